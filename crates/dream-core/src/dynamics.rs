@@ -1,0 +1,261 @@
+//! Unicycle dynamics and the Robotarium's validation, for the whole swarm at once.
+//!
+//! Poses are `(3, n)` row-major (`x` row, `y` row, `theta` row) and unicycle commands `(2, n)`
+//! (`v` row, `w` row), the Robotarium's layout, so NumPy arrays pass through without reshaping.
+//! The arithmetic follows rps operation by operation, so the Fast backend reproduces its poses.
+
+use crate::error::{check_finite, check_len, check_positive, GeomError, Result};
+use crate::grid::Grid;
+
+/// Differential-drive geometry: what turns a unicycle command into wheel speeds (SI units).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Wheels {
+    /// Wheel radius (m).
+    pub radius: f64,
+    /// Distance between the wheels (m).
+    pub base_length: f64,
+    /// Largest wheel speed (rad/s).
+    pub max_speed: f64,
+}
+
+impl Wheels {
+    /// # Errors
+    /// [`GeomError::InvalidParameter`] unless every field is finite and positive.
+    pub fn new(radius: f64, base_length: f64, max_speed: f64) -> Result<Self> {
+        check_positive("wheel_radius", radius)?;
+        check_positive("base_length", base_length)?;
+        check_positive("max_wheel", max_speed)?;
+        Ok(Self { radius, base_length, max_speed })
+    }
+
+    /// Whether the command `(v, w)` needs a wheel faster than `max_speed` (rps's criterion).
+    fn exceeded_by(&self, v: f64, w: f64) -> bool {
+        let (r, l) = (self.radius, self.base_length);
+        let left = 1.0 / (2.0 * r) * (2.0 * v - l * w);
+        let right = 1.0 / (2.0 * r) * (2.0 * v + l * w);
+        left.abs() > self.max_speed || right.abs() > self.max_speed
+    }
+}
+
+/// Axis-aligned rectangular arena (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Arena {
+    pub xmin: f64,
+    pub xmax: f64,
+    pub ymin: f64,
+    pub ymax: f64,
+}
+
+impl Arena {
+    /// # Errors
+    /// [`GeomError::InvalidBounds`] unless the bounds are finite with `xmin < xmax`, `ymin < ymax`.
+    pub fn new(xmin: f64, xmax: f64, ymin: f64, ymax: f64) -> Result<Self> {
+        let finite = [xmin, xmax, ymin, ymax].iter().all(|v| v.is_finite());
+        if finite && xmin < xmax && ymin < ymax {
+            Ok(Self { xmin, xmax, ymin, ymax })
+        } else {
+            Err(GeomError::InvalidBounds { xmin, xmax, ymin, ymax })
+        }
+    }
+
+    /// Whether `(x, y)` is inside or on the border (the rps boundary criterion).
+    pub fn contains(&self, x: f64, y: f64) -> bool {
+        !(x < self.xmin || x > self.xmax || y < self.ymin || y > self.ymax)
+    }
+}
+
+/// The three rps validation counts of one iteration.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Violations {
+    /// Robots outside the arena.
+    pub boundary: u64,
+    /// Pairs of robots whose centres are within one diameter.
+    pub collision: u64,
+    /// 1 if any robot's command needs a wheel faster than allowed, else 0.
+    pub actuator: u64,
+}
+
+fn rows<'a>(arg: &'static str, data: &'a [f64], count: usize, n: usize) -> Result<Vec<&'a [f64]>> {
+    check_len(arg, count * n, data.len())?;
+    check_finite(arg, data)?;
+    Ok(if n == 0 { vec![&data[0..0]; count] } else { data.chunks(n).collect() })
+}
+
+/// Clips commands to the linear and angular limits, keeping their signs (rps `set_velocities`).
+///
+/// # Errors
+/// Length or finiteness problems of `velocities` (`2 * n` values).
+pub fn threshold_velocities(velocities: &mut [f64], n: usize, max_linear: f64, max_angular: f64) -> Result<()> {
+    check_positive("max_linear", max_linear)?;
+    check_positive("max_angular", max_angular)?;
+    rows("velocities", velocities, 2, n)?;
+    let (v, w) = velocities.split_at_mut(n);
+    for value in v.iter_mut() {
+        if value.abs() > max_linear {
+            *value = max_linear * value.signum();
+        }
+    }
+    for value in w.iter_mut() {
+        if value.abs() > max_angular {
+            *value = max_angular * value.signum();
+        }
+    }
+    Ok(())
+}
+
+/// Counts boundary, collision and actuator violations of the current poses and commands,
+/// with the criteria of rps's `_validate`; collisions use a grid, so the cost is O(n).
+///
+/// # Errors
+/// Length or finiteness problems of `poses` (`3 * n`) or `velocities` (`2 * n`).
+pub fn validate(
+    poses: &[f64],
+    velocities: &[f64],
+    n: usize,
+    arena: &Arena,
+    diameter: f64,
+    wheels: &Wheels,
+) -> Result<Violations> {
+    check_positive("diameter", diameter)?;
+    let p = rows("poses", poses, 3, n)?;
+    let u = rows("velocities", velocities, 2, n)?;
+    let (xs, ys) = (p[0], p[1]);
+
+    let boundary = (0..n).filter(|&i| !arena.contains(xs[i], ys[i])).count() as u64;
+
+    let grid = Grid::new(xs, ys, diameter);
+    let mut collision = 0_u64;
+    for i in 0..n {
+        grid.for_each_near(xs[i], ys[i], |j| {
+            if j > i {
+                let (dx, dy) = (xs[i] - xs[j], ys[i] - ys[j]);
+                if (dx * dx + dy * dy).sqrt() <= diameter {
+                    collision += 1;
+                }
+            }
+        });
+    }
+
+    let actuator = u64::from((0..n).any(|i| wheels.exceeded_by(u[0][i], u[1][i])));
+
+    Ok(Violations { boundary, collision, actuator })
+}
+
+/// Advances every pose by one forward-Euler step of the unicycle model and wraps the heading
+/// to (-pi, pi], exactly as rps's `step`.
+///
+/// # Errors
+/// Length or finiteness problems of `poses` (`3 * n`) or `velocities` (`2 * n`), or a
+/// non-positive `dt`.
+pub fn unicycle_step(poses: &mut [f64], velocities: &[f64], n: usize, dt: f64) -> Result<()> {
+    check_positive("dt", dt)?;
+    rows("poses", poses, 3, n)?;
+    let u = rows("velocities", velocities, 2, n)?;
+    let (xs, rest) = poses.split_at_mut(n);
+    let (ys, thetas) = rest.split_at_mut(n);
+    for i in 0..n {
+        let theta = thetas[i];
+        xs[i] += dt * theta.cos() * u[0][i];
+        ys[i] += dt * theta.sin() * u[0][i];
+        let turned = theta + dt * u[1][i];
+        thetas[i] = turned.sin().atan2(turned.cos());
+    }
+    Ok(())
+}
+
+/// Converts single-integrator velocities `(2, n)` to unicycle commands `(2, n)` for robots at
+/// `poses` `(3, n)`: `v = kv (c dx + s dy)`, `w = kw atan2(-s dx + c dy, v) / (pi/2)`.
+///
+/// # Errors
+/// Length or finiteness problems of `dxi` or `poses`.
+pub fn dxi_to_dxu(dxi: &[f64], poses: &[f64], n: usize, vel_gain: f64, ang_gain: f64) -> Result<Vec<f64>> {
+    let d = rows("dxi", dxi, 2, n)?;
+    let p = rows("poses", poses, 3, n)?;
+    let mut dxu = vec![0.0; 2 * n];
+    for i in 0..n {
+        let (c, s) = (p[2][i].cos(), p[2][i].sin());
+        let v = vel_gain * (c * d[0][i] + s * d[1][i]);
+        dxu[i] = v;
+        dxu[n + i] = ang_gain * (-s * d[0][i] + c * d[1][i]).atan2(v) / std::f64::consts::FRAC_PI_2;
+    }
+    Ok(dxu)
+}
+
+/// Limits unicycle commands `(2, n)` in place as DREAM's `Robot.actuator_limit`: clip `v` and `w`
+/// to their limits, then, if the faster wheel would exceed `max_wheel`, shrink `|v|` (keeping its
+/// sign and keeping `w`: turning matters more) so that it does not.
+///
+/// # Errors
+/// Length or finiteness problems of `dxu`.
+pub fn actuator_limit(dxu: &mut [f64], n: usize, max_linear: f64, max_angular: f64, wheels: &Wheels) -> Result<()> {
+    threshold_velocities(dxu, n, max_linear, max_angular)?;
+    let (v, w) = dxu.split_at_mut(n);
+    let (r, half_l) = (wheels.radius, wheels.base_length / 2.0);
+    for i in 0..n {
+        if v[i].abs() / r + w[i].abs() * half_l / r > wheels.max_speed {
+            let speed = (wheels.max_speed * r - half_l * w[i].abs()).max(0.0);
+            v[i] = if v[i] > 0.0 { speed } else { -speed };
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MAX_ANGULAR: f64 = 2.0 * (0.016 / 0.11) * (0.2 / 0.016);
+
+    fn gritsbot() -> Wheels {
+        Wheels::new(0.016, 0.105, 0.2 / 0.016).unwrap()
+    }
+
+    fn robotarium() -> Arena {
+        Arena::new(-1.6, 1.6, -1.0, 1.0).unwrap()
+    }
+
+    #[test]
+    fn step_moves_along_heading_and_wraps_angle() {
+        let mut poses = vec![0.0, 1.0, 0.0, 0.0, 0.0, 3.1];
+        unicycle_step(&mut poses, &[0.1, 0.0, 0.0, 10.0], 2, 0.033).unwrap();
+        assert!((poses[0] - 0.0033).abs() < 1e-15);
+        assert!((poses[5] - (3.1 + 0.33 - 2.0 * std::f64::consts::PI)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn validate_counts_like_rps() {
+        // robots 0 and 1 touch (0.11 apart: inclusive), robot 2 is out, robot 3 spins too fast.
+        let poses = [0.0, 0.11, 1.7, -1.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0];
+        let velocities = [0.0, 0.0, 0.0, 0.2, 0.0, 0.0, 0.0, 1.0];
+        let counts = validate(&poses, &velocities, 4, &robotarium(), 0.11, &gritsbot()).unwrap();
+        assert_eq!(counts, Violations { boundary: 1, collision: 1, actuator: 1 });
+    }
+
+    #[test]
+    fn actuator_limit_keeps_turning() {
+        let mut dxu = vec![-0.2, 3.0];
+        actuator_limit(&mut dxu, 1, 0.2, MAX_ANGULAR, &gritsbot()).unwrap();
+        assert!((dxu[0] + (0.2 - 3.0 * 0.0525)).abs() < 1e-15);
+        assert_eq!(dxu[1], 3.0);
+    }
+
+    #[test]
+    fn bad_lengths_and_values_are_errors() {
+        assert!(matches!(
+            validate(&[0.0; 5], &[0.0; 4], 2, &robotarium(), 0.11, &gritsbot()),
+            Err(GeomError::LengthMismatch { arg: "poses", expected: 6, got: 5 })
+        ));
+        assert!(matches!(
+            unicycle_step(&mut [f64::NAN, 0.0, 0.0], &[0.0, 0.0], 1, 0.033),
+            Err(GeomError::NonFinite { arg: "poses", index: 0 })
+        ));
+        assert!(Arena::new(1.0, -1.0, 0.0, 1.0).is_err());
+    }
+
+    #[test]
+    fn empty_swarm_is_fine() {
+        let counts = validate(&[], &[], 0, &robotarium(), 0.11, &gritsbot()).unwrap();
+        assert_eq!(counts, Violations::default());
+        unicycle_step(&mut [], &[], 0, 0.033).unwrap();
+    }
+}

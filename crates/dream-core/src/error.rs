@@ -1,0 +1,65 @@
+//! The one error type of the core: every kernel validates its input and reports what is wrong.
+
+/// Invalid input to a kernel. The message names the argument and what was expected.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum GeomError {
+    /// An array does not hold one entry per robot.
+    #[error("`{arg}` has {got} values, expected {expected}")]
+    LengthMismatch {
+        arg: &'static str,
+        expected: usize,
+        got: usize,
+    },
+    /// A value that must be finite is NaN or infinite.
+    #[error("`{arg}` contains a non-finite value (NaN or inf) at index {index}")]
+    NonFinite { arg: &'static str, index: usize },
+    /// A length, radius or limit that must be positive (or non-negative) is not.
+    #[error("`{arg}` must be finite and {rule}, got {got}")]
+    InvalidParameter {
+        arg: &'static str,
+        rule: &'static str,
+        got: f64,
+    },
+    /// An arena whose minimum is not below its maximum.
+    #[error("arena bounds must satisfy xmin < xmax and ymin < ymax, got ({xmin}, {xmax}, {ymin}, {ymax})")]
+    InvalidBounds {
+        xmin: f64,
+        xmax: f64,
+        ymin: f64,
+        ymax: f64,
+    },
+}
+
+/// Result of a core kernel.
+pub type Result<T> = std::result::Result<T, GeomError>;
+
+/// Fails with [`GeomError::NonFinite`] at the first NaN or infinite value of `values`.
+pub fn check_finite(arg: &'static str, values: &[f64]) -> Result<()> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(index) => Err(GeomError::NonFinite { arg, index }),
+        None => Ok(()),
+    }
+}
+
+/// Fails with [`GeomError::LengthMismatch`] unless `got == expected`.
+pub fn check_len(arg: &'static str, expected: usize, got: usize) -> Result<()> {
+    if got == expected {
+        Ok(())
+    } else {
+        Err(GeomError::LengthMismatch { arg, expected, got })
+    }
+}
+
+/// Fails with [`GeomError::InvalidParameter`] unless `value` is finite and > 0.
+pub fn check_positive(arg: &'static str, value: f64) -> Result<()> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(GeomError::InvalidParameter {
+            arg,
+            rule: "> 0",
+            got: value,
+        })
+    }
+}

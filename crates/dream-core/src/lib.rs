@@ -1,0 +1,16 @@
+//! # dream-core
+//!
+//! The geometry kernels of DREAM, a library for simulating distributed multi-robot algorithms.
+//! Pure Rust, no Python: every kernel takes slices of `f64` and parameter structs and returns
+//! owned vectors or a [`GeomError`] that names the bad argument. Units are SI (metres,
+//! seconds, radians) in the world frame.
+//!
+//! - [`dynamics`]: unicycle Euler step, rps velocity thresholding and validation counts,
+//!   single-integrator to unicycle conversion and actuator limiting, for the whole swarm.
+//! - [`grid`]: the uniform grid behind neighbour queries.
+
+pub mod dynamics;
+pub mod error;
+pub mod grid;
+
+pub use error::{GeomError, Result};

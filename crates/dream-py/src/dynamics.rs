@@ -1,0 +1,97 @@
+//! Bindings of `dream_core::dynamics`: the Fast backend's step and the rps validation counts.
+
+use dream_core::dynamics::{self, Arena, Wheels};
+use numpy::{IntoPyArray, PyArray2, PyArrayMethods, PyReadonlyArray2};
+use pyo3::prelude::*;
+
+use crate::arrays::{rows_of, same_count};
+use crate::errors::PyDreamResult;
+
+fn into_rows<'py>(py: Python<'py>, values: Vec<f64>, rows: usize, n: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    values.into_pyarray(py).reshape([rows, n])
+}
+
+/// Poses `(3, n)` after one Euler step of the unicycle model with commands `(2, n)`.
+#[pyfunction]
+pub fn unicycle_step<'py>(
+    py: Python<'py>,
+    poses: PyReadonlyArray2<'py, f64>,
+    velocities: PyReadonlyArray2<'py, f64>,
+    dt: f64,
+) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
+    let (mut p, n) = rows_of("poses", &poses, 3)?;
+    let (u, m) = rows_of("velocities", &velocities, 2)?;
+    same_count("velocities", n, m, 2)?;
+    py.detach(|| dynamics::unicycle_step(&mut p, &u, n, dt))?;
+    Ok(into_rows(py, p, 3, n)?)
+}
+
+/// Commands `(2, n)` with |v| and |w| clipped to their limits, signs kept.
+#[pyfunction]
+pub fn threshold_velocities<'py>(
+    py: Python<'py>,
+    velocities: PyReadonlyArray2<'py, f64>,
+    max_linear: f64,
+    max_angular: f64,
+) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
+    let (mut u, n) = rows_of("velocities", &velocities, 2)?;
+    dynamics::threshold_velocities(&mut u, n, max_linear, max_angular)?;
+    Ok(into_rows(py, u, 2, n)?)
+}
+
+/// `(boundary, collision, actuator)` violation counts of one iteration, by rps's criteria.
+#[pyfunction]
+#[pyo3(signature = (poses, velocities, bounds, *, diameter, wheel_radius, base_length, max_wheel))]
+#[allow(clippy::too_many_arguments)]
+pub fn validate(
+    py: Python<'_>,
+    poses: PyReadonlyArray2<'_, f64>,
+    velocities: PyReadonlyArray2<'_, f64>,
+    bounds: (f64, f64, f64, f64),
+    diameter: f64,
+    wheel_radius: f64,
+    base_length: f64,
+    max_wheel: f64,
+) -> PyDreamResult<(u64, u64, u64)> {
+    let (p, n) = rows_of("poses", &poses, 3)?;
+    let (u, m) = rows_of("velocities", &velocities, 2)?;
+    same_count("velocities", n, m, 2)?;
+    let arena = Arena::new(bounds.0, bounds.1, bounds.2, bounds.3)?;
+    let wheels = Wheels::new(wheel_radius, base_length, max_wheel)?;
+    let counts = py.detach(|| dynamics::validate(&p, &u, n, &arena, diameter, &wheels))?;
+    Ok((counts.boundary, counts.collision, counts.actuator))
+}
+
+/// Unicycle commands `(2, n)` from single-integrator velocities `(2, n)` at poses `(3, n)`.
+#[pyfunction]
+pub fn dxi_to_dxu<'py>(
+    py: Python<'py>,
+    dxi: PyReadonlyArray2<'py, f64>,
+    poses: PyReadonlyArray2<'py, f64>,
+    vel_gain: f64,
+    ang_gain: f64,
+) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
+    let (d, n) = rows_of("dxi", &dxi, 2)?;
+    let (p, m) = rows_of("poses", &poses, 3)?;
+    same_count("poses", n, m, 3)?;
+    let dxu = py.detach(|| dynamics::dxi_to_dxu(&d, &p, n, vel_gain, ang_gain))?;
+    Ok(into_rows(py, dxu, 2, n)?)
+}
+
+/// Commands `(2, n)` clipped to the speed limits, then slowed so that no wheel is too fast.
+#[pyfunction]
+#[pyo3(signature = (dxu, *, max_linear, max_angular, wheel_radius, base_length, max_wheel))]
+pub fn actuator_limit<'py>(
+    py: Python<'py>,
+    dxu: PyReadonlyArray2<'py, f64>,
+    max_linear: f64,
+    max_angular: f64,
+    wheel_radius: f64,
+    base_length: f64,
+    max_wheel: f64,
+) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
+    let (mut u, n) = rows_of("dxu", &dxu, 2)?;
+    let wheels = Wheels::new(wheel_radius, base_length, max_wheel)?;
+    dynamics::actuator_limit(&mut u, n, max_linear, max_angular, &wheels)?;
+    Ok(into_rows(py, u, 2, n)?)
+}

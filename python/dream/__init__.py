@@ -1,0 +1,71 @@
+"""DREAM — Distributed Robotics Execution and Management.
+
+Simulate distributed multi-robot algorithms: each robot decides from its own sensors, radio
+messages and clock. Robots, sensors, radios and timers keep the original DREAM API (``from
+dream import *`` gives the original names); simulators are backends (the Robotarium's ``rps``
+and DREAM's Fast simulator); :mod:`dream.kernels` holds the vectorised geometry.
+
+Units are SI in the world frame: metres, seconds, radians. Poses of n robots are ``(3, n)``
+arrays ``[x; y; theta]``, unicycle commands ``(2, n)`` arrays ``[v; w]`` (the Robotarium's
+convention); positions given to geometry kernels are ``(n, 2)``.
+"""
+
+from dream import kernels, specs
+from dream.backends import Backend, Fast, Robotarium, initial_poses, make_robotarium
+from dream.radios import GraphRadio, Radio, RangeRadio
+from dream.robot import Robot, RobotHRVO
+from dream.sensors import MovementSensor, OdometrySensor, Sensor
+from dream.specs import (
+    R_AC_MAX,
+    R_R_LENGTH,
+    R_R_WHEEL,
+    R_V_MAX,
+    R_W_MAX,
+    T_HEIGHT,
+    T_MAX_HEIGHT,
+    T_MAX_WIDTH,
+    T_MIN_HEIGHT,
+    T_MIN_WIDTH,
+    T_ORIGIN_X,
+    T_ORIGIN_Y,
+    T_WIDTH,
+)
+from dream.timers import Timer, create_timer, update_timers
+from dream.world import World, current_world
+
+__version__ = "0.1.0"
+
+# The original names, for scripts written for the prototype.
+Robot_hrvo = RobotHRVO
+Movement_sensor = MovementSensor
+Odometry_sensor = OdometrySensor
+Radio_range = RangeRadio
+
+# `from dream import *` gives what an original script expects.
+__all__ = [
+    "GraphRadio",
+    "Movement_sensor",
+    "Odometry_sensor",
+    "R_AC_MAX",
+    "R_R_LENGTH",
+    "R_R_WHEEL",
+    "R_V_MAX",
+    "R_W_MAX",
+    "Radio",
+    "Radio_range",
+    "Robot",
+    "Robot_hrvo",
+    "Sensor",
+    "T_HEIGHT",
+    "T_MAX_HEIGHT",
+    "T_MAX_WIDTH",
+    "T_MIN_HEIGHT",
+    "T_MIN_WIDTH",
+    "T_ORIGIN_X",
+    "T_ORIGIN_Y",
+    "T_WIDTH",
+    "Timer",
+    "World",
+    "create_timer",
+    "update_timers",
+]

@@ -1,0 +1,55 @@
+"""Input checks shared by the public API: every error names the argument and what is wrong."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+
+
+def as_array(value: Any, name: str, shape: tuple[int | None, ...]) -> FloatArray:
+    """``value`` as a C-contiguous float64 array of ``shape`` (``None`` = any length), all finite.
+
+    Raises
+    ------
+    ValueError
+        If the shape differs (the message shows expected and actual shapes) or a value is NaN/inf.
+    """
+    try:
+        array = np.ascontiguousarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"`{name}` must be a float array of shape {_show(shape)}: {err}") from None
+    if array.ndim != len(shape) or any(want is not None and got != want for got, want in zip(array.shape, shape)):
+        raise ValueError(f"`{name}` must have shape {_show(shape)}, got {array.shape}")
+    if not np.isfinite(array).all():
+        bad = np.argwhere(~np.isfinite(array))[0]
+        raise ValueError(f"`{name}` contains a non-finite value (NaN or inf) at index {tuple(int(i) for i in bad)}")
+    return array
+
+
+def as_poses(value: Any, name: str = "poses", n: int | None = None) -> FloatArray:
+    """A ``(3, n)`` pose array (x, y, theta rows)."""
+    return as_array(value, name, (3, n))
+
+
+def check_robot_id(robot_id: int, n: int, what: str = "poses") -> int:
+    """``robot_id`` as an int, or an IndexError naming it and the number of robots."""
+    if not 0 <= robot_id < n:
+        raise IndexError(f"robot id {robot_id} is out of range for {what} of {n} robots")
+    return int(robot_id)
+
+
+def check_nonnegative(value: float, name: str) -> float:
+    value = float(value)
+    if not (np.isfinite(value) and value >= 0):
+        raise ValueError(f"`{name}` must be finite and >= 0, got {value}")
+    return value
+
+
+def _show(shape: tuple[int | None, ...]) -> str:
+    names = iter("nmk")
+    parts = [str(s) if s is not None else next(names) for s in shape]
+    return "(" + ", ".join(parts) + ("," if len(parts) == 1 else "") + ")"

@@ -1,0 +1,24 @@
+"""NumPy reference of every DREAM kernel.
+
+Written for clarity, not speed: these functions are the test oracle of the Rust kernels in
+:mod:`dream._core`, and the fallback that lets every experiment run where the compiled
+extension is absent (the Robotarium lab runs scripts with numpy, scipy and matplotlib only).
+They depend on NumPy alone.
+"""
+
+from dream._reference.dynamics import actuator_limit, dxi_to_dxu, threshold_velocities, unicycle_step, validate
+from dream._reference.hrvo import candidate_grid, hrvo, hrvo_velocity
+from dream._reference.neighbours import neighbours, neighbours_of
+
+__all__ = [
+    "actuator_limit",
+    "candidate_grid",
+    "dxi_to_dxu",
+    "hrvo",
+    "hrvo_velocity",
+    "neighbours",
+    "neighbours_of",
+    "threshold_velocities",
+    "unicycle_step",
+    "validate",
+]

@@ -1,0 +1,95 @@
+"""Unicycle dynamics and rps validation, written as rps writes them (the Fast backend's oracle).
+
+Poses are ``(3, n)`` (x, y, theta rows), unicycle commands ``(2, n)`` (v, w rows).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dream._checks import FloatArray
+
+
+def threshold_velocities(velocities: FloatArray, max_linear: float, max_angular: float) -> FloatArray:
+    """Commands ``(2, n)`` with |v| and |w| clipped to their limits, signs kept (rps ``set_velocities``)."""
+    out = np.array(velocities, dtype=np.float64)
+    for row, limit in ((0, max_linear), (1, max_angular)):
+        over = np.abs(out[row]) > limit
+        out[row, over] = limit * np.sign(out[row, over])
+    return out
+
+
+def validate(
+    poses: FloatArray,
+    velocities: FloatArray,
+    bounds: tuple[float, float, float, float],
+    *,
+    diameter: float,
+    wheel_radius: float,
+    base_length: float,
+    max_wheel: float,
+) -> tuple[int, int, int]:
+    """``(boundary, collision, actuator)`` counts of one iteration by rps's ``_validate`` criteria.
+
+    boundary: robots outside ``bounds`` (xmin, xmax, ymin, ymax); collision: pairs whose centres
+    are within ``diameter`` (inclusive); actuator: 1 if any command needs a wheel faster than
+    ``max_wheel``.
+    """
+    x, y = poses[0], poses[1]
+    xmin, xmax, ymin, ymax = bounds
+    boundary = int(np.count_nonzero((x < xmin) | (x > xmax) | (y < ymin) | (y > ymax)))
+    dx = x[:, None] - x[None, :]
+    dy = y[:, None] - y[None, :]
+    close = np.sqrt(dx * dx + dy * dy) <= diameter
+    collision = int(np.count_nonzero(np.triu(close, k=1)))
+    v, w = velocities[0], velocities[1]
+    wheels = np.vstack(
+        (1 / (2 * wheel_radius) * (2 * v - base_length * w), 1 / (2 * wheel_radius) * (2 * v + base_length * w))
+    )
+    actuator = int(np.any(np.abs(wheels) > max_wheel))
+    return boundary, collision, actuator
+
+
+def unicycle_step(poses: FloatArray, velocities: FloatArray, dt: float) -> FloatArray:
+    """Poses ``(3, n)`` after one forward-Euler unicycle step, heading wrapped to (-pi, pi]."""
+    out = np.array(poses, dtype=np.float64)
+    out[0] = out[0] + dt * np.cos(out[2]) * velocities[0]
+    out[1] = out[1] + dt * np.sin(out[2]) * velocities[0]
+    out[2] = out[2] + dt * velocities[1]
+    out[2] = np.arctan2(np.sin(out[2]), np.cos(out[2]))
+    return out
+
+
+def dxi_to_dxu(dxi: FloatArray, poses: FloatArray, vel_gain: float, ang_gain: float) -> FloatArray:
+    """Unicycle commands ``(2, n)`` from single-integrator velocities ``(2, n)`` at ``poses``.
+
+    ``v = vel_gain (c dx + s dy)`` and ``w = ang_gain atan2(-s dx + c dy, v) / (pi/2)`` with
+    ``c, s = cos, sin(theta)``: the original DREAM conversion.
+    """
+    c, s = np.cos(poses[2]), np.sin(poses[2])
+    v = vel_gain * (c * dxi[0] + s * dxi[1])
+    w = ang_gain * np.arctan2(-s * dxi[0] + c * dxi[1], v) / (np.pi / 2)
+    return np.vstack((v, w))
+
+
+def actuator_limit(
+    dxu: FloatArray,
+    *,
+    max_linear: float,
+    max_angular: float,
+    wheel_radius: float,
+    base_length: float,
+    max_wheel: float,
+) -> FloatArray:
+    """Commands ``(2, n)`` clipped to the speed limits, then slowed so that no wheel is too fast.
+
+    If ``|v|/r + |w| L/(2r) > max_wheel``, ``|v|`` becomes ``max_wheel r - |w| L/2`` (at least 0),
+    keeping its sign and keeping ``w``: turning matters more than advancing.
+    """
+    out = threshold_velocities(dxu, max_linear, max_angular)
+    v, w = out[0], out[1]
+    half = base_length / 2
+    over = np.abs(v) / wheel_radius + np.abs(w) * half / wheel_radius > max_wheel
+    speed = np.maximum(max_wheel * wheel_radius - half * np.abs(w), 0.0)
+    out[0] = np.where(over, np.where(v > 0, speed, -speed), v)
+    return out

@@ -1,0 +1,169 @@
+"""Hybrid Reciprocal Velocity Obstacles with candidate sampling (reference implementation).
+
+For robot A (own previous velocity v_A, preferred velocity v_pref) and each neighbour B at
+distance d in direction u (from A to B) moving with v_B, with safety radius r:
+
+* half-angle ``phi = asin(r / max(d, r))``; the cone's left edge has direction angle(u) + phi,
+  its right edge angle(u) - phi;
+* the VO's apex is v_B, the RVO's apex (v_A + v_B) / 2;
+* HRVO keeps the RVO edge on the side v_A is closer to and the VO edge on the other side
+  (if v_A is equally close to both, both edges are the VO's, as in the original);
+* a velocity is forbidden by B if it lies strictly inside both half-planes.
+
+The result is the candidate closest to v_pref (first in candidate order on ties) that no
+neighbour forbids and, when ``bounds`` is given, keeps ``position + v`` strictly inside the
+bounds; the zero velocity if no candidate qualifies.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dream._checks import FloatArray
+from dream._reference.neighbours import neighbours as find_neighbours
+
+
+def candidate_grid(v_max: float, n_angles: int = 20, n_speeds: int = 10) -> FloatArray:
+    """The original polar sampling of velocities, without its duplicates: ``(m, 2)``.
+
+    The original samples ``n_angles`` angles in [0, 2 pi] (both ends) times ``n_speeds``
+    speeds in [0, v_max] (both ends), plus the zero velocity: 201 samples of which only 172
+    differ. Here the zero velocity comes first, then for each distinct angle every non-zero
+    speed: the same set, in the original's order, each velocity once.
+    """
+    angles = np.linspace(0.0, 2 * np.pi, n_angles)
+    if n_angles > 1:
+        angles = angles[:-1]
+    speeds = np.linspace(0.0, v_max, n_speeds)[1:]
+    vv, thth = np.meshgrid(speeds, angles)
+    polar = np.column_stack(((vv * np.cos(thth)).ravel(), (vv * np.sin(thth)).ravel()))
+    return np.vstack((np.zeros((1, 2)), polar))
+
+
+def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
+    """z of the cross product of 2-vectors along the last axis."""
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def _forbidden(
+    candidates: FloatArray,
+    velocity: FloatArray,
+    directions: FloatArray,
+    distances: FloatArray,
+    neighbour_velocities: FloatArray,
+    safety: float,
+) -> FloatArray:
+    """Boolean ``(m,)``: candidates inside the HRVO of at least one neighbour."""
+    if len(directions) == 0:
+        return np.zeros(len(candidates), dtype=bool)
+    phi = np.arcsin(safety / np.maximum(distances, safety))
+    left = np.column_stack((np.cos(directions + phi), np.sin(directions + phi)))
+    right = np.column_stack((np.cos(directions - phi), np.sin(directions - phi)))
+    vo_apex = neighbour_velocities
+    rvo_apex = (velocity[None, :] + neighbour_velocities) / 2
+    dist_left = np.abs(_cross(left, velocity[None, :] - rvo_apex))
+    dist_right = np.abs(_cross(right, velocity[None, :] - rvo_apex))
+    left_apex = np.where((dist_left < dist_right)[:, None], rvo_apex, vo_apex)
+    right_apex = np.where((dist_left > dist_right)[:, None], rvo_apex, vo_apex)
+    # (k, m): right of the left edge and left of the right edge, both strictly.
+    inside_left = _cross(left[:, None, :], candidates[None, :, :] - left_apex[:, None, :]) < 0
+    inside_right = _cross(right[:, None, :], candidates[None, :, :] - right_apex[:, None, :]) > 0
+    return np.any(inside_left & inside_right, axis=0)
+
+
+def hrvo_velocity(
+    velocity: FloatArray,
+    preferred: FloatArray,
+    directions: FloatArray,
+    distances: FloatArray,
+    neighbour_velocities: FloatArray,
+    *,
+    safety: float = 0.24,
+    v_max: float = 0.2,
+    position: FloatArray | None = None,
+    bounds: tuple[float, float, float, float] | None = None,
+    candidates: FloatArray | None = None,
+    include_preferred: bool = True,
+) -> FloatArray:
+    """One robot's HRVO velocity ``(2,)``.
+
+    Parameters
+    ----------
+    velocity, preferred : (2,)
+        The robot's previous velocity v_A and its preferred velocity (m/s).
+    directions, distances : (k,)
+        Angle (rad) of the direction from the robot to each neighbour, and the distance (m).
+    neighbour_velocities : (k, 2)
+        Each neighbour's velocity (m/s).
+    position : (2,), optional
+        The robot's position; needed with ``bounds``.
+    bounds : (xmin, xmax, ymin, ymax), optional
+        Keep ``position + v`` strictly inside; ``None`` skips the check.
+    candidates : (m, 2), optional
+        Velocities to choose from; default :func:`candidate_grid` of ``v_max``.
+    include_preferred : bool
+        Also try ``preferred`` itself (clamped to ``v_max``) before the grid.
+    """
+    grid = candidate_grid(v_max) if candidates is None else candidates
+    if include_preferred:
+        norm = np.hypot(preferred[0], preferred[1])
+        first = preferred * (v_max / norm) if norm > v_max else preferred
+        grid = np.vstack((first[None, :], grid))
+    valid = ~_forbidden(grid, velocity, directions, distances, neighbour_velocities, safety)
+    if bounds is not None:
+        if position is None:
+            raise ValueError("`position` is required when `bounds` is given")
+        ahead = position[None, :] + grid
+        xmin, xmax, ymin, ymax = bounds
+        valid &= (xmin < ahead[:, 0]) & (ahead[:, 0] < xmax) & (ymin < ahead[:, 1]) & (ahead[:, 1] < ymax)
+    if not valid.any():
+        return np.zeros(2)
+    dx = grid[:, 0] - preferred[0]
+    dy = grid[:, 1] - preferred[1]
+    cost = np.where(valid, dx * dx + dy * dy, np.inf)
+    return np.array(grid[int(np.argmin(cost))], dtype=np.float64)
+
+
+def hrvo(
+    positions: FloatArray,
+    velocities: FloatArray,
+    preferred: FloatArray,
+    neighbours: tuple[np.ndarray, np.ndarray] | None = None,
+    *,
+    radius: float = 1.0,
+    safety: float = 0.24,
+    v_max: float = 0.2,
+    bounds: tuple[float, float, float, float] | None = None,
+    n_angles: int = 20,
+    n_speeds: int = 10,
+    include_preferred: bool = True,
+) -> FloatArray:
+    """HRVO velocities ``(n, 2)`` for the whole swarm, one robot at a time.
+
+    ``neighbours`` is a CSR pair ``(indptr, indices)``; ``None`` means every other robot within
+    ``radius``. Neighbour velocities are the rows of ``velocities``.
+    """
+    n = len(positions)
+    if neighbours is None:
+        indptr, indices, _ = find_neighbours(positions, radius)
+    else:
+        indptr, indices = neighbours
+    grid = candidate_grid(v_max, n_angles, n_speeds)
+    out = np.zeros((n, 2))
+    for i in range(n):
+        js = np.asarray(indices[indptr[i] : indptr[i + 1]], dtype=np.int64)
+        offsets = positions[js] - positions[i]
+        out[i] = hrvo_velocity(
+            velocities[i],
+            preferred[i],
+            np.arctan2(offsets[:, 1], offsets[:, 0]),
+            np.sqrt(offsets[:, 0] ** 2 + offsets[:, 1] ** 2),
+            velocities[js],
+            safety=safety,
+            v_max=v_max,
+            position=positions[i],
+            bounds=bounds,
+            candidates=grid,
+            include_preferred=include_preferred,
+        )
+    return out

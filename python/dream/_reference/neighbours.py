@@ -1,0 +1,70 @@
+"""Neighbour filtering by range and field of view (reference: all pairs, O(n^2))."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dream._checks import FloatArray
+
+
+def neighbours_of(
+    positions: FloatArray,
+    i: int,
+    radius: float,
+    *,
+    heading: float | None = None,
+    direction: float = 0.0,
+    fov: float = 2 * np.pi,
+    max_neighbours: int | None = None,
+) -> tuple[np.ndarray, FloatArray]:
+    """Robot ``i``'s neighbours: ``(indices, distances)``, indices increasing.
+
+    Robot j is a neighbour when j != i (by index: co-located robots count),
+    ``|p_j - p_i| <= radius`` and, with ``heading`` given, the direction from i to j lies within
+    ``fov / 2`` of ``heading + direction`` (a co-located robot is always seen). With
+    ``max_neighbours`` only the nearest are kept (ties: lower index first).
+    """
+    dx = positions[:, 0] - positions[i, 0]
+    dy = positions[:, 1] - positions[i, 1]
+    dist = np.sqrt(dx * dx + dy * dy)
+    keep = dist <= radius
+    keep[i] = False
+    if heading is not None:
+        rel = np.arctan2(dy, dx) - (heading + direction)
+        rel = (rel + np.pi) % (2 * np.pi) - np.pi
+        keep &= (np.abs(rel) <= fov / 2) | (dist == 0)
+    js = np.flatnonzero(keep)
+    if max_neighbours is not None and len(js) > max_neighbours:
+        nearest = np.lexsort((js, dist[js]))[:max_neighbours]
+        js = np.sort(js[nearest])
+    return js.astype(np.int64), dist[js]
+
+
+def neighbours(
+    positions: FloatArray,
+    radius: float,
+    *,
+    headings: FloatArray | None = None,
+    direction: float = 0.0,
+    fov: float = 2 * np.pi,
+    max_neighbours: int | None = None,
+) -> tuple[np.ndarray, np.ndarray, FloatArray]:
+    """Every robot's :func:`neighbours_of`, as CSR ``(indptr (n+1,), indices, distances)``."""
+    n = len(positions)
+    rows = [
+        neighbours_of(
+            positions,
+            i,
+            radius,
+            heading=None if headings is None else float(headings[i]),
+            direction=direction,
+            fov=fov,
+            max_neighbours=max_neighbours,
+        )
+        for i in range(n)
+    ]
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    indptr[1:] = np.cumsum([len(js) for js, _ in rows])
+    indices = np.concatenate([js for js, _ in rows]) if rows else np.zeros(0, dtype=np.int64)
+    distances = np.concatenate([d for _, d in rows]) if rows else np.zeros(0)
+    return indptr, indices.astype(np.int64), distances

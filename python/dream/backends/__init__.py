@@ -1,0 +1,84 @@
+"""Simulator backends: the real Robotarium simulator (``rps``) and DREAM's Fast simulator."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from dream._checks import FloatArray, as_poses
+from dream.backends.base import Backend
+from dream.backends.fast import Fast
+from dream.backends.robotarium import MAX_ROBOTS, Robotarium, rps_available
+from dream.specs import ROBOTARIUM, ArenaSpec
+from dream.world import current_world
+
+__all__ = ["Backend", "Fast", "Robotarium", "initial_poses", "make_robotarium", "rps_available"]
+
+BACKENDS = ("auto", "robotarium", "fast")
+
+
+def initial_poses(
+    n: int,
+    rng: np.random.Generator,
+    arena: ArenaSpec = ROBOTARIUM,
+    spacing: float = 0.2,
+) -> FloatArray:
+    """Random poses ``(3, n)`` on a grid of ``spacing`` in the central part of the arena.
+
+    As rps's ``generate_initial_conditions`` (distinct grid points in a 2.5 x 1.5 m area of the
+    3.2 x 2 m arena, random headings), scaled to ``arena``, drawn from ``rng``.
+    """
+    width, height = arena.width * 2.5 / 3.2, arena.height * 1.5 / 2.0
+    columns, rows = int(width // spacing), int(height // spacing)
+    if columns * rows < n:
+        raise ValueError(
+            f"{n} robots do not fit {spacing} m apart in the central {width:.2f} x {height:.2f} m of the arena: use a larger arena"
+        )
+    cells = rng.choice(columns * rows, size=n, replace=False)
+    cx, cy = (arena.xmin + arena.xmax) / 2, (arena.ymin + arena.ymax) / 2
+    poses = np.empty((3, n))
+    poses[0] = cx - (columns - 1) * spacing / 2 + (cells // rows) * spacing
+    poses[1] = cy - (rows - 1) * spacing / 2 + (cells % rows) * spacing
+    poses[2] = rng.uniform(-np.pi, np.pi, size=n)
+    return poses
+
+
+def make_robotarium(
+    n: int,
+    backend: str = "auto",
+    initial_conditions: Any = None,
+    *,
+    arena: ArenaSpec | None = None,
+    seed: int | None = None,
+) -> Backend:
+    """A simulator for ``n`` robots.
+
+    Parameters
+    ----------
+    backend : {"auto", "robotarium", "fast"}
+        ``"auto"`` is the real Robotarium simulator when ``rps`` is installed, ``n <= 50`` and
+        the arena is the Robotarium's, else the Fast backend.
+    initial_conditions : (3, n) array_like, optional
+        Initial poses; default: :func:`initial_poses` drawn from ``seed`` (or the current
+        world's generator).
+    arena : ArenaSpec, optional
+        Default: the Robotarium arena.
+    """
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+        raise ValueError(f"the number of robots must be an integer >= 0, got {n!r}")
+    arena = ROBOTARIUM if arena is None else arena
+    if initial_conditions is None:
+        rng = current_world().rng if seed is None else np.random.default_rng(seed)
+        initial_conditions = initial_poses(n, rng, arena)
+    poses = as_poses(initial_conditions, "initial_conditions", n)
+    if backend == "auto":
+        real = rps_available() and n <= MAX_ROBOTS and arena == ROBOTARIUM
+        backend = "robotarium" if real else "fast"
+    if backend == "robotarium":
+        if arena != ROBOTARIUM:
+            raise ValueError("the Robotarium backend only has the Robotarium arena: use backend='fast'")
+        return Robotarium(poses)
+    return Fast(poses, arena)

@@ -1,0 +1,141 @@
+"""What every simulator backend shares: the Robotarium call protocol and DREAM's bookkeeping."""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from typing import Any
+
+import numpy as np
+
+from dream import kernels
+from dream._checks import FloatArray, as_array, as_poses
+from dream.specs import ROBOTARIUM, RPS, ArenaSpec, SimulatorSpec
+
+
+class Backend(ABC):
+    """A simulator with the Robotarium interface, plus what DREAM needs.
+
+    The protocol is the Robotarium's: each iteration calls :meth:`get_poses` once, then
+    :meth:`set_velocities`, then :meth:`step`. Before each step the backend counts violations
+    by rps's criteria (robots outside the arena, pairs closer than a diameter, commands beyond
+    the wheel limit) into :attr:`violations`.
+
+    Attributes
+    ----------
+    number_of_robots : int
+    arena : ArenaSpec
+    sim : SimulatorSpec
+        Time step and the limits the simulator enforces.
+    velocities : (2, n) ndarray
+        The last commands applied (after thresholding).
+    iterations : int
+        Steps taken.
+    violations : dream.kernels.Violations
+        Counts summed over all steps so far.
+    """
+
+    name = "backend"
+
+    def __init__(self, initial_conditions: Any, arena: ArenaSpec = ROBOTARIUM, sim: SimulatorSpec = RPS) -> None:
+        poses = as_poses(initial_conditions, "initial_conditions")
+        self.number_of_robots = poses.shape[1]
+        self.arena = arena
+        self.sim = sim
+        self.time_step = sim.time_step
+        self.velocities = np.zeros((2, self.number_of_robots))
+        self.iterations = 0
+        self.violations = kernels.Violations(0, 0, 0)
+        self._poses = poses.copy()
+        self._poses_taken = False
+        self._figure: Any = None
+        self._axes: Any = None
+
+    @property
+    def poses(self) -> FloatArray:
+        """Current poses ``(3, n)`` (a copy; does not count as :meth:`get_poses`)."""
+        return self._poses.copy()
+
+    def get_poses(self) -> FloatArray:
+        """Poses ``(3, n)`` of all robots; once per :meth:`step`, as on the Robotarium."""
+        if self._poses_taken:
+            raise RuntimeError("get_poses() can only be called once per step(), as on the Robotarium")
+        self._poses_taken = True
+        return self._poses.copy()
+
+    def set_velocities(self, ids: Any, velocities: Any) -> None:
+        """Command robots ``ids`` with unicycle velocities ``(2, len(ids))`` ``[v; w]``.
+
+        Commands beyond the simulator's linear or angular limit are clipped (keeping the sign),
+        as rps does; robots not in ``ids`` keep their previous command.
+        """
+        index = np.atleast_1d(np.asarray(ids))
+        if index.dtype.kind not in "iu" or index.ndim != 1:
+            raise ValueError(f"`ids` must be a 1-D array of robot ids, got {np.asarray(ids)!r}")
+        n = self.number_of_robots
+        if len(index) and (index.min() < 0 or index.max() >= n):
+            bad = index[(index < 0) | (index >= n)][0]
+            raise IndexError(f"robot id {bad} is out of range for a simulation of {n} robots")
+        commands = as_array(velocities, "velocities", (2, len(index)))
+        self.velocities = self.velocities.copy()
+        self.velocities[:, index] = kernels.threshold_velocities(commands, self.sim)
+
+    def step(self) -> None:
+        """Count this iteration's violations, then advance the simulation by one time step."""
+        if not self._poses_taken:
+            raise RuntimeError("call get_poses() before each step(), as on the Robotarium")
+        found = kernels.validate(self._poses, self.velocities, self.arena, self.sim)
+        self.violations = kernels.Violations(*(a + b for a, b in zip(self.violations, found)))
+        self._advance()
+        self.iterations += 1
+        self._poses_taken = False
+
+    @abstractmethod
+    def _advance(self) -> None:
+        """Move the robots by one time step with ``self.velocities``; update ``self._poses``."""
+
+    def call_at_scripts_end(self) -> None:
+        """Print the run's duration on the real Robotarium and its violation counts."""
+        print(self.summary())
+
+    def summary(self) -> str:
+        """Iterations, real-time duration and violation counts, in one paragraph."""
+        b, c, a = self.violations
+        seconds = math.ceil(self.iterations * self.time_step)
+        lines = [f"{self.iterations} iterations on the {self.name} backend (~{seconds} s on the Robotarium)."]
+        if b or c or a:
+            lines += [
+                f"  {b} robot-iteration(s) outside the boundaries",
+                f"  {c} pair-iteration(s) where robots collided",
+                f"  {a} iteration(s) where the actuator limits were exceeded",
+            ]
+        else:
+            lines.append("  No errors: acceptance of the experiment on the Robotarium is likely.")
+        return "\n".join(lines)
+
+    # -- drawing, for seed-style scripts that add patches (``r.axes.add_patch(...)``) ---------
+    @property
+    def figure(self) -> Any:
+        """A headless matplotlib figure of the arena, created on first use."""
+        if self._figure is None:
+            self._make_figure()
+        return self._figure
+
+    @property
+    def axes(self) -> Any:
+        """The axes of :attr:`figure`."""
+        if self._axes is None:
+            self._make_figure()
+        return self._axes
+
+    def _make_figure(self) -> None:
+        from matplotlib.figure import Figure
+        from matplotlib.patches import Rectangle
+
+        self._figure = Figure()
+        self._axes = self._figure.add_subplot()
+        a = self.arena
+        self._axes.add_patch(Rectangle((a.xmin, a.ymin), a.width, a.height, fill=False))
+        self._axes.set_xlim(a.xmin - 0.1, a.xmax + 0.1)
+        self._axes.set_ylim(a.ymin - 0.1, a.ymax + 0.1)
+        self._axes.set_aspect("equal")

@@ -1,0 +1,13 @@
+"""The reference experiments of the thesis, as library modules with ``run(...)``."""
+
+from __future__ import annotations
+
+from types import ModuleType
+
+from dream.experiments import hrvo_circle
+from dream.experiments.result import ExperimentResult
+
+#: CLI name -> module with a ``run(n, seed, backend, steps, ...)`` function.
+EXPERIMENTS: dict[str, ModuleType] = {hrvo_circle.NAME: hrvo_circle}
+
+__all__ = ["EXPERIMENTS", "ExperimentResult", "hrvo_circle"]

@@ -1,0 +1,179 @@
+"""HRVO circle (thesis 3.1): robots cross a circle three times without touching.
+
+N robots start at random poses. Each has a goal on a circle, then the antipodal point, then
+its first goal again. A robot that reaches its goal (within 0.05 m) raises its state; range
+radios spread every robot's known states (element-wise max); when a robot knows that all
+states equal its own, it heads for its next goal. Robots avoid each other with HRVO using a
+movement sensor. Success: every robot finishes the third circle with zero collisions.
+
+For N > 10 the circle grows so that neighbouring goals stay at least 0.3 m apart (with 50
+robots on the original 0.85 m circle they would be 0.107 m apart, closer than a robot's
+diameter), and the arena grows with it when the circle no longer fits the Robotarium.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from dream.backends import make_robotarium
+from dream.experiments.result import ExperimentResult
+from dream.radios import RangeRadio
+from dream.robot import RobotHRVO
+from dream.sensors import MovementSensor, OdometrySensor
+from dream.specs import ROBOTARIUM, ArenaSpec
+from dream.timers import create_timer, update_timers
+from dream.world import World
+
+NAME = "hrvo-circle"
+CIRCLES = 3
+RADIUS = 0.85  #: the thesis's circle (m)
+GOAL_SPACING = 0.3  #: least distance between neighbouring goals (m)
+ARRIVAL = 0.05  #: a robot within this distance of its goal has arrived (m)
+
+
+def circle_radius(n: int) -> float:
+    """The thesis's 0.85 m, grown so that neighbouring goals are >= 0.3 m apart."""
+    return RADIUS if n < 2 else max(RADIUS, GOAL_SPACING / (2 * math.sin(math.pi / n)))
+
+
+def circle_arena(n: int) -> ArenaSpec:
+    """The Robotarium arena while the circle fits in it, else a larger arena of its shape."""
+    radius = circle_radius(n)
+    if radius <= RADIUS:
+        return ROBOTARIUM
+    scale = radius / RADIUS
+    return ArenaSpec.centred(ROBOTARIUM.width * scale, ROBOTARIUM.height * scale)
+
+
+def circle_goals(n: int) -> np.ndarray:
+    """Goals ``(n, 3, 2)``: robot i's point on the circle, its antipode, then the point again."""
+    radius = circle_radius(n)
+    angles = 2 * np.pi * np.arange(n) / max(n, 1)
+    here = radius * np.column_stack((np.cos(angles), np.sin(angles)))
+    return np.stack((here, -here, here), axis=1)
+
+
+class CircleRobot(RobotHRVO):
+    """A robot of the circle experiment (see the module docs).
+
+    Callbacks: :meth:`update_odom` (odometry), :meth:`update_sensor` (movement sensor),
+    :meth:`update_radio` (range radio) and :meth:`update` (the controller, writes ``dxu``).
+    """
+
+    def __init__(self, robot_id: int, tag: str, goals: np.ndarray, n: int, **kwargs: Any) -> None:
+        super().__init__(robot_id, tag, **kwargs)
+        self.goals = np.asarray(goals, dtype=np.float64)
+        self.current_goal = self.goals[0]
+        self.robot_states = [0] * n  # what this robot knows of every robot's state
+        self.state = 0  # goals reached so far
+        self.change_state = True  # the current goal has not been reached yet
+        self.desired_velocity = np.zeros(2)
+
+    def update_odom(self, pose: np.ndarray) -> None:
+        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in pose)
+
+    def update_sensor(self, detections: np.ndarray) -> None:
+        self.detections = detections
+
+    def update_radio(self, messages: list[list[int]]) -> list[int]:
+        for states in messages:
+            self.robot_states = [max(mine, theirs) for mine, theirs in zip(self.robot_states, states)]
+        self.robot_states[self.robot_id] = self.state
+        if self.state < len(self.goals) and all(s == self.state for s in self.robot_states):
+            self.current_goal = self.goals[self.state]
+            self.change_state = True
+        return self.robot_states
+
+    def update(self, dxu: np.ndarray) -> None:
+        if self.has_pose:
+            offset = self.current_goal - (self.pos_x, self.pos_y)
+            distance = math.hypot(offset[0], offset[1])
+            if distance < ARRIVAL:
+                self.desired_velocity = np.zeros(2)
+                if self.change_state:
+                    self.state += 1
+                    self.change_state = False
+            else:
+                self.desired_velocity = self.v_max * offset / distance
+        self.HRVO(self.detections, self.desired_velocity)
+        self.dxi_to_dxu()
+        self.actuator_limit()
+        dxu[:, self.robot_id] = self.dxu
+
+
+def default_steps(n: int) -> int:
+    """An iteration cap that every seed finishes well within (the run stops when done)."""
+    return 4000 + 40 * n
+
+
+def run(
+    n: int = 10,
+    seed: int = 0,
+    backend: str = "auto",
+    steps: int | None = None,
+    *,
+    trace: bool = False,
+    progress: Any = None,
+) -> ExperimentResult:
+    """Run the circle experiment until every robot completes the third circle (or ``steps``).
+
+    Parameters
+    ----------
+    n : int
+        Number of robots.
+    seed : int
+        Seeds the initial poses and everything random in the run.
+    backend : {"auto", "robotarium", "fast"}
+    steps : int, optional
+        Iteration cap; default :func:`default_steps`.
+    trace : bool
+        Record the poses of every step in ``result.trace``.
+    progress : callable, optional
+        Called as ``progress(step, cap)`` after every step.
+
+    Returns
+    -------
+    ExperimentResult
+        ``measures``: ``circles_completed`` (by every robot) and the circle radius.
+    """
+    cap = default_steps(n) if steps is None else steps
+    goals = circle_goals(n)
+    with World(seed) as world:
+        sim = make_robotarium(n, backend, arena=circle_arena(n), seed=seed)
+        robots = []
+        for i in range(n):
+            robot = CircleRobot(i, f"robot_{i}", goals[i], n, arena=sim.arena)
+            odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
+            movement = MovementSensor(i, f"movement_{i}", robot.update_sensor)
+            radio = RangeRadio(i, f"radio_{i}", robot.update_radio)
+            create_timer(i, 20 + i, [
+                {"delay": 2 + i % 2, "tag": "odom", "call": odometry.update},
+                {"delay": 3 + i % 2, "tag": "movement", "call": movement.update},
+                {"delay": 30, "tag": "radio", "call": radio.update},
+                {"delay": 4 + i % 2, "tag": "robot", "call": robot.update},
+            ])
+            robots.append(robot)
+
+        dxu = np.zeros((2, n))
+        poses = [sim.poses] if trace else []
+        done_at = None
+        start = time.perf_counter()
+        for t in range(cap):
+            x = sim.get_poses()
+            update_timers(t, {"odom": (x,), "movement": (x, dxu), "radio": (x,), "robot": (dxu,)})
+            sim.set_velocities(np.arange(n), dxu)
+            sim.step()
+            if trace:
+                poses.append(sim.poses)
+            if progress is not None:
+                progress(t + 1, cap)
+            if all(robot.state >= CIRCLES for robot in robots):
+                done_at = t + 1
+                break
+        wall = time.perf_counter() - start
+    measures = {"circles_completed": min((r.state for r in robots), default=CIRCLES), "circle_radius": circle_radius(n)}
+    return ExperimentResult.from_backend(NAME, seed, sim, done_at, wall, measures, np.array(poses) if trace else None)

@@ -1,0 +1,77 @@
+"""What an experiment run returns: its metrics, a printable summary and an optional trace."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from dream.backends import Backend
+
+
+@dataclass
+class ExperimentResult:
+    """Metrics of one run.
+
+    ``collisions``, ``boundary`` and ``actuator`` are the rps validation counts summed over the
+    run (pair-iterations of robots within a diameter, robot-iterations outside the arena,
+    iterations with a command beyond the wheel limit). ``completed_step`` is the step at which
+    the experiment reached its goal (``None`` if it did not). ``measures`` holds the
+    experiment's own figures; ``trace``, when recorded, the poses ``(steps + 1, 3, n)``.
+    """
+
+    experiment: str
+    n: int
+    seed: int
+    backend: str
+    steps: int
+    completed_step: int | None
+    collisions: int
+    boundary: int
+    actuator: int
+    wall_time: float
+    measures: dict[str, Any] = field(default_factory=dict)
+    trace: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def completed(self) -> bool:
+        return self.completed_step is not None
+
+    @property
+    def steps_per_second(self) -> float:
+        return self.steps / self.wall_time if self.wall_time > 0 else float("inf")
+
+    @classmethod
+    def from_backend(cls, experiment: str, seed: int, backend: Backend, completed_step: int | None, wall_time: float,
+                     measures: dict[str, Any], trace: np.ndarray | None = None) -> ExperimentResult:
+        b, c, a = backend.violations
+        return cls(experiment, backend.number_of_robots, seed, backend.name, backend.iterations, completed_step,
+                   c, b, a, wall_time, measures, trace)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The metrics as plain JSON-ready values (without the trace)."""
+        data = asdict(self)
+        data.pop("trace")
+        data["steps_per_second"] = self.steps_per_second
+        data["completed"] = self.completed
+        return data
+
+    def summary(self) -> str:
+        """A two-column table of the metrics."""
+        rows = [
+            ("experiment", self.experiment),
+            ("robots", self.n),
+            ("seed", self.seed),
+            ("backend", self.backend),
+            ("steps run", self.steps),
+            ("completed at step", "not completed" if self.completed_step is None else self.completed_step),
+            ("collisions", self.collisions),
+            ("boundary", self.boundary),
+            ("actuator", self.actuator),
+            *self.measures.items(),
+            ("wall time (s)", f"{self.wall_time:.2f}"),
+            ("steps/s", f"{self.steps_per_second:.0f}"),
+        ]
+        width = max(len(name) for name, _ in rows)
+        return "\n".join(f"{name:<{width}}  {value}" for name, value in rows)

@@ -1,0 +1,186 @@
+"""Robots: the decision-making part, independent of any simulator.
+
+A robot learns its pose only through its sensors' callbacks; until the first one arrives its
+pose is unknown (NaN) and it commands zero velocity, whatever order its timers run in.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from dream import kernels
+from dream._checks import FloatArray, as_array
+from dream._reference.hrvo import candidate_grid
+from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec, RobotSpec
+
+
+class Robot:
+    """Base robot: parameters, velocity placeholders and the unicycle conversion.
+
+    Parameters
+    ----------
+    robot_id : int
+        Index of the robot in the simulator's pose and velocity arrays.
+    tag : str
+        Name of the robot.
+    vel_gain, ang_gain : float
+        Gains of the single-integrator to unicycle conversion (:meth:`dxi_to_dxu`).
+    spec : RobotSpec
+        Physical limits (default: GRITSbot).
+
+    Attributes
+    ----------
+    pos_x, pos_y, rot_w : float
+        The robot's belief of its pose (m, m, rad); NaN until a sensor reports it.
+    dxi : (2,) ndarray
+        Single-integrator velocity (m/s) the robot wants.
+    dxu : (2,) ndarray
+        Unicycle command ``[v, w]`` (m/s, rad/s).
+    """
+
+    def __init__(
+        self, robot_id: int, tag: str = "robot", vel_gain: float = 0.8, ang_gain: float = 3.0, *, spec: RobotSpec = GRITSBOT
+    ) -> None:
+        if isinstance(robot_id, bool) or not isinstance(robot_id, (int, np.integer)) or robot_id < 0:
+            raise ValueError(f"robot_id must be an integer >= 0, got {robot_id!r}")
+        self.robot_id = int(robot_id)
+        self.tag = tag
+        self.pos_x = math.nan
+        self.pos_y = math.nan
+        self.rot_w = math.nan
+        self.vel_gain = vel_gain
+        self.ang_gain = ang_gain
+        self.dxi = np.zeros(2)
+        self.dxu = np.zeros(2)
+        self.spec = spec
+        self.v_max = spec.v_max
+        self.w_max = spec.w_max
+        self.ac_max = spec.ac_max
+        self.r_wheel = spec.wheel_radius
+        self.r_length = spec.base_length
+
+    @property
+    def has_pose(self) -> bool:
+        """Whether a sensor has told the robot where it is."""
+        return math.isfinite(self.pos_x) and math.isfinite(self.pos_y) and math.isfinite(self.rot_w)
+
+    def dxi_to_dxu(self) -> None:
+        """Convert ``dxi`` to the unicycle command ``dxu`` (zero while the pose is unknown).
+
+        ``v = vel_gain (c dxi_x + s dxi_y)``, ``w = ang_gain atan2(-s dxi_x + c dxi_y, v) / (pi/2)``
+        with ``c, s = cos, sin(rot_w)``.
+        """
+        if not self.has_pose:
+            self.dxu[:] = 0.0
+            return
+        c, s = math.cos(self.rot_w), math.sin(self.rot_w)
+        dx, dy = float(self.dxi[0]), float(self.dxi[1])
+        v = self.vel_gain * (c * dx + s * dy)
+        self.dxu[0] = v
+        self.dxu[1] = self.ang_gain * math.atan2(-s * dx + c * dy, v) / (math.pi / 2)
+
+    def actuator_limit(self) -> None:
+        """Keep ``dxu`` within the robot's limits, slowing down rather than turning less.
+
+        ``v`` and ``w`` are clipped to ``v_max`` and ``w_max``; if the faster wheel would then
+        exceed ``ac_max`` (``|v|/r + |w| L/(2r) > ac_max``), ``|v|`` becomes
+        ``ac_max r - |w| L/2``, keeping its sign.
+        """
+        v = max(-self.v_max, min(self.v_max, float(self.dxu[0])))
+        w = max(-self.w_max, min(self.w_max, float(self.dxu[1])))
+        half = self.r_length / 2
+        if abs(v) / self.r_wheel + abs(w) * half / self.r_wheel > self.ac_max:
+            speed = max(self.ac_max * self.r_wheel - half * abs(w), 0.0)
+            v = speed if v > 0 else -speed
+        self.dxu[0] = v
+        self.dxu[1] = w
+
+
+class RobotHRVO(Robot):
+    """A robot that avoids the others with Hybrid Reciprocal Velocity Obstacles.
+
+    Parameters
+    ----------
+    safety : float
+        Combined safety radius (m): the closest two robots' centres should come.
+    check_boundaries : bool
+        Only choose velocities that keep ``position + v`` inside the arena, shrunk by
+        ``boundary_margin`` (default: the robot's radius, so its body stays inside; the
+        original used no margin).
+    arena : ArenaSpec
+        The arena (default: the Robotarium's).
+    n_angles, n_speeds : int
+        Candidate velocity grid (see :func:`dream.kernels.hrvo`).
+    include_preferred : bool
+        Also try the desired velocity itself before the grid (the original did not).
+    """
+
+    def __init__(
+        self,
+        robot_id: int,
+        tag: str = "robot",
+        vel_gain: float = 0.8,
+        ang_gain: float = 3.0,
+        safety: float = 0.24,
+        check_boundaries: bool = True,
+        *,
+        spec: RobotSpec = GRITSBOT,
+        arena: ArenaSpec = ROBOTARIUM,
+        boundary_margin: float | None = None,
+        n_angles: int = 20,
+        n_speeds: int = 10,
+        include_preferred: bool = True,
+    ) -> None:
+        super().__init__(robot_id, tag, vel_gain, ang_gain, spec=spec)
+        if not (math.isfinite(safety) and safety >= 0):
+            raise ValueError(f"safety must be finite and >= 0, got {safety}")
+        self.safety = safety
+        self.check_boundaries = check_boundaries
+        self.arena = arena
+        margin = spec.radius if boundary_margin is None else boundary_margin
+        self.bounds = arena.shrunk(margin)
+        self.bound_x = [self.bounds[0], self.bounds[1]]
+        self.bound_y = [self.bounds[2], self.bounds[3]]
+        self.include_preferred = include_preferred
+        self.candidates = candidate_grid(self.v_max, n_angles, n_speeds)
+        self.detections: FloatArray = np.zeros((0, 4))
+
+    def HRVO(self, detections: Any, desired_velocity: Any) -> FloatArray:  # noqa: N802 (original name)
+        """Choose a collision-free velocity close to ``desired_velocity`` and store it in ``dxi``.
+
+        Parameters
+        ----------
+        detections : (k, 4) array_like
+            Rows ``[distance, angle, vx, vy]`` from a :class:`~dream.sensors.MovementSensor`;
+            ``angle`` points from the detected robot towards this one (original convention).
+        desired_velocity : (2,) array_like
+            Preferred single-integrator velocity (m/s).
+
+        Returns
+        -------
+        (2,) ndarray
+            The chosen velocity (also stored in ``dxi``): zero while the pose is unknown or
+            when every candidate is forbidden.
+        """
+        if not self.has_pose:
+            self.dxi = np.zeros(2)
+            return self.dxi
+        d = as_array(detections, "detections", (None, 4)) if len(detections) else np.zeros((0, 4))
+        preferred = as_array(desired_velocity, "desired_velocity", (2,))
+        self.dxi = kernels.hrvo_velocity(
+            self.dxi,
+            preferred,
+            d[:, 1] + math.pi,  # towards the detected robot
+            d[:, 0],
+            d[:, 2:4],
+            safety=self.safety,
+            v_max=self.v_max,
+            position=np.array([self.pos_x, self.pos_y]),
+            bounds=self.bounds if self.check_boundaries else None,
+            candidates=self.candidates,
+            include_preferred=self.include_preferred,
+        )
+        return self.dxi

@@ -1,0 +1,135 @@
+"""Sensors: how a robot perceives itself and the others, with optional seeded noise.
+
+Each sensor reads the simulator's pose array ``x`` ``(3, n)``, keeps its own robot's pose as
+its origin and reports through a callback. Noise is Gaussian with standard deviation
+``noise``, drawn from the world's generator, so a seeded world gives reproducible runs.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import numpy as np
+
+from dream import kernels
+from dream._checks import FloatArray, as_array, as_poses, check_nonnegative, check_robot_id
+from dream.world import current_world
+
+#: Distance ahead of a robot's centre at which its velocity is estimated (m).
+PROJECTION_DISTANCE = 0.05
+
+
+class Sensor:
+    """Base sensor attached to robot ``robot_id``.
+
+    Attributes
+    ----------
+    pos_x, pos_y, rot_w : float
+        Pose of the robot the sensor is attached to, at the last :meth:`update`.
+    ret : any
+        The last reading.
+    """
+
+    def __init__(self, robot_id: int, tag: str = "Sensor") -> None:
+        self.robot_id = robot_id
+        self.tag = tag
+        self.pos_x = 0.0
+        self.pos_y = 0.0
+        self.rot_w = 0.0
+        self.ret: Any = 0
+        self.world = current_world()
+
+    def add_noise(self, values: Any, noise: float) -> FloatArray:
+        """``values`` plus Gaussian noise of standard deviation ``noise`` (world's generator)."""
+        array = np.array(values, dtype=np.float64)
+        if noise > 0:
+            array = array + self.world.rng.normal(0.0, noise, array.shape)
+        return array
+
+    def update(self, x: Any) -> None:
+        """Take the attached robot's pose from the pose array ``x`` ``(3, n)``."""
+        poses = as_poses(x, "x")
+        check_robot_id(self.robot_id, poses.shape[1], "x")
+        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in poses[:, self.robot_id])
+        self._poses = poses
+
+
+class MovementSensor(Sensor):
+    """Detects the position and velocity of the other robots in range and field of view.
+
+    Parameters
+    ----------
+    callback : callable
+        Receives the detections, an array ``(k, 4)`` of rows ``[distance, angle, vx, vy]``.
+    range : float
+        Largest distance detected (m, inclusive).
+    direction : float
+        Sensor axis relative to the robot's heading (rad, counter-clockwise).
+    wide : float
+        Full aperture (rad); ``2 pi`` sees all around.
+    noise : float
+        Standard deviation of the noise added to every value.
+
+    Notes
+    -----
+    ``angle`` is the direction *from the detected robot towards this robot*,
+    ``atan2(y_self - y_other, x_self - x_other)``: the original DREAM convention, kept so that
+    original experiments run unchanged (``RobotHRVO.HRVO`` expects it). ``(vx, vy)`` is the
+    detected robot's velocity estimated from its last command ``(v, w)`` and heading ``th`` at
+    a point 0.05 m ahead of it: ``vx = v cos th - 0.05 w sin th``,
+    ``vy = v sin th + 0.05 w cos th``. A robot never detects itself; robots at the same spot
+    detect each other.
+    """
+
+    def __init__(
+        self,
+        robot_id: int,
+        tag: str,
+        callback: Callable[[FloatArray], Any],
+        range: float = 1.0,  # noqa: A002 (original name)
+        direction: float = 0.0,
+        wide: float = 2 * np.pi,
+        noise: float = 0.0,
+    ) -> None:
+        super().__init__(robot_id, tag)
+        self.callback = callback
+        self.range = check_nonnegative(range, "range")
+        self.direction = float(direction)
+        self.wide = check_nonnegative(wide, "wide")
+        self.noise = check_nonnegative(noise, "noise")
+
+    def update(self, x: Any, v: Any) -> None:  # type: ignore[override]
+        """Detect from poses ``x`` ``(3, n)`` and last commands ``v`` ``(2, n)``; call the callback."""
+        super().update(x)
+        poses = self._poses
+        commands = as_array(v, "v", (2, poses.shape[1]))
+        found, distances = kernels.neighbours_of(
+            poses[:2].T, self.robot_id, self.range, heading=self.rot_w, direction=self.direction, fov=self.wide
+        )
+        theta = poses[2, found]
+        lin, ang = commands[0, found], commands[1, found]
+        detections = np.column_stack(
+            (
+                distances,
+                np.arctan2(self.pos_y - poses[1, found], self.pos_x - poses[0, found]),
+                lin * np.cos(theta) - PROJECTION_DISTANCE * ang * np.sin(theta),
+                lin * np.sin(theta) + PROJECTION_DISTANCE * ang * np.cos(theta),
+            )
+        )
+        self.ret = self.add_noise(detections, self.noise)
+        self.callback(self.ret)
+
+
+class OdometrySensor(Sensor):
+    """Reports the attached robot's own pose ``[x, y, theta]`` (plus noise) to ``callback``."""
+
+    def __init__(self, robot_id: int, tag: str, callback: Callable[[FloatArray], Any], noise: float = 0.0) -> None:
+        super().__init__(robot_id, tag)
+        self.callback = callback
+        self.noise = check_nonnegative(noise, "noise")
+
+    def update(self, x: Any) -> None:
+        """Read the pose from ``x`` ``(3, n)`` and call the callback."""
+        super().update(x)
+        self.ret = self.add_noise([self.pos_x, self.pos_y, self.rot_w], self.noise)
+        self.callback(self.ret)

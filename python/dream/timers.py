@@ -1,0 +1,98 @@
+"""Timers: when each part of a robot runs, in simulation steps.
+
+A timer belongs to a robot. It stays off while ``current_time <= delay`` (start-up delay);
+afterwards each entry ``{"delay": gap, "tag": tag, "call": callable}`` runs
+``call(*param[tag])`` whenever ``gap`` steps have passed since it last ran (initially at 0).
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from dream.world import current_world
+
+
+@dataclass
+class _Entry:
+    delay: float
+    tag: str
+    call: Callable[..., Any]
+    ptime: float = 0  # time of the last activation
+
+
+class Timer:
+    """Activates a robot's callbacks at their own rates.
+
+    Parameters
+    ----------
+    robot_id : int
+        Robot the timer belongs to (used in error messages).
+    timer_delay : float
+        Start-up delay: nothing runs while ``current_time <= timer_delay``.
+    list_of_timers : list of dict
+        Entries with keys ``delay`` (steps between activations), ``tag`` (key into the params
+        dict of :meth:`update`) and ``call`` (the callable).
+    """
+
+    def __init__(self, robot_id: int, timer_delay: float, list_of_timers: Sequence[Mapping[str, Any]]) -> None:
+        self.robot_id = robot_id
+        self.timer_delay = _steps(timer_delay, f"timer of robot {robot_id}: start-up delay")
+        self.current_time: float = 0
+        self.list_of_timers = [self._entry(i, spec) for i, spec in enumerate(list_of_timers)]
+
+    def _entry(self, index: int, spec: Mapping[str, Any]) -> _Entry:
+        where = f"timer of robot {self.robot_id}, entry {index}"
+        if not isinstance(spec, Mapping):
+            raise TypeError(f"{where}: must be a dict with keys 'delay', 'tag', 'call', got {type(spec).__name__}")
+        missing = [key for key in ("delay", "tag", "call") if key not in spec]
+        if missing:
+            raise KeyError(f"{where}: missing key(s) {', '.join(map(repr, missing))}")
+        if not callable(spec["call"]):
+            raise TypeError(f"{where} (tag {spec['tag']!r}): 'call' must be callable, got {type(spec['call']).__name__}")
+        return _Entry(_steps(spec["delay"], f"{where} (tag {spec['tag']!r}): 'delay'"), spec["tag"], spec["call"])
+
+    def update(self, current_time: float, param: Mapping[str, Sequence[Any]]) -> None:
+        """Run every entry that is due at ``current_time`` with its arguments ``param[tag]``."""
+        self.current_time = current_time
+        if current_time <= self.timer_delay:
+            return
+        for entry in self.list_of_timers:
+            if current_time - entry.ptime >= entry.delay:
+                entry.ptime = current_time
+                entry.call(*self._arguments(entry.tag, param))
+
+    def _arguments(self, tag: str, param: Mapping[str, Sequence[Any]]) -> Sequence[Any]:
+        if tag not in param:
+            given = ", ".join(map(repr, param)) or "none"
+            raise KeyError(f"timer of robot {self.robot_id}: tag {tag!r} is not in the params dict (tags given: {given})")
+        args = param[tag]
+        if not isinstance(args, (tuple, list)):
+            raise TypeError(
+                f"timer of robot {self.robot_id}: params[{tag!r}] must be a tuple of arguments, "
+                f"got {type(args).__name__} (one argument is written as {tag!r}: (x,))"
+            )
+        return args
+
+
+def _steps(value: Any, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value) or value < 0:
+        raise ValueError(f"{what} must be a finite number of steps >= 0, got {value!r}")
+    return value
+
+
+def create_timer(robot_id: int, delay: float, list_of_timers: Sequence[Mapping[str, Any]]) -> Timer:
+    """Create a timer for ``robot_id`` in the current world (see :class:`Timer`)."""
+    return current_world().create_timer(robot_id, delay, list_of_timers)
+
+
+def update_timers(current_time: float, param: Mapping[str, Sequence[Any]]) -> None:
+    """Update every timer of the current world; call once per simulation step.
+
+    ``param`` maps each tag to the tuple of arguments of its callbacks, e.g.
+    ``{"odom": (x,), "movement": (x, dxu), "robot": (dxu,)}``.
+    """
+    current_world().update_timers(current_time, param)

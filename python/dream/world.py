@@ -1,0 +1,127 @@
+"""The World: everything the original DREAM kept in module globals, in one object.
+
+A world owns the radio message board, the registered timers, the clock of the last
+``update_timers`` call and a seeded random generator (sensor noise, message loss). Original
+scripts use the default world through the module-level functions; ``with World(seed=1):``
+makes a fresh world current for the block, so runs in one process never see each other's
+messages or timers::
+
+    >>> from dream import World, RangeRadio
+    >>> with World(seed=0) as world:
+    ...     radio = RangeRadio(0, "radio", callback=lambda messages: None)
+    ...     radio.send_data({"state": 1})
+    ...     world.messages
+    {0: {'state': 1}}
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from dream.timers import Timer
+
+
+class World:
+    """Shared state of one simulation: message board, timers, clock and random generator.
+
+    Parameters
+    ----------
+    seed : int, optional
+        Seed of the world's random generator; the same seed gives the same noise and losses.
+    """
+
+    def __init__(self, seed: int | None = None) -> None:
+        self.seed = seed
+        self.rng = np.random.default_rng(seed)
+        self.time = 0  #: the ``current_time`` of the last ``update_timers`` call
+        self.timers: list[Timer] = []
+        self._board: dict[int, Any] = {}
+        self._in_flight: list[tuple[int, int, Any]] = []  # (visible at, sender, data)
+
+    # -- radio -----------------------------------------------------------------------------
+    def publish(self, robot_id: int, data: Any, latency: int = 0) -> None:
+        """Put ``data`` on the board under ``robot_id`` (a later send overwrites an earlier one).
+
+        The board keeps a deep copy, so the sender's later changes reach nobody. With
+        ``latency`` > 0 the message becomes visible ``latency`` steps of the world's clock later.
+        """
+        snapshot = copy.deepcopy(data)
+        if latency > 0:
+            self._in_flight.append((self.time + latency, robot_id, snapshot))
+        else:
+            self._board[robot_id] = snapshot
+
+    @property
+    def messages(self) -> dict[int, Any]:
+        """The board ``{robot_id: data}`` as it is visible now."""
+        self._deliver()
+        return self._board
+
+    def receive(self, senders: Iterable[int], loss: float = 0.0) -> list[Any]:
+        """Copies of the visible messages of ``senders`` (in the given order).
+
+        Robots that have not published are skipped; each message is dropped with probability
+        ``loss``, drawn from the world's generator.
+        """
+        board = self.messages
+        received = []
+        for sender in senders:
+            if sender in board and (loss <= 0 or self.rng.random() >= loss):
+                received.append(copy.deepcopy(board[sender]))
+        return received
+
+    def _deliver(self) -> None:
+        if not self._in_flight:
+            return
+        waiting = []
+        for visible_at, sender, data in self._in_flight:
+            if visible_at <= self.time:
+                self._board[sender] = data
+            else:
+                waiting.append((visible_at, sender, data))
+        self._in_flight = waiting
+
+    # -- timers ----------------------------------------------------------------------------
+    def create_timer(self, robot_id: int, delay: float, list_of_timers: Sequence[Mapping[str, Any]]) -> Timer:
+        """Create a :class:`~dream.timers.Timer` and register it in this world."""
+        from dream.timers import Timer
+
+        timer = Timer(robot_id, delay, list_of_timers)
+        self.timers.append(timer)
+        return timer
+
+    def update_timers(self, current_time: float, param: Mapping[str, Sequence[Any]]) -> None:
+        """Advance the clock to ``current_time`` and update every timer of this world."""
+        self.time = current_time
+        for timer in self.timers:
+            timer.update(current_time, param)
+
+    # -- current world ---------------------------------------------------------------------
+    def __enter__(self) -> World:
+        _stack.append(self)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        _stack.remove(self)
+
+    def __repr__(self) -> str:
+        return f"World(seed={self.seed}, time={self.time}, timers={len(self.timers)}, messages={len(self._board)})"
+
+
+_stack: list[World] = [World()]
+
+
+def current_world() -> World:
+    """The innermost world entered with ``with``, or the default world."""
+    return _stack[-1]
+
+
+def reset_default_world(seed: int | None = None) -> World:
+    """Replace the default world (for scripts that run several simulations in sequence)."""
+    _stack[0] = World(seed)
+    return _stack[0]
