@@ -78,6 +78,8 @@ def make_robotarium(
         real = rps_available() and n <= MAX_ROBOTS and arena == ROBOTARIUM
         backend = "robotarium" if real else "fast"
     if backend == "robotarium":
+        if n > MAX_ROBOTS:
+            raise ValueError(f"the Robotarium runs at most {MAX_ROBOTS} robots, got {n}: use backend='fast'")
         if arena != ROBOTARIUM:
             raise ValueError("the Robotarium backend only has the Robotarium arena: use backend='fast'")
         return Robotarium(poses)

@@ -1,0 +1,42 @@
+"""The `dream` command and the example scripts, run as a user would."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+from dream.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_cli_list_names_the_experiments(capsys):
+    assert main(["list"]) == 0
+    assert "hrvo-circle" in capsys.readouterr().out
+
+
+def test_cli_run_prints_summary_and_writes_json(tmp_path, capsys):
+    out = tmp_path / "metrics.json"
+    assert main(["run", "hrvo-circle", "-n", "4", "--steps", "80", "--backend", "fast", "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "collisions" in printed and "steps/s" in printed
+    metrics = json.loads(out.read_text())
+    assert metrics["steps"] == 80 and metrics["n"] == 4 and metrics["backend"] == "fast"
+    assert metrics["collisions"] == 0
+
+
+def test_cli_run_reports_bad_input_without_traceback(capsys):
+    assert main(["run", "hrvo-circle", "-n", "51", "--backend", "robotarium", "--steps", "5"]) == 2
+    err = capsys.readouterr().err
+    assert "at most 50" in err and "Traceback" not in err
+
+
+def test_example_script_runs():
+    done = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / "hrvo_circle.py"), "--steps", "120", "--backend", "fast"],
+        capture_output=True, text=True, timeout=120, check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "120 iterations" in done.stdout

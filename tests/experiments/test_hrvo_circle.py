@@ -1,0 +1,62 @@
+"""Outcomes of the HRVO circle experiment, not just that it runs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dream.experiments import hrvo_circle
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_hrvo_circle_completes_three_circles_without_collision_on_rps(seed):
+    result = hrvo_circle.run(n=10, seed=seed, backend="robotarium")
+    assert result.backend == "robotarium"
+    assert result.measures["circles_completed"] == 3
+    assert result.completed_step is not None and result.completed_step < hrvo_circle.default_steps(10)
+    assert result.steps == result.completed_step  # stops as soon as it is done
+    assert result.collisions == 0
+    assert result.boundary == 0
+
+
+def test_hrvo_circle_fast_backend_follows_rps_trajectories():
+    # Same algorithm, same semantics: identical poses until float rounding eventually tips a
+    # discrete decision (the conversion's atan2 branch cut), which takes well over 500 steps.
+    real = hrvo_circle.run(n=10, seed=3, backend="robotarium", steps=500, trace=True)
+    fast = hrvo_circle.run(n=10, seed=3, backend="fast", steps=500, trace=True)
+    assert real.trace.shape == fast.trace.shape == (501, 3, 10)
+    np.testing.assert_allclose(fast.trace, real.trace, rtol=0, atol=1e-9)
+    assert np.abs(real.trace[-1] - real.trace[0]).max() > 0.5  # the robots did move
+
+
+def test_hrvo_circle_robots_wait_for_their_first_pose():
+    # Robot i's timer starts after 20 + i steps: until then it has no pose and must not move
+    # (only the heading's re-wrapping may change its last bit).
+    result = hrvo_circle.run(n=10, seed=1, backend="fast", steps=60, trace=True)
+    for i in range(10):
+        still = result.trace[: 22 + i, :, i]
+        np.testing.assert_allclose(still, np.repeat(result.trace[:1, :, i], 22 + i, axis=0), rtol=0, atol=1e-12)
+        assert np.abs(result.trace[23 + i, :, i] - result.trace[0, :, i]).max() > 1e-6
+    assert np.abs(result.trace[-1] - result.trace[0]).max() > 0
+
+
+def test_hrvo_circle_is_reproducible():
+    first = hrvo_circle.run(n=6, seed=11, backend="fast", steps=400, trace=True)
+    second = hrvo_circle.run(n=6, seed=11, backend="fast", steps=400, trace=True)
+    np.testing.assert_array_equal(first.trace, second.trace)
+
+
+def test_hrvo_circle_goals_stay_apart_for_many_robots():
+    for n in (10, 50, 200):
+        goals = hrvo_circle.circle_goals(n)[:, 0]
+        gaps = np.linalg.norm(goals - np.roll(goals, 1, axis=0), axis=1)
+        assert gaps.min() >= hrvo_circle.GOAL_SPACING - 1e-12
+        arena = hrvo_circle.circle_arena(n)
+        assert np.all(np.abs(goals[:, 0]) < arena.xmax) and np.all(np.abs(goals[:, 1]) < arena.ymax)
+
+
+def test_hrvo_circle_scales_beyond_ten_robots_on_fast():
+    # The original state vector was hard-coded for 10 robots and crashed beyond.
+    result = hrvo_circle.run(n=24, seed=0, backend="fast", steps=300)
+    assert result.n == 24 and result.backend == "fast"
+    assert result.collisions == 0
