@@ -9,7 +9,7 @@ from pathlib import Path
 README = Path(__file__).resolve().parents[1] / "README.md"
 
 
-def test_readme_example_moves_robots_right(capsys):
+def test_readme_example_runs_without_collision(capsys):
     code = re.findall(r"```python\n(.*?)```", README.read_text(), re.S)[0]
     namespace: dict = {}
     exec(compile(code, "README.md", "exec"), namespace)
