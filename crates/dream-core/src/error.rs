@@ -21,6 +21,12 @@ pub enum GeomError {
         rule: &'static str,
         got: f64,
     },
+    /// CSR neighbour lists that do not describe one row per robot with valid robot ids.
+    #[error("`neighbours` is not a valid CSR of {robots} rows: {reason}")]
+    InvalidNeighbours { robots: usize, reason: String },
+    /// An obstacle whose vertices enclose no area.
+    #[error("obstacle {0} is degenerate: its vertices enclose no area")]
+    DegenerateObstacle(usize),
     /// An arena whose minimum is not below its maximum.
     #[error("arena bounds must satisfy xmin < xmax and ymin < ymax, got ({xmin}, {xmax}, {ymin}, {ymax})")]
     InvalidBounds {

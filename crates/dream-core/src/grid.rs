@@ -1,45 +1,67 @@
 //! Uniform grid over the plane: the spatial index behind every "who is near whom" query.
 //!
-//! Cells are squares of side `cell`; a query within distance `cell` of a point only has to
-//! look at the 3x3 block of cells around it, so a whole-swarm query costs O(N * k), not O(N^2).
+//! Cells are squares of side `cell`; every point within distance `cell` of a point lies in the
+//! 3x3 block of cells around it, so a whole-swarm query costs O(n k), not O(n^2). Points are
+//! bucketed by a counting sort into CSR order. When the occupied bounding box has few cells
+//! (robots spread over an arena: the usual case) the cell table is a dense array; otherwise
+//! (a few far-flung robots) a hash map keeps memory O(n).
 
 use std::collections::HashMap;
 
-/// Points bucketed by cell, stored as CSR (`starts`, `members`) so a cell's points are contiguous.
+/// Points bucketed by cell; a cell's points are contiguous in `members`, in increasing index.
 #[derive(Debug, Clone)]
 pub struct Grid {
     cell: f64,
-    index: HashMap<(i64, i64), usize>,
+    table: CellTable,
     starts: Vec<usize>,
     members: Vec<usize>,
 }
 
+#[derive(Debug, Clone)]
+enum CellTable {
+    /// Slot of cell `(cx, cy)` is `(cx - x0) * rows + (cy - y0)`.
+    Dense { x0: i64, y0: i64, columns: i64, rows: i64 },
+    Sparse(HashMap<(i64, i64), usize>),
+}
+
 impl Grid {
-    /// Buckets the points `(xs[i], ys[i])` into cells of side `cell` (> 0, finite: checked by the caller).
+    /// Buckets the points `(xs[i], ys[i])` into cells of side `cell`.
+    ///
+    /// `cell` must be finite and > 0 and the coordinates finite (the callers check).
     pub fn new(xs: &[f64], ys: &[f64], cell: f64) -> Self {
-        let keys: Vec<(i64, i64)> = xs
-            .iter()
-            .zip(ys)
-            .map(|(&x, &y)| cell_of(x, y, cell))
-            .collect();
-        let mut index: HashMap<(i64, i64), usize> = HashMap::with_capacity(keys.len());
-        let mut counts: Vec<usize> = Vec::new();
-        let slots: Vec<usize> = keys
-            .iter()
-            .map(|key| {
-                let next = counts.len();
-                let slot = *index.entry(*key).or_insert(next);
-                if slot == next {
-                    counts.push(0);
-                }
-                counts[slot] += 1;
-                slot
-            })
-            .collect();
-        let mut starts = Vec::with_capacity(counts.len() + 1);
-        starts.push(0);
-        for count in &counts {
-            starts.push(starts.last().copied().unwrap_or(0) + count);
+        let keys: Vec<(i64, i64)> = xs.iter().zip(ys).map(|(&x, &y)| cell_of(x, y, cell)).collect();
+        let (mut x0, mut y0, mut x1, mut y1) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
+        for &(cx, cy) in &keys {
+            x0 = x0.min(cx);
+            y0 = y0.min(cy);
+            x1 = x1.max(cx);
+            y1 = y1.max(cy);
+        }
+        let columns = x1.checked_sub(x0).and_then(|w| w.checked_add(1)).unwrap_or(i64::MAX);
+        let rows = y1.checked_sub(y0).and_then(|h| h.checked_add(1)).unwrap_or(i64::MAX);
+        let budget = 4 * keys.len() as i64 + 1024;
+        let (table, slots, cells) = if !keys.is_empty() && columns <= budget && rows <= budget && columns * rows <= budget {
+            let slots: Vec<usize> = keys.iter().map(|&(cx, cy)| ((cx - x0) * rows + (cy - y0)) as usize).collect();
+            (CellTable::Dense { x0, y0, columns, rows }, slots, (columns * rows) as usize)
+        } else {
+            let mut index: HashMap<(i64, i64), usize> = HashMap::with_capacity(keys.len());
+            let slots: Vec<usize> = keys
+                .iter()
+                .map(|key| {
+                    let next = index.len();
+                    *index.entry(*key).or_insert(next)
+                })
+                .collect();
+            let cells = index.len();
+            (CellTable::Sparse(index), slots, cells)
+        };
+        // Counting sort of point indices by slot: stable, so each cell lists increasing indices.
+        let mut starts = vec![0_usize; cells + 1];
+        for &slot in &slots {
+            starts[slot + 1] += 1;
+        }
+        for s in 0..cells {
+            starts[s + 1] += starts[s];
         }
         let mut fill = starts.clone();
         let mut members = vec![0; keys.len()];
@@ -47,27 +69,33 @@ impl Grid {
             members[fill[slot]] = point;
             fill[slot] += 1;
         }
-        Self {
-            cell,
-            index,
-            starts,
-            members,
-        }
+        Self { cell, table, starts, members }
     }
 
-    /// Calls `visit(j)` for every point in the 3x3 block of cells around `(x, y)`
-    /// (a superset of the points within `cell` of it), in increasing cell order.
+    /// Calls `visit(j)` for every point in the 3x3 block of cells around `(x, y)`: a superset
+    /// of the points within `cell` of it.
     pub fn for_each_near(&self, x: f64, y: f64, mut visit: impl FnMut(usize)) {
         let (cx, cy) = cell_of(x, y, self.cell);
         for dx in -1..=1_i64 {
             for dy in -1..=1_i64 {
-                let key = (cx.saturating_add(dx), cy.saturating_add(dy));
-                if let Some(&slot) = self.index.get(&key) {
+                if let Some(slot) = self.slot(cx.saturating_add(dx), cy.saturating_add(dy)) {
                     for &j in &self.members[self.starts[slot]..self.starts[slot + 1]] {
                         visit(j);
                     }
                 }
             }
+        }
+    }
+
+    fn slot(&self, cx: i64, cy: i64) -> Option<usize> {
+        match &self.table {
+            CellTable::Dense { x0, y0, columns, rows } => {
+                let (i, j) = (cx.checked_sub(*x0)?, cy.checked_sub(*y0)?);
+                (0..*columns).contains(&i).then_some(())?;
+                (0..*rows).contains(&j).then_some(())?;
+                Some((i * rows + j) as usize)
+            }
+            CellTable::Sparse(index) => index.get(&(cx, cy)).copied(),
         }
     }
 }
@@ -81,22 +109,35 @@ fn cell_of(x: f64, y: f64, cell: f64) -> (i64, i64) {
 mod tests {
     use super::*;
 
+    fn near(grid: &Grid, x: f64, y: f64) -> Vec<usize> {
+        let mut seen = Vec::new();
+        grid.for_each_near(x, y, |j| seen.push(j));
+        seen.sort();
+        seen
+    }
+
     #[test]
     fn near_points_are_visited_once() {
         let xs = [0.0, 0.05, 0.3, -0.09, 5.0];
         let ys = [0.0, 0.02, 0.0, 0.0, 5.0];
         let grid = Grid::new(&xs, &ys, 0.1);
-        let mut seen = Vec::new();
-        grid.for_each_near(0.0, 0.0, |j| seen.push(j));
-        seen.sort();
-        assert_eq!(seen, vec![0, 1, 3]);
+        assert_eq!(near(&grid, 0.0, 0.0), vec![0, 1, 3]);
+        assert_eq!(near(&grid, 5.0, 5.0), vec![4]);
+    }
+
+    #[test]
+    fn far_flung_points_use_the_sparse_table() {
+        let xs = [0.0, 1e12, -1e12, 1e12 + 0.05];
+        let ys = [0.0, 1e12, 0.0, 1e12];
+        let grid = Grid::new(&xs, &ys, 0.1);
+        assert!(matches!(grid.table, CellTable::Sparse(_)));
+        assert_eq!(near(&grid, 1e12, 1e12), vec![1, 3]);
+        assert_eq!(near(&grid, 0.0, 0.0), vec![0]);
     }
 
     #[test]
     fn empty_grid_visits_nothing() {
         let grid = Grid::new(&[], &[], 1.0);
-        let mut count = 0;
-        grid.for_each_near(0.0, 0.0, |_| count += 1);
-        assert_eq!(count, 0);
+        assert!(near(&grid, 0.0, 0.0).is_empty());
     }
 }

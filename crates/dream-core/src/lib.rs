@@ -12,5 +12,9 @@
 pub mod dynamics;
 pub mod error;
 pub mod grid;
+pub mod hrvo;
+pub mod neighbours;
+pub mod obstacles;
+pub mod voronoi;
 
 pub use error::{GeomError, Result};

@@ -4,6 +4,10 @@
 mod arrays;
 mod dynamics;
 mod errors;
+mod hrvo;
+mod neighbours;
+mod obstacles;
+mod voronoi;
 
 use pyo3::prelude::*;
 
@@ -15,5 +19,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(dynamics::validate, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::dxi_to_dxu, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::actuator_limit, m)?)?;
+    m.add_function(wrap_pyfunction!(neighbours::neighbours, m)?)?;
+    m.add_function(wrap_pyfunction!(hrvo::hrvo, m)?)?;
+    m.add_class::<hrvo::PyHrvoPlanner>()?;
+    m.add_function(wrap_pyfunction!(voronoi::voronoi_cells, m)?)?;
+    m.add_function(wrap_pyfunction!(obstacles::virtual_agents, m)?)?;
     Ok(())
 }

@@ -1,0 +1,190 @@
+//! Voronoi cells bounded by a disc and the arena, by exact convex polygon clipping.
+//!
+//! Robot i's cell starts as the disc of `radius` around it (a regular polygon of `resolution`
+//! vertices, the first at angle 0), is clipped by the arena, then by the perpendicular-bisector
+//! half-plane of every other robot within `2 radius` (increasing index) and of each of its
+//! virtual agents (given order). A robot whose cell is empty gets area 0 and its own position
+//! as centroid. The arithmetic matches the NumPy reference operation by operation.
+
+use std::f64::consts::TAU;
+
+use rayon::prelude::*;
+
+use crate::dynamics::Arena;
+use crate::error::{check_finite, check_len, GeomError, Result};
+use crate::hrvo::Vec2;
+use crate::neighbours;
+
+/// Rows below this count run on one thread.
+const PARALLEL_ROBOTS: usize = 256;
+
+/// Every robot's cell: centroid, area and polygon (CSR: robot i's vertices are
+/// `vertices[offsets[i]..offsets[i + 1]]`, counter-clockwise).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Cells {
+    pub centroids: Vec<Vec2>,
+    pub areas: Vec<f64>,
+    pub vertices: Vec<Vec2>,
+    pub offsets: Vec<i64>,
+}
+
+/// Keeps the part of the convex `polygon` where `(q - point) . normal <= 0`, into `out`.
+fn clip(polygon: &[Vec2], point: Vec2, normal: Vec2, out: &mut Vec<Vec2>) {
+    out.clear();
+    let side = |q: Vec2| (q[0] - point[0]) * normal[0] + (q[1] - point[1]) * normal[1];
+    for k in 0..polygon.len() {
+        let (a, b) = (polygon[k], polygon[(k + 1) % polygon.len()]);
+        let (sa, sb) = (side(a), side(b));
+        if sa <= 0.0 {
+            out.push(a);
+        }
+        if (sa <= 0.0) != (sb <= 0.0) {
+            let t = sa / (sa - sb);
+            out.push([a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t]);
+        }
+    }
+}
+
+/// Area and centroid of a simple polygon (shoelace); `fallback` is the centroid of an empty one.
+pub fn area_centroid(polygon: &[Vec2], fallback: Vec2) -> (f64, Vec2) {
+    let (mut twice, mut cx, mut cy) = (0.0, 0.0, 0.0);
+    for k in 0..polygon.len() {
+        let (a, b) = (polygon[k], polygon[(k + 1) % polygon.len()]);
+        let cross = a[0] * b[1] - b[0] * a[1];
+        twice += cross;
+        cx += (a[0] + b[0]) * cross;
+        cy += (a[1] + b[1]) * cross;
+    }
+    if polygon.len() < 3 || twice <= 0.0 {
+        (0.0, fallback)
+    } else {
+        (twice / 2.0, [cx / (3.0 * twice), cy / (3.0 * twice)])
+    }
+}
+
+fn cell(p: Vec2, radius: f64, arena: &Arena, agents: impl Iterator<Item = Vec2>, resolution: usize) -> Vec<Vec2> {
+    let mut polygon: Vec<Vec2> = (0..resolution)
+        .map(|k| {
+            let angle = TAU * k as f64 / resolution as f64;
+            [p[0] + radius * angle.cos(), p[1] + radius * angle.sin()]
+        })
+        .collect();
+    let mut scratch = Vec::with_capacity(resolution + 8);
+    let walls = [
+        ([arena.xmin, 0.0], [-1.0, 0.0]),
+        ([arena.xmax, 0.0], [1.0, 0.0]),
+        ([0.0, arena.ymin], [0.0, -1.0]),
+        ([0.0, arena.ymax], [0.0, 1.0]),
+    ];
+    for (point, normal) in walls {
+        clip(&polygon, point, normal, &mut scratch);
+        std::mem::swap(&mut polygon, &mut scratch);
+    }
+    for q in agents {
+        if polygon.is_empty() {
+            break;
+        }
+        let middle = [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0];
+        clip(&polygon, middle, [q[0] - p[0], q[1] - p[1]], &mut scratch);
+        std::mem::swap(&mut polygon, &mut scratch);
+    }
+    polygon
+}
+
+/// Cells of every robot. `virtual_agents` is CSR `(indptr, points)`: robot i's virtual agents
+/// are `points[indptr[i]..indptr[i + 1]]`.
+///
+/// # Errors
+/// Non-finite input, a non-positive radius, fewer than 3 vertices per disc, or an invalid
+/// virtual-agent CSR.
+pub fn voronoi_cells(
+    positions: &[Vec2],
+    radius: f64,
+    arena: &Arena,
+    virtual_agents: Option<(&[i64], &[Vec2])>,
+    resolution: usize,
+) -> Result<Cells> {
+    let n = positions.len();
+    check_finite("positions", positions.as_flattened())?;
+    if !(radius.is_finite() && radius > 0.0) {
+        return Err(GeomError::InvalidParameter { arg: "radius", rule: "> 0", got: radius });
+    }
+    if resolution < 3 {
+        return Err(GeomError::InvalidParameter { arg: "resolution", rule: ">= 3", got: resolution as f64 });
+    }
+    if let Some((indptr, points)) = virtual_agents {
+        check_len("virtual indptr", n + 1, indptr.len())?;
+        check_finite("virtual", points.as_flattened())?;
+        let ok = indptr[0] == 0 && indptr[n] == points.len() as i64 && indptr.windows(2).all(|w| w[0] <= w[1]);
+        if !ok {
+            return Err(GeomError::InvalidNeighbours { robots: n, reason: "virtual indptr must rise from 0 to len(points)".into() });
+        }
+    }
+    let (xs, ys): (Vec<f64>, Vec<f64>) = positions.iter().map(|p| (p[0], p[1])).unzip();
+    let near = neighbours::within(&xs, &ys, 2.0 * radius, None, None)?;
+    let robot = |i: usize| {
+        let others = near.indices[near.indptr[i] as usize..near.indptr[i + 1] as usize].iter().map(|&j| positions[j as usize]);
+        let own: &[Vec2] = match virtual_agents {
+            Some((indptr, points)) => &points[indptr[i] as usize..indptr[i + 1] as usize],
+            None => &[],
+        };
+        let polygon = cell(positions[i], radius, arena, others.chain(own.iter().copied()), resolution);
+        let (area, centroid) = area_centroid(&polygon, positions[i]);
+        (polygon, area, centroid)
+    };
+    let per_robot: Vec<(Vec<Vec2>, f64, Vec2)> =
+        if n >= PARALLEL_ROBOTS { (0..n).into_par_iter().map(robot).collect() } else { (0..n).map(robot).collect() };
+    let mut cells = Cells { offsets: Vec::with_capacity(n + 1), ..Cells::default() };
+    cells.offsets.push(0);
+    for (polygon, area, centroid) in per_robot {
+        cells.vertices.extend(polygon);
+        cells.offsets.push(cells.vertices.len() as i64);
+        cells.areas.push(area);
+        cells.centroids.push(centroid);
+    }
+    Ok(cells)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn arena() -> Arena {
+        Arena::new(-1.6, 1.6, -1.0, 1.0).unwrap()
+    }
+
+    #[test]
+    fn lone_robot_gets_its_disc() {
+        let cells = voronoi_cells(&[[0.0, 0.0]], 0.5, &arena(), None, 256).unwrap();
+        let disc = std::f64::consts::PI * 0.25;
+        assert!((cells.areas[0] - disc).abs() < 1e-3 * disc);
+        assert!(cells.centroids[0][0].abs() < 1e-12 && cells.centroids[0][1].abs() < 1e-12);
+    }
+
+    #[test]
+    fn two_robots_split_the_plane_at_the_bisector() {
+        let cells = voronoi_cells(&[[-0.2, 0.0], [0.2, 0.0]], 0.5, &arena(), None, 64).unwrap();
+        let left = &cells.vertices[cells.offsets[0] as usize..cells.offsets[1] as usize];
+        assert!(left.iter().all(|v| v[0] <= 1e-12));
+        assert!((cells.areas[0] - cells.areas[1]).abs() < 1e-12);
+        assert!(cells.centroids[0][0] < -0.2);
+    }
+
+    #[test]
+    fn arena_and_virtual_agents_cut_the_cell() {
+        // A robot in the corner: the arena takes three quarters of its small disc.
+        let corner = voronoi_cells(&[[1.6, 1.0]], 0.1, &arena(), None, 400).unwrap();
+        assert!((corner.areas[0] - std::f64::consts::PI * 0.01 / 4.0).abs() < 1e-4);
+        // A virtual agent straight above at 0.4 m keeps the cell below y = 0.2.
+        let cut = voronoi_cells(&[[0.0, 0.0]], 0.5, &arena(), Some((&[0, 1], &[[0.0, 0.4]])), 64).unwrap();
+        assert!(cut.vertices.iter().all(|v| v[1] <= 0.2 + 1e-12));
+    }
+
+    #[test]
+    fn robot_outside_the_arena_has_an_empty_cell() {
+        let cells = voronoi_cells(&[[5.0, 5.0]], 0.5, &arena(), None, 64).unwrap();
+        assert_eq!(cells.areas[0], 0.0);
+        assert_eq!(cells.centroids[0], [5.0, 5.0]);
+        assert_eq!(cells.offsets, vec![0, 0]);
+    }
+}

@@ -1,0 +1,104 @@
+//! Bindings of `dream_core::hrvo`: the batch call and a per-robot planner.
+
+use dream_core::dynamics::Arena;
+use dream_core::hrvo::{self as core, HrvoParams, Neighbour, Vec2};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+
+use crate::arrays::{points_of, vector_of};
+use crate::errors::PyDreamResult;
+
+fn params(
+    safety: f64,
+    v_max: f64,
+    bounds: Option<(f64, f64, f64, f64)>,
+    include_preferred: bool,
+) -> PyDreamResult<HrvoParams> {
+    let bounds = bounds.map(|b| Arena::new(b.0, b.1, b.2, b.3)).transpose()?;
+    Ok(HrvoParams { safety, v_max, bounds, include_preferred }.validated()?)
+}
+
+fn vec2(arg: &str, array: &PyReadonlyArray1<'_, f64>) -> PyDreamResult<Vec2> {
+    let v = vector_of(arg, array, Some(2))?;
+    Ok([v[0], v[1]])
+}
+
+/// HRVO velocities `(n, 2)` of the whole swarm; neighbours from CSR `(indptr, indices)` or within `radius`.
+#[pyfunction]
+#[pyo3(signature = (positions, velocities, preferred, indptr, indices, *, radius, safety, v_max, bounds, candidates, include_preferred))]
+#[allow(clippy::too_many_arguments)]
+pub fn hrvo<'py>(
+    py: Python<'py>,
+    positions: PyReadonlyArray2<'py, f64>,
+    velocities: PyReadonlyArray2<'py, f64>,
+    preferred: PyReadonlyArray2<'py, f64>,
+    indptr: Option<PyReadonlyArray1<'py, i64>>,
+    indices: Option<PyReadonlyArray1<'py, i64>>,
+    radius: f64,
+    safety: f64,
+    v_max: f64,
+    bounds: Option<(f64, f64, f64, f64)>,
+    candidates: PyReadonlyArray2<'py, f64>,
+    include_preferred: bool,
+) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
+    let p = points_of::<2>("positions", &positions)?;
+    let v = points_of::<2>("velocities", &velocities)?;
+    let pref = points_of::<2>("preferred", &preferred)?;
+    let grid = points_of::<2>("candidates", &candidates)?;
+    let csr = match (indptr, indices) {
+        (Some(a), Some(b)) => Some((a.as_array().to_vec(), b.as_array().to_vec())),
+        _ => None,
+    };
+    let params = params(safety, v_max, bounds, include_preferred)?;
+    let chosen = py.detach(|| {
+        let csr = csr.as_ref().map(|(a, b)| (a.as_slice(), b.as_slice()));
+        core::hrvo_batch(&p, &v, &pref, csr, radius, &grid, &params)
+    })?;
+    let n = chosen.len();
+    Ok(chosen.into_flattened().into_pyarray(py).reshape([n, 2])?)
+}
+
+/// A robot's HRVO planner: parameters and candidate grid, fixed; one call per decision.
+#[pyclass(name = "HrvoPlanner", module = "dream._core", frozen)]
+pub struct PyHrvoPlanner {
+    params: HrvoParams,
+    grid: Vec<Vec2>,
+}
+
+#[pymethods]
+impl PyHrvoPlanner {
+    #[new]
+    #[pyo3(signature = (candidates, *, safety, v_max, bounds, include_preferred))]
+    fn new(
+        candidates: PyReadonlyArray2<'_, f64>,
+        safety: f64,
+        v_max: f64,
+        bounds: Option<(f64, f64, f64, f64)>,
+        include_preferred: bool,
+    ) -> PyDreamResult<Self> {
+        let grid = points_of::<2>("candidates", &candidates)?;
+        dream_core::error::check_finite("candidates", grid.as_flattened())?;
+        Ok(Self { params: params(safety, v_max, bounds, include_preferred)?, grid })
+    }
+
+    /// The velocity `(2,)` for seed-format `detections` `(k, 4)` `[distance, angle, vx, vy]`.
+    fn velocity<'py>(
+        &self,
+        py: Python<'py>,
+        detections: PyReadonlyArray2<'py, f64>,
+        velocity: PyReadonlyArray1<'py, f64>,
+        preferred: PyReadonlyArray1<'py, f64>,
+        position: PyReadonlyArray1<'py, f64>,
+    ) -> PyDreamResult<Bound<'py, PyArray1<f64>>> {
+        let around: Vec<Neighbour> = points_of::<4>("detections", &detections)?.into_iter().map(Neighbour::from_detection).collect();
+        let chosen = core::hrvo_one(
+            vec2("velocity", &velocity)?,
+            vec2("preferred", &preferred)?,
+            vec2("position", &position)?,
+            &around,
+            &self.grid,
+            &self.params,
+        )?;
+        Ok(chosen.to_vec().into_pyarray(py))
+    }
+}

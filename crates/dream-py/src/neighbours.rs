@@ -1,0 +1,32 @@
+//! Bindings of `dream_core::neighbours`: range and field-of-view queries as CSR arrays.
+
+use dream_core::neighbours::{self as core, FieldOfView};
+use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+
+use crate::arrays::{points_of, vector_of};
+use crate::errors::PyDreamResult;
+
+type CsrArrays<'py> = (Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<f64>>);
+
+/// Neighbours of every robot within `radius` (and field of view) as `(indptr, indices, distances)`.
+#[pyfunction]
+#[pyo3(signature = (positions, radius, headings=None, direction=0.0, fov=std::f64::consts::TAU, max_neighbours=None))]
+pub fn neighbours<'py>(
+    py: Python<'py>,
+    positions: PyReadonlyArray2<'py, f64>,
+    radius: f64,
+    headings: Option<PyReadonlyArray1<'py, f64>>,
+    direction: f64,
+    fov: f64,
+    max_neighbours: Option<usize>,
+) -> PyDreamResult<CsrArrays<'py>> {
+    let points = points_of::<2>("positions", &positions)?;
+    let headings = headings.map(|h| vector_of("headings", &h, Some(points.len()))).transpose()?;
+    let csr = py.detach(|| {
+        let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|p| (p[0], p[1])).unzip();
+        let view = headings.as_deref().map(|headings| FieldOfView { headings, direction, fov });
+        core::within(&xs, &ys, radius, view, max_neighbours)
+    })?;
+    Ok((csr.indptr.into_pyarray(py), csr.indices.into_pyarray(py), csr.distances.into_pyarray(py)))
+}

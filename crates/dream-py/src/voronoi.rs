@@ -1,0 +1,47 @@
+//! Bindings of `dream_core::voronoi`: disc-bounded Voronoi cells of the whole swarm.
+
+use dream_core::dynamics::Arena;
+use dream_core::voronoi as core;
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+
+use crate::arrays::points_of;
+use crate::errors::PyDreamResult;
+
+type CellArrays<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<i64>>,
+);
+
+/// `(centroids (n, 2), areas (n,), vertices (m, 2), offsets (n + 1,))` of every robot's cell.
+#[pyfunction]
+#[pyo3(signature = (positions, *, radius, bounds, virtual_indptr=None, virtual_points=None, resolution=64))]
+pub fn voronoi_cells<'py>(
+    py: Python<'py>,
+    positions: PyReadonlyArray2<'py, f64>,
+    radius: f64,
+    bounds: (f64, f64, f64, f64),
+    virtual_indptr: Option<PyReadonlyArray1<'py, i64>>,
+    virtual_points: Option<PyReadonlyArray2<'py, f64>>,
+    resolution: usize,
+) -> PyDreamResult<CellArrays<'py>> {
+    let points = points_of::<2>("positions", &positions)?;
+    let arena = Arena::new(bounds.0, bounds.1, bounds.2, bounds.3)?;
+    let agents = match (virtual_indptr, virtual_points) {
+        (Some(indptr), Some(found)) => Some((indptr.as_array().to_vec(), points_of::<2>("virtual", &found)?)),
+        _ => None,
+    };
+    let cells = py.detach(|| {
+        let agents = agents.as_ref().map(|(indptr, found)| (indptr.as_slice(), found.as_slice()));
+        core::voronoi_cells(&points, radius, &arena, agents, resolution)
+    })?;
+    let (n, m) = (cells.centroids.len(), cells.vertices.len());
+    Ok((
+        cells.centroids.into_flattened().into_pyarray(py).reshape([n, 2])?,
+        cells.areas.into_pyarray(py),
+        cells.vertices.into_flattened().into_pyarray(py).reshape([m, 2])?,
+        cells.offsets.into_pyarray(py),
+    ))
+}
