@@ -168,7 +168,9 @@ class RobotHRVO(Robot):
         if not self.has_pose:
             self.dxi = np.zeros(2)
             return self.dxi
-        d = as_array(detections, "detections", (None, 4)) if len(detections) else np.zeros((0, 4))
+        # The original sensor reported "nothing detected" as an empty 1-D array: accept it.
+        empty = np.ndim(detections) <= 1 and np.size(detections) == 0
+        d = np.zeros((0, 4)) if empty else as_array(detections, "detections", (None, 4))
         preferred = as_array(desired_velocity, "desired_velocity", (2,))
         self.dxi = kernels.hrvo_velocity(
             self.dxi,

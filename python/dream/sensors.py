@@ -42,7 +42,7 @@ class Sensor:
     def add_noise(self, values: Any, noise: float) -> FloatArray:
         """``values`` plus Gaussian noise of standard deviation ``noise`` (world's generator)."""
         array = np.array(values, dtype=np.float64)
-        if noise > 0:
+        if check_nonnegative(noise, "noise") > 0:
             array = array + self.world.rng.normal(0.0, noise, array.shape)
         return array
 
@@ -95,6 +95,8 @@ class MovementSensor(Sensor):
         self.callback = callback
         self.range = check_nonnegative(range, "range")
         self.direction = float(direction)
+        if not np.isfinite(self.direction):
+            raise ValueError(f"`direction` must be finite, got {direction}")
         self.wide = check_nonnegative(wide, "wide")
         self.noise = check_nonnegative(noise, "noise")
 

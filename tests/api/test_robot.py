@@ -282,3 +282,18 @@ def test_robot_accepts_numpy_integer_id():
 def test_robot_hrvo_rejects_invalid_safety(safety):
     with pytest.raises(ValueError, match="safety"):
         RobotHRVO(0, "robot", safety=safety)
+
+
+@pytest.mark.parametrize("empty", [[], np.zeros(0), np.zeros((0, 4))])
+def test_robot_hrvo_treats_empty_detections_as_nobody_around(empty):
+    # The original sensor reported "nothing" as an empty 1-D array; both forms mean free space.
+    robot = RobotHRVO(0, "r", check_boundaries=False)
+    robot.pos_x, robot.pos_y, robot.rot_w = 0.0, 0.0, 0.0
+    assert_array_equal(robot.HRVO(empty, np.array([0.1, 0.0])), [0.1, 0.0])
+
+
+def test_robot_hrvo_rejects_empty_detections_of_the_wrong_width():
+    robot = RobotHRVO(0, "r")
+    robot.pos_x, robot.pos_y, robot.rot_w = 0.0, 0.0, 0.0
+    with pytest.raises(ValueError, match="detections"):
+        robot.HRVO(np.zeros((0, 3)), np.array([0.1, 0.0]))

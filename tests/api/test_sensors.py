@@ -271,3 +271,14 @@ def test_movement_sensor_rejects_invalid_parameters(kwargs, name):
 def test_odometry_sensor_rejects_negative_noise():
     with pytest.raises(ValueError, match="noise"):
         OdometrySensor(0, "odom", lambda p: None, noise=-0.5)
+
+
+@pytest.mark.parametrize("noise", [-0.1, math.nan])
+def test_sensor_add_noise_rejects_invalid_noise(noise):
+    with pytest.raises(ValueError, match="noise"):
+        Sensor(0).add_noise([1.0, 2.0], noise)
+
+
+def test_movement_sensor_rejects_non_finite_direction():
+    with pytest.raises(ValueError, match="direction"):
+        MovementSensor(0, "m", lambda d: None, direction=math.nan)
