@@ -2,9 +2,26 @@
 
 import numpy as np
 from numpy.typing import NDArray
+from typing import final
 
 __version__: str
-__all__ = ["__version__", "unicycle_step", "threshold_velocities", "validate", "dxi_to_dxu", "actuator_limit"]
+__all__ = [
+    "__version__",
+    "unicycle_step",
+    "threshold_velocities",
+    "validate",
+    "dxi_to_dxu",
+    "actuator_limit",
+    "neighbours",
+    "hrvo",
+    "HrvoPlanner",
+    "voronoi_cells",
+    "virtual_agents",
+]
+
+_Bounds = tuple[float, float, float, float]
+_Floats = NDArray[np.float64]
+_Ints = NDArray[np.int64]
 
 def unicycle_step(poses: NDArray[np.float64], velocities: NDArray[np.float64], dt: float) -> NDArray[np.float64]:
     """Poses (3, n) after one forward-Euler unicycle step with commands (2, n)."""
@@ -39,3 +56,51 @@ def actuator_limit(
     max_wheel: float,
 ) -> NDArray[np.float64]:
     """Commands (2, n) within the speed limits, slowed so that no wheel is too fast."""
+
+def neighbours(
+    positions: _Floats,
+    radius: float,
+    headings: _Floats | None = None,
+    direction: float = 0.0,
+    fov: float = ...,
+    max_neighbours: int | None = None,
+) -> tuple[_Ints, _Ints, _Floats]:
+    """CSR (indptr (n+1,), indices, distances) of every robot's neighbours within radius and field of view."""
+
+def hrvo(
+    positions: _Floats,
+    velocities: _Floats,
+    preferred: _Floats,
+    indptr: _Ints | None,
+    indices: _Ints | None,
+    *,
+    radius: float,
+    safety: float,
+    v_max: float,
+    bounds: _Bounds | None,
+    candidates: _Floats,
+    include_preferred: bool,
+) -> _Floats:
+    """HRVO velocities (n, 2) of the whole swarm; neighbours from CSR or within radius."""
+
+@final
+class HrvoPlanner:
+    """One robot's HRVO parameters and candidate grid (m, 2)."""
+
+    def __new__(cls, candidates: _Floats, *, safety: float, v_max: float, bounds: _Bounds | None, include_preferred: bool) -> HrvoPlanner: ...
+    def velocity(self, detections: _Floats, velocity: _Floats, preferred: _Floats, position: _Floats) -> _Floats:
+        """Velocity (2,) for seed-format detections (k, 4) [distance, angle, vx, vy]."""
+
+def voronoi_cells(
+    positions: _Floats,
+    *,
+    radius: float,
+    bounds: _Bounds,
+    virtual_indptr: _Ints | None = None,
+    virtual_points: _Floats | None = None,
+    resolution: int = 64,
+) -> tuple[_Floats, _Floats, _Floats, _Ints]:
+    """(centroids (n, 2), areas (n,), vertices (m, 2), offsets (n+1,)) of disc-bounded Voronoi cells."""
+
+def virtual_agents(positions: _Floats, vertices: _Floats, offsets: _Ints, *, range: float, offset: float) -> tuple[_Ints, _Floats]:
+    """CSR (indptr (n+1,), points (m, 2)) of every robot's virtual agents for convex obstacles."""

@@ -19,7 +19,10 @@ import numpy as np
 
 from dream import _reference
 from dream._checks import FloatArray, as_array, as_poses, check_nonnegative, check_robot_id
+from dream.errors import GeometryError
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec, RobotSpec, SimulatorSpec
+
+Bounds = tuple[float, float, float, float]
 
 
 def _load_core() -> ModuleType | None:
@@ -124,6 +127,8 @@ def neighbours(
 ) -> tuple[np.ndarray, np.ndarray, FloatArray]:
     """Each robot's neighbours within ``radius`` (and field of view) as CSR arrays.
 
+    A uniform grid (cells of the radius) makes this O(n k) in Rust.
+
     Parameters
     ----------
     positions : (n, 2)
@@ -131,9 +136,9 @@ def neighbours(
         Inclusive range (m).
     headings : (n,), optional
         Robot headings (rad); with them only robots within ``fov / 2`` of
-        ``heading + direction`` are kept.
+        ``heading + direction`` are kept (a co-located robot is always kept).
     max_neighbours : int, optional
-        Keep only the nearest ones.
+        Keep only the nearest ones (ties: lower index).
 
     Returns
     -------
@@ -144,9 +149,14 @@ def neighbours(
     p = as_array(positions, "positions", (None, 2))
     check_nonnegative(radius, "radius")
     h = None if headings is None else as_array(headings, "headings", (p.shape[0],))
+    if not np.isfinite(direction):
+        raise ValueError(f"`direction` must be finite, got {direction}")
+    check_nonnegative(fov, "fov")
     if max_neighbours is not None and max_neighbours < 0:
         raise ValueError(f"`max_neighbours` must be >= 0, got {max_neighbours}")
-    return _reference.neighbours(p, radius, headings=h, direction=direction, fov=fov, max_neighbours=max_neighbours)
+    if _core is None:
+        return _reference.neighbours(p, radius, headings=h, direction=direction, fov=fov, max_neighbours=max_neighbours)
+    return _core.neighbours(p, radius, h, direction, fov, max_neighbours)
 
 
 def neighbours_of(
@@ -160,7 +170,9 @@ def neighbours_of(
 ) -> tuple[np.ndarray, FloatArray]:
     """One robot's neighbours ``(indices, distances)`` among ``positions`` ``(n, 2)``.
 
-    Same rules as :func:`neighbours` for row ``robot_id`` (``heading`` is that robot's).
+    Same rules as :func:`neighbours` for row ``robot_id`` (``heading`` is that robot's); O(n).
+    Per-robot sensors and radios use :meth:`dream.World.neighbours_of`, which answers from one
+    index per step instead.
     """
     p = as_array(positions, "positions", (None, 2))
     check_robot_id(robot_id, p.shape[0], "positions")
@@ -168,30 +180,64 @@ def neighbours_of(
     return _reference.neighbours_of(p, robot_id, radius, heading=heading, direction=direction, fov=fov)
 
 
-def hrvo_velocity(
-    velocity: FloatArray,
-    preferred: FloatArray,
-    directions: FloatArray,
-    distances: FloatArray,
-    neighbour_velocities: FloatArray,
-    *,
-    safety: float = 0.24,
-    v_max: float = 0.2,
-    position: FloatArray | None = None,
-    bounds: tuple[float, float, float, float] | None = None,
-    candidates: FloatArray | None = None,
-    include_preferred: bool = True,
-) -> FloatArray:
-    """One robot's HRVO velocity ``(2,)`` from its neighbours' directions ``(k,)`` (rad, from the
-    robot towards each), distances ``(k,)`` and velocities ``(k, 2)``; see :func:`hrvo`.
+def _checked_bounds(bounds: Any) -> Bounds | None:
+    if bounds is None:
+        return None
+    values = tuple(float(b) for b in bounds)
+    if len(values) != 4 or not all(np.isfinite(values)) or values[0] >= values[1] or values[2] >= values[3]:
+        raise ValueError(f"`bounds` must be finite (xmin, xmax, ymin, ymax) with xmin < xmax and ymin < ymax, got {bounds}")
+    return values  # type: ignore[return-value]
 
-    Inputs are trusted to be finite float64 arrays of those shapes (the per-robot API checks
-    them once, upstream).
+
+def _checked_grid(v_max: float, n_angles: int, n_speeds: int) -> FloatArray:
+    check_nonnegative(v_max, "v_max")
+    if n_angles < 1 or n_speeds < 1:
+        raise ValueError(f"`n_angles` and `n_speeds` must be >= 1, got {n_angles} and {n_speeds}")
+    return _reference.candidate_grid(v_max, n_angles, n_speeds)
+
+
+class HrvoPlanner:
+    """One robot's HRVO: fixed parameters and candidate grid, one :meth:`velocity` call per decision.
+
+    This is the per-robot path of :class:`dream.RobotHRVO`; see :func:`hrvo` for the algorithm.
     """
-    return _reference.hrvo_velocity(
-        velocity, preferred, directions, distances, neighbour_velocities, safety=safety, v_max=v_max,
-        position=position, bounds=bounds, candidates=candidates, include_preferred=include_preferred,
-    )
+
+    def __init__(
+        self,
+        *,
+        safety: float = 0.24,
+        v_max: float = 0.2,
+        bounds: Bounds | None = None,
+        n_angles: int = 20,
+        n_speeds: int = 10,
+        include_preferred: bool = True,
+    ) -> None:
+        self.safety = check_nonnegative(safety, "safety")
+        self.v_max = v_max
+        self.bounds = _checked_bounds(bounds)
+        self.candidates = _checked_grid(v_max, n_angles, n_speeds)
+        self.include_preferred = include_preferred
+        self._rust = None
+        if _core is not None:
+            self._rust = _core.HrvoPlanner(
+                self.candidates, safety=safety, v_max=v_max, bounds=self.bounds, include_preferred=include_preferred
+            )
+
+    def velocity(self, detections: FloatArray, velocity: FloatArray, preferred: FloatArray, position: FloatArray) -> FloatArray:
+        """The chosen velocity ``(2,)``.
+
+        ``detections`` ``(k, 4)`` are movement-sensor rows ``[distance, angle, vx, vy]`` (angle
+        from the detected robot towards this one); ``velocity`` is the robot's previous
+        velocity, ``preferred`` the one it wants, ``position`` where it is (all ``(2,)``, finite
+        float64: the caller checks).
+        """
+        if self._rust is not None:
+            return self._rust.velocity(detections, velocity, preferred, position)
+        return _reference.hrvo_velocity(
+            velocity, preferred, detections[:, 1] + np.pi, detections[:, 0], detections[:, 2:4],
+            safety=self.safety, v_max=self.v_max, position=position, bounds=self.bounds,
+            candidates=self.candidates, include_preferred=self.include_preferred,
+        )
 
 
 def hrvo(
@@ -203,12 +249,18 @@ def hrvo(
     radius: float = 1.0,
     safety: float = 0.24,
     v_max: float = 0.2,
-    bounds: tuple[float, float, float, float] | None = None,
+    bounds: Bounds | None = None,
     n_angles: int = 20,
     n_speeds: int = 10,
     include_preferred: bool = True,
 ) -> FloatArray:
     """HRVO velocities ``(n, 2)`` for the whole swarm (single-integrator, m/s).
+
+    For each robot and neighbour: a cone of half-angle ``asin(safety / max(d, safety))`` towards
+    the neighbour, with the RVO edge (apex ``(v_A + v_B) / 2``) on the side of the robot's
+    velocity and the VO edge (apex ``v_B``) on the other. The result is the candidate closest to
+    the preferred velocity that no neighbour forbids and that keeps ``position + v`` strictly
+    inside ``bounds``; zero if none does.
 
     Parameters
     ----------
@@ -233,21 +285,149 @@ def hrvo(
     pref = as_array(preferred, "preferred", (n, 2))
     check_nonnegative(radius, "radius")
     check_nonnegative(safety, "safety")
-    check_nonnegative(v_max, "v_max")
-    if n_angles < 1 or n_speeds < 1:
-        raise ValueError(f"`n_angles` and `n_speeds` must be >= 1, got {n_angles} and {n_speeds}")
+    grid = _checked_grid(v_max, n_angles, n_speeds)
+    box = _checked_bounds(bounds)
     csr = None if neighbours is None else _checked_csr(neighbours, n)
-    return _reference.hrvo(
-        p, v, pref, csr, radius=radius, safety=safety, v_max=v_max, bounds=bounds,
-        n_angles=n_angles, n_speeds=n_speeds, include_preferred=include_preferred,
+    if _core is None:
+        return _reference.hrvo(
+            p, v, pref, csr, radius=radius, safety=safety, v_max=v_max, bounds=box,
+            n_angles=n_angles, n_speeds=n_speeds, include_preferred=include_preferred,
+        )
+    indptr, indices = (None, None) if csr is None else csr
+    return _core.hrvo(
+        p, v, pref, indptr, indices, radius=radius, safety=safety, v_max=v_max, bounds=box,
+        candidates=grid, include_preferred=include_preferred,
     )
 
 
 def _checked_csr(csr: tuple[Any, Any], n: int) -> tuple[np.ndarray, np.ndarray]:
-    indptr = np.asarray(csr[0], dtype=np.int64)
-    indices = np.asarray(csr[1], dtype=np.int64)
+    indptr = np.ascontiguousarray(csr[0], dtype=np.int64)
+    indices = np.ascontiguousarray(csr[1], dtype=np.int64)
     if indptr.shape != (n + 1,) or indptr[0] != 0 or np.any(np.diff(indptr) < 0) or indptr[-1] != len(indices):
         raise ValueError(f"`neighbours` indptr must be non-decreasing of shape ({n + 1},) from 0 to len(indices)")
     if len(indices) and (indices.min() < 0 or indices.max() >= n):
         raise ValueError(f"`neighbours` indices must be robot ids in [0, {n})")
     return indptr, indices
+
+
+class VoronoiCells(NamedTuple):
+    """Cells of :func:`voronoi_cells`; ``vertices``/``offsets`` are ``None`` unless requested."""
+
+    centroids: FloatArray  #: (n, 2)
+    areas: FloatArray  #: (n,)
+    vertices: FloatArray | None  #: (m, 2): robot i's polygon is vertices[offsets[i]:offsets[i+1]]
+    offsets: np.ndarray | None  #: (n + 1,) int64
+
+
+def voronoi_cells(
+    positions: Any,
+    *,
+    radius: float = 1.0,
+    bounds: Bounds = ROBOTARIUM.bounds,
+    virtual: tuple[Any, Any] | None = None,
+    resolution: int = 64,
+    polygons: bool = False,
+) -> VoronoiCells:
+    """Each robot's Voronoi cell within a disc: centroid, area and optionally the polygon.
+
+    Robot i's cell is the disc of ``radius`` (a regular polygon of ``resolution`` vertices)
+    intersected with the arena ``bounds``, clipped by the perpendicular bisector of every other
+    robot within ``2 radius`` and of each of its virtual agents (exact polygon clipping). An
+    empty cell (robot outside the arena) has area 0 and the robot's position as centroid.
+
+    Parameters
+    ----------
+    positions : (n, 2)
+    virtual : (indptr (n + 1,), points (m, 2)), optional
+        Virtual agents per robot, e.g. from :func:`virtual_agents`.
+    polygons : bool
+        Also return the cells' vertices (counter-clockwise) as CSR.
+    """
+    p = as_array(positions, "positions", (None, 2))
+    n = p.shape[0]
+    if not (np.isfinite(radius) and radius > 0):
+        raise ValueError(f"`radius` must be finite and > 0, got {radius}")
+    if resolution < 3:
+        raise ValueError(f"`resolution` must be >= 3, got {resolution}")
+    box = _checked_bounds(bounds)
+    assert box is not None
+    agents = None
+    if virtual is not None:
+        indptr = np.ascontiguousarray(virtual[0], dtype=np.int64)
+        points = as_array(virtual[1], "virtual points", (None, 2))
+        if indptr.shape != (n + 1,) or indptr[0] != 0 or np.any(np.diff(indptr) < 0) or indptr[-1] != len(points):
+            raise ValueError(f"`virtual` indptr must be non-decreasing of shape ({n + 1},) from 0 to len(points)")
+        agents = (indptr, points)
+    if _core is None:
+        centroids, areas, vertices, offsets = _reference.voronoi_cells(p, radius=radius, bounds=box, virtual=agents, resolution=resolution)
+    else:
+        vi, vp = (None, None) if agents is None else agents
+        centroids, areas, vertices, offsets = _core.voronoi_cells(
+            p, radius=radius, bounds=box, virtual_indptr=vi, virtual_points=vp, resolution=resolution
+        )
+    return VoronoiCells(centroids, areas, vertices if polygons else None, offsets if polygons else None)
+
+
+def virtual_agents(
+    positions: Any,
+    obstacles: tuple[Any, Any],
+    *,
+    range: float = 1.0,  # noqa: A002 (a sensor's range, as elsewhere in the API)
+    robot_radius: float = GRITSBOT.radius,
+    margin: float = 0.0,
+    mirror_at_surface: bool = False,
+) -> tuple[np.ndarray, FloatArray]:
+    """Virtual agents that keep each robot's Voronoi cell off the obstacles it senses.
+
+    For robot p and each convex obstacle whose closest point c is within ``range``, the agent
+    is p mirrored across ``c - n (robot_radius + margin)`` (n the unit vector from p to c): the
+    cell's boundary then stays ``robot_radius + margin`` before the obstacle, so the robot's
+    body does not touch it. ``mirror_at_surface=True`` mirrors across c itself, as the original
+    did. A robot inside an obstacle gets no agent for it.
+
+    Parameters
+    ----------
+    positions : (n, 2)
+    obstacles : (vertices (v, 2), offsets (k + 1,))
+        Convex obstacles as CSR: obstacle k is the convex hull of
+        ``vertices[offsets[k]:offsets[k + 1]]``.
+
+    Returns
+    -------
+    indptr : (n + 1,) int64, points : (m, 2)
+        Robot i's agents are ``points[indptr[i]:indptr[i + 1]]``, by obstacle.
+
+    Raises
+    ------
+    GeometryError
+        If an obstacle's vertices enclose no area.
+    """
+    p = as_array(positions, "positions", (None, 2))
+    vertices = as_array(obstacles[0], "obstacle vertices", (None, 2))
+    offsets = np.ascontiguousarray(obstacles[1], dtype=np.int64)
+    if offsets.ndim != 1 or len(offsets) < 1 or offsets[0] != 0 or np.any(np.diff(offsets) < 0) or offsets[-1] != len(vertices):
+        raise ValueError("obstacle `offsets` must be non-decreasing from 0 to the number of vertices")
+    check_nonnegative(range, "range")
+    offset = 0.0 if mirror_at_surface else check_nonnegative(robot_radius, "robot_radius") + check_nonnegative(margin, "margin")
+    if _core is None:
+        return _reference.virtual_agents(p, vertices, offsets, range=range, offset=offset)
+    return _core.virtual_agents(p, vertices, offsets, range=range, offset=offset)
+
+
+__all__ = [
+    "IMPLEMENTATION",
+    "GeometryError",
+    "HrvoPlanner",
+    "Violations",
+    "VoronoiCells",
+    "actuator_limit",
+    "dxi_to_dxu",
+    "hrvo",
+    "neighbours",
+    "neighbours_of",
+    "threshold_velocities",
+    "unicycle_step",
+    "validate",
+    "virtual_agents",
+    "voronoi_cells",
+]

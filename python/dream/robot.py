@@ -13,7 +13,6 @@ import numpy as np
 
 from dream import kernels
 from dream._checks import FloatArray, as_array
-from dream._reference.hrvo import candidate_grid
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec, RobotSpec
 
 
@@ -145,7 +144,17 @@ class RobotHRVO(Robot):
         self.bound_x = [self.bounds[0], self.bounds[1]]
         self.bound_y = [self.bounds[2], self.bounds[3]]
         self.include_preferred = include_preferred
-        self.candidates = candidate_grid(self.v_max, n_angles, n_speeds)
+        self.planner = kernels.HrvoPlanner(
+            safety=safety,
+            v_max=self.v_max,
+            bounds=self.bounds,
+            n_angles=n_angles,
+            n_speeds=n_speeds,
+            include_preferred=include_preferred,
+        )
+        self._free_planner = kernels.HrvoPlanner(
+            safety=safety, v_max=self.v_max, n_angles=n_angles, n_speeds=n_speeds, include_preferred=include_preferred
+        )
         self.detections: FloatArray = np.zeros((0, 4))
 
     def HRVO(self, detections: Any, desired_velocity: Any) -> FloatArray:  # noqa: N802 (original name)
@@ -172,17 +181,6 @@ class RobotHRVO(Robot):
         empty = np.ndim(detections) <= 1 and np.size(detections) == 0
         d = np.zeros((0, 4)) if empty else as_array(detections, "detections", (None, 4))
         preferred = as_array(desired_velocity, "desired_velocity", (2,))
-        self.dxi = kernels.hrvo_velocity(
-            self.dxi,
-            preferred,
-            d[:, 1] + math.pi,  # towards the detected robot
-            d[:, 0],
-            d[:, 2:4],
-            safety=self.safety,
-            v_max=self.v_max,
-            position=np.array([self.pos_x, self.pos_y]),
-            bounds=self.bounds if self.check_boundaries else None,
-            candidates=self.candidates,
-            include_preferred=self.include_preferred,
-        )
+        planner = self.planner if self.check_boundaries else self._free_planner
+        self.dxi = planner.velocity(d, np.asarray(self.dxi, dtype=np.float64), preferred, np.array([self.pos_x, self.pos_y]))
         return self.dxi

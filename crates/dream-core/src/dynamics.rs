@@ -188,6 +188,7 @@ pub fn dxi_to_dxu(dxi: &[f64], poses: &[f64], n: usize, vel_gain: f64, ang_gain:
 /// # Errors
 /// Length or finiteness problems of `dxu`.
 pub fn actuator_limit(dxu: &mut [f64], n: usize, max_linear: f64, max_angular: f64, wheels: &Wheels) -> Result<()> {
+    rows("dxu", dxu, 2, n)?;
     threshold_velocities(dxu, n, max_linear, max_angular)?;
     let (v, w) = dxu.split_at_mut(n);
     let (r, half_l) = (wheels.radius, wheels.base_length / 2.0);

@@ -1,7 +1,9 @@
 //! Uniform grid over the plane: the spatial index behind every "who is near whom" query.
 //!
-//! Cells are squares of side `cell`; every point within distance `cell` of a point lies in the
-//! 3x3 block of cells around it, so a whole-swarm query costs O(n k), not O(n^2). Points are
+//! Cells are squares a hair larger than the query distance `reach`, so every point within
+//! `reach` of a point lies in the 3x3 block of cells around it even when rounding puts a
+//! computed distance of exactly `reach` across two cell borders; a whole-swarm query costs
+//! O(n k), not O(n^2). Points are
 //! bucketed by a counting sort into CSR order. When the occupied bounding box has few cells
 //! (robots spread over an arena: the usual case) the cell table is a dense array; otherwise
 //! (a few far-flung robots) a hash map keeps memory O(n).
@@ -25,10 +27,11 @@ enum CellTable {
 }
 
 impl Grid {
-    /// Buckets the points `(xs[i], ys[i])` into cells of side `cell`.
+    /// Buckets the points `(xs[i], ys[i])` for queries within `reach`.
     ///
-    /// `cell` must be finite and > 0 and the coordinates finite (the callers check).
-    pub fn new(xs: &[f64], ys: &[f64], cell: f64) -> Self {
+    /// `reach` must be finite and > 0 and the coordinates finite (the callers check).
+    pub fn new(xs: &[f64], ys: &[f64], reach: f64) -> Self {
+        let cell = reach * (1.0 + 1e-9);
         let keys: Vec<(i64, i64)> = xs.iter().zip(ys).map(|(&x, &y)| cell_of(x, y, cell)).collect();
         let (mut x0, mut y0, mut x1, mut y1) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
         for &(cx, cy) in &keys {
@@ -73,7 +76,7 @@ impl Grid {
     }
 
     /// Calls `visit(j)` for every point in the 3x3 block of cells around `(x, y)`: a superset
-    /// of the points within `cell` of it.
+    /// of the points within `reach` of it.
     pub fn for_each_near(&self, x: f64, y: f64, mut visit: impl FnMut(usize)) {
         let (cx, cy) = cell_of(x, y, self.cell);
         for dx in -1..=1_i64 {
@@ -133,6 +136,13 @@ mod tests {
         assert!(matches!(grid.table, CellTable::Sparse(_)));
         assert_eq!(near(&grid, 1e12, 1e12), vec![1, 3]);
         assert_eq!(near(&grid, 0.0, 0.0), vec![0]);
+    }
+
+    #[test]
+    fn a_pair_exactly_reach_apart_across_two_borders_is_found() {
+        // The exact distance is a hair over 0.11 but computes to 0.11: it must still be found.
+        let grid = Grid::new(&[0.0, 0.0], &[-1e-18, 0.11], 0.11);
+        assert_eq!(near(&grid, 0.0, -1e-18), vec![0, 1]);
     }
 
     #[test]

@@ -5,7 +5,8 @@
 //! the cone has half-angle `phi = asin(r / max(d, r))`, a left edge along `angle(u) + phi` and a
 //! right edge along `angle(u) - phi`; the VO's apex is `v_B`, the RVO's `(v_A + v_B) / 2`; HRVO
 //! keeps the RVO edge on the side `v_A` is closer to and the VO edge on the other (both VO edges
-//! on a tie, as the original). A velocity is forbidden by B when it is strictly inside both
+//! on a tie, as the original; distances within [`TIE`] of each other, relative to `|v_A - apex|`,
+//! are a tie, so that symmetric scenes are decided by geometry and not by rounding). A velocity is forbidden by B when it is strictly inside both
 //! half-planes.
 //!
 //! The chosen velocity is the candidate closest to `v_pref` (first in candidate order on ties)
@@ -26,6 +27,8 @@ pub type Vec2 = [f64; 2];
 
 /// Rows below this count run on one thread.
 const PARALLEL_ROBOTS: usize = 256;
+/// Relative tolerance under which `v_A` is equally close to both RVO edges.
+pub const TIE: f64 = 1e-9;
 /// Candidates sorted up front; the rest are sorted only if none of these is valid.
 const FIRST_BATCH: usize = 16;
 
@@ -117,11 +120,12 @@ impl Cone {
         let rvo = [(velocity[0] + vo[0]) / 2.0, (velocity[1] + vo[1]) / 2.0];
         let from_rvo = [velocity[0] - rvo[0], velocity[1] - rvo[1]];
         let (to_left, to_right) = (cross(left, from_rvo).abs(), cross(right, from_rvo).abs());
+        let tie = (to_left - to_right).abs() <= TIE * from_rvo[0].hypot(from_rvo[1]);
         Cone {
             left,
-            left_apex: if to_left < to_right { rvo } else { vo },
+            left_apex: if !tie && to_left < to_right { rvo } else { vo },
             right,
-            right_apex: if to_left > to_right { rvo } else { vo },
+            right_apex: if !tie && to_left > to_right { rvo } else { vo },
         }
     }
 

@@ -1,44 +1,67 @@
 //! Checked copies of NumPy arrays into Rust values: the only place that looks at shapes.
+//!
+//! Bindings take arrays as plain Python objects and convert them here, so that a wrong
+//! dtype or dimensionality is a `ValueError` naming the argument, like a wrong shape.
 
-use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::prelude::*;
 
-use crate::errors::{shape_error, PyDreamResult};
+use crate::errors::{shape_error, value_error, PyDreamResult};
 
-fn values_of<D: numpy::ndarray::Dimension>(array: &numpy::PyReadonlyArray<'_, f64, D>) -> Vec<f64> {
-    match array.as_slice() {
-        Ok(slice) => slice.to_vec(),
-        Err(_) => array.as_array().iter().copied().collect(),
-    }
+/// The float64 (or int64, via `T`) values of `object` in row-major order, with its shape.
+fn values_of<T: numpy::Element + Copy>(arg: &str, object: &Bound<'_, PyAny>, kind: &str) -> PyDreamResult<(Vec<T>, Vec<usize>)> {
+    let array = object
+        .cast::<PyArrayDyn<T>>()
+        .map_err(|_| value_error(format!("`{arg}` must be a NumPy array of {kind}")))?;
+    let readonly = array.try_readonly().map_err(|e| value_error(format!("`{arg}`: {e}")))?;
+    let shape = readonly.shape().to_vec();
+    // `as_slice` also accepts Fortran order, whose memory is not row-major: only trust C order.
+    let values = match readonly.as_slice() {
+        Ok(slice) if readonly.is_c_contiguous() => slice.to_vec(),
+        _ => readonly.as_array().iter().copied().collect(),
+    };
+    Ok((values, shape))
 }
 
-/// Copies a `(rows, n)` float64 array (any strides) into a row-major vector; returns it with `n`.
-pub fn rows_of(arg: &str, array: &PyReadonlyArray2<'_, f64>, rows: usize) -> PyDreamResult<(Vec<f64>, usize)> {
-    let shape = array.shape();
-    if shape[0] != rows {
-        return Err(shape_error(arg, &format!("({rows}, n)"), shape));
-    }
-    Ok((values_of(array), shape[1]))
+fn float_values(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<(Vec<f64>, Vec<usize>)> {
+    values_of::<f64>(arg, object, "float64")
 }
 
-/// Copies an `(n, width)` float64 array into `n` fixed-size rows.
-pub fn points_of<const W: usize>(arg: &str, array: &PyReadonlyArray2<'_, f64>) -> PyDreamResult<Vec<[f64; W]>> {
-    let shape = array.shape();
-    if shape[1] != W {
-        return Err(shape_error(arg, &format!("(n, {W})"), shape));
+/// Copies a `(rows, n)` float64 array into a row-major vector; returns it with `n`.
+pub fn rows_of(arg: &str, object: &Bound<'_, PyAny>, rows: usize) -> PyDreamResult<(Vec<f64>, usize)> {
+    let (values, shape) = float_values(arg, object)?;
+    if shape.len() != 2 || shape[0] != rows {
+        return Err(shape_error(arg, &format!("({rows}, n)"), &shape));
     }
-    let values = values_of(array);
+    Ok((values, shape[1]))
+}
+
+/// Copies an `(n, W)` float64 array into `n` fixed-size rows.
+pub fn points_of<const W: usize>(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<Vec<[f64; W]>> {
+    let (values, shape) = float_values(arg, object)?;
+    if shape.len() != 2 || shape[1] != W {
+        return Err(shape_error(arg, &format!("(n, {W})"), &shape));
+    }
     Ok(values.chunks_exact(W).map(|c| std::array::from_fn(|k| c[k])).collect())
 }
 
-/// Copies a float64 vector, checking its length when `len` is given.
-pub fn vector_of(arg: &str, array: &PyReadonlyArray1<'_, f64>, len: Option<usize>) -> PyDreamResult<Vec<f64>> {
-    let shape = array.shape();
-    if let Some(want) = len {
-        if shape[0] != want {
-            return Err(shape_error(arg, &format!("({want},)"), shape));
-        }
+/// Copies a 1-D float64 array, checking its length when `len` is given.
+pub fn vector_of(arg: &str, object: &Bound<'_, PyAny>, len: Option<usize>) -> PyDreamResult<Vec<f64>> {
+    let (values, shape) = float_values(arg, object)?;
+    if shape.len() != 1 || len.is_some_and(|want| shape[0] != want) {
+        let expected = len.map_or("(n,)".to_string(), |want| format!("({want},)"));
+        return Err(shape_error(arg, &expected, &shape));
     }
-    Ok(values_of(array))
+    Ok(values)
+}
+
+/// Copies a 1-D int64 array (CSR offsets and indices).
+pub fn indices_of(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<Vec<i64>> {
+    let (values, shape) = values_of::<i64>(arg, object, "int64")?;
+    if shape.len() != 1 {
+        return Err(shape_error(arg, "(n,)", &shape));
+    }
+    Ok(values)
 }
 
 /// Fails unless the two arrays describe the same number of robots.

@@ -1,7 +1,7 @@
 //! Bindings of `dream_core::dynamics`: the Fast backend's step and the rps validation counts.
 
 use dream_core::dynamics::{self, Arena, Wheels};
-use numpy::{IntoPyArray, PyArray2, PyArrayMethods, PyReadonlyArray2};
+use numpy::{IntoPyArray, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
 use crate::arrays::{rows_of, same_count};
@@ -15,8 +15,8 @@ fn into_rows<'py>(py: Python<'py>, values: Vec<f64>, rows: usize, n: usize) -> P
 #[pyfunction]
 pub fn unicycle_step<'py>(
     py: Python<'py>,
-    poses: PyReadonlyArray2<'py, f64>,
-    velocities: PyReadonlyArray2<'py, f64>,
+    poses: Bound<'py, PyAny>,
+    velocities: Bound<'py, PyAny>,
     dt: f64,
 ) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
     let (mut p, n) = rows_of("poses", &poses, 3)?;
@@ -30,7 +30,7 @@ pub fn unicycle_step<'py>(
 #[pyfunction]
 pub fn threshold_velocities<'py>(
     py: Python<'py>,
-    velocities: PyReadonlyArray2<'py, f64>,
+    velocities: Bound<'py, PyAny>,
     max_linear: f64,
     max_angular: f64,
 ) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
@@ -45,8 +45,8 @@ pub fn threshold_velocities<'py>(
 #[allow(clippy::too_many_arguments)]
 pub fn validate(
     py: Python<'_>,
-    poses: PyReadonlyArray2<'_, f64>,
-    velocities: PyReadonlyArray2<'_, f64>,
+    poses: Bound<'_, PyAny>,
+    velocities: Bound<'_, PyAny>,
     bounds: (f64, f64, f64, f64),
     diameter: f64,
     wheel_radius: f64,
@@ -66,8 +66,8 @@ pub fn validate(
 #[pyfunction]
 pub fn dxi_to_dxu<'py>(
     py: Python<'py>,
-    dxi: PyReadonlyArray2<'py, f64>,
-    poses: PyReadonlyArray2<'py, f64>,
+    dxi: Bound<'py, PyAny>,
+    poses: Bound<'py, PyAny>,
     vel_gain: f64,
     ang_gain: f64,
 ) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
@@ -83,7 +83,7 @@ pub fn dxi_to_dxu<'py>(
 #[pyo3(signature = (dxu, *, max_linear, max_angular, wheel_radius, base_length, max_wheel))]
 pub fn actuator_limit<'py>(
     py: Python<'py>,
-    dxu: PyReadonlyArray2<'py, f64>,
+    dxu: Bound<'py, PyAny>,
     max_linear: f64,
     max_angular: f64,
     wheel_radius: f64,

@@ -1,8 +1,11 @@
-//! Maps core errors to Python exceptions: bad input is a `ValueError` naming the argument.
+//! Maps core errors to Python exceptions: bad input is a `ValueError` naming the argument,
+//! impossible geometry a `dream.errors.GeometryError` (a `ValueError` too).
 
 use dream_core::GeomError;
 use pyo3::exceptions::PyValueError;
 use pyo3::PyErr;
+
+pyo3::import_exception!(dream.errors, GeometryError);
 
 /// Error of a binding: either a core error or one already raised on the Python side.
 pub enum PyDreamError {
@@ -27,10 +30,16 @@ impl From<PyErr> for PyDreamError {
 impl From<PyDreamError> for PyErr {
     fn from(err: PyDreamError) -> Self {
         match err {
+            PyDreamError::Core(e @ GeomError::DegenerateObstacle(_)) => GeometryError::new_err(e.to_string()),
             PyDreamError::Core(e) => PyValueError::new_err(e.to_string()),
             PyDreamError::Python(e) => e,
         }
     }
+}
+
+/// A `ValueError` with `message`.
+pub fn value_error(message: String) -> PyDreamError {
+    PyDreamError::Python(PyValueError::new_err(message))
 }
 
 /// A `ValueError` for an array of the wrong shape.

@@ -2,10 +2,10 @@
 
 use dream_core::dynamics::Arena;
 use dream_core::hrvo::{self as core, HrvoParams, Neighbour, Vec2};
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
-use crate::arrays::{points_of, vector_of};
+use crate::arrays::{indices_of, points_of, vector_of};
 use crate::errors::PyDreamResult;
 
 fn params(
@@ -18,7 +18,7 @@ fn params(
     Ok(HrvoParams { safety, v_max, bounds, include_preferred }.validated()?)
 }
 
-fn vec2(arg: &str, array: &PyReadonlyArray1<'_, f64>) -> PyDreamResult<Vec2> {
+fn vec2(arg: &str, array: &Bound<'_, PyAny>) -> PyDreamResult<Vec2> {
     let v = vector_of(arg, array, Some(2))?;
     Ok([v[0], v[1]])
 }
@@ -29,16 +29,16 @@ fn vec2(arg: &str, array: &PyReadonlyArray1<'_, f64>) -> PyDreamResult<Vec2> {
 #[allow(clippy::too_many_arguments)]
 pub fn hrvo<'py>(
     py: Python<'py>,
-    positions: PyReadonlyArray2<'py, f64>,
-    velocities: PyReadonlyArray2<'py, f64>,
-    preferred: PyReadonlyArray2<'py, f64>,
-    indptr: Option<PyReadonlyArray1<'py, i64>>,
-    indices: Option<PyReadonlyArray1<'py, i64>>,
+    positions: Bound<'py, PyAny>,
+    velocities: Bound<'py, PyAny>,
+    preferred: Bound<'py, PyAny>,
+    indptr: Option<Bound<'py, PyAny>>,
+    indices: Option<Bound<'py, PyAny>>,
     radius: f64,
     safety: f64,
     v_max: f64,
     bounds: Option<(f64, f64, f64, f64)>,
-    candidates: PyReadonlyArray2<'py, f64>,
+    candidates: Bound<'py, PyAny>,
     include_preferred: bool,
 ) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
     let p = points_of::<2>("positions", &positions)?;
@@ -46,7 +46,7 @@ pub fn hrvo<'py>(
     let pref = points_of::<2>("preferred", &preferred)?;
     let grid = points_of::<2>("candidates", &candidates)?;
     let csr = match (indptr, indices) {
-        (Some(a), Some(b)) => Some((a.as_array().to_vec(), b.as_array().to_vec())),
+        (Some(a), Some(b)) => Some((indices_of("indptr", &a)?, indices_of("indices", &b)?)),
         _ => None,
     };
     let params = params(safety, v_max, bounds, include_preferred)?;
@@ -70,7 +70,7 @@ impl PyHrvoPlanner {
     #[new]
     #[pyo3(signature = (candidates, *, safety, v_max, bounds, include_preferred))]
     fn new(
-        candidates: PyReadonlyArray2<'_, f64>,
+        candidates: Bound<'_, PyAny>,
         safety: f64,
         v_max: f64,
         bounds: Option<(f64, f64, f64, f64)>,
@@ -85,10 +85,10 @@ impl PyHrvoPlanner {
     fn velocity<'py>(
         &self,
         py: Python<'py>,
-        detections: PyReadonlyArray2<'py, f64>,
-        velocity: PyReadonlyArray1<'py, f64>,
-        preferred: PyReadonlyArray1<'py, f64>,
-        position: PyReadonlyArray1<'py, f64>,
+        detections: Bound<'py, PyAny>,
+        velocity: Bound<'py, PyAny>,
+        preferred: Bound<'py, PyAny>,
+        position: Bound<'py, PyAny>,
     ) -> PyDreamResult<Bound<'py, PyArray1<f64>>> {
         let around: Vec<Neighbour> = points_of::<4>("detections", &detections)?.into_iter().map(Neighbour::from_detection).collect();
         let chosen = core::hrvo_one(

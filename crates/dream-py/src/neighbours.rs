@@ -1,7 +1,7 @@
 //! Bindings of `dream_core::neighbours`: range and field-of-view queries as CSR arrays.
 
 use dream_core::neighbours::{self as core, FieldOfView};
-use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 
 use crate::arrays::{points_of, vector_of};
@@ -14,9 +14,9 @@ type CsrArrays<'py> = (Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>, Bou
 #[pyo3(signature = (positions, radius, headings=None, direction=0.0, fov=std::f64::consts::TAU, max_neighbours=None))]
 pub fn neighbours<'py>(
     py: Python<'py>,
-    positions: PyReadonlyArray2<'py, f64>,
+    positions: Bound<'py, PyAny>,
     radius: f64,
-    headings: Option<PyReadonlyArray1<'py, f64>>,
+    headings: Option<Bound<'py, PyAny>>,
     direction: f64,
     fov: f64,
     max_neighbours: Option<usize>,

@@ -1,10 +1,10 @@
 //! Bindings of `dream_core::obstacles`: virtual agents that keep Voronoi cells off obstacles.
 
 use dream_core::obstacles::{self as core, Obstacles};
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
-use crate::arrays::points_of;
+use crate::arrays::{indices_of, points_of};
 use crate::errors::PyDreamResult;
 
 /// Virtual agents `(indptr (n + 1,), points (m, 2))` of every robot for convex obstacles given
@@ -13,15 +13,15 @@ use crate::errors::PyDreamResult;
 #[pyo3(signature = (positions, vertices, offsets, *, range, offset))]
 pub fn virtual_agents<'py>(
     py: Python<'py>,
-    positions: PyReadonlyArray2<'py, f64>,
-    vertices: PyReadonlyArray2<'py, f64>,
-    offsets: PyReadonlyArray1<'py, i64>,
+    positions: Bound<'py, PyAny>,
+    vertices: Bound<'py, PyAny>,
+    offsets: Bound<'py, PyAny>,
     range: f64,
     offset: f64,
 ) -> PyDreamResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>)> {
     let points = points_of::<2>("positions", &positions)?;
     let corners = points_of::<2>("vertices", &vertices)?;
-    let offsets = offsets.as_array().to_vec();
+    let offsets = indices_of("offsets", &offsets)?;
     let (indptr, agents) = py.detach(|| {
         let obstacles = Obstacles::new(&corners, &offsets)?;
         core::virtual_agents(&points, &obstacles, range, offset)

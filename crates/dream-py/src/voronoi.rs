@@ -2,10 +2,10 @@
 
 use dream_core::dynamics::Arena;
 use dream_core::voronoi as core;
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
-use crate::arrays::points_of;
+use crate::arrays::{indices_of, points_of};
 use crate::errors::PyDreamResult;
 
 type CellArrays<'py> = (
@@ -20,17 +20,17 @@ type CellArrays<'py> = (
 #[pyo3(signature = (positions, *, radius, bounds, virtual_indptr=None, virtual_points=None, resolution=64))]
 pub fn voronoi_cells<'py>(
     py: Python<'py>,
-    positions: PyReadonlyArray2<'py, f64>,
+    positions: Bound<'py, PyAny>,
     radius: f64,
     bounds: (f64, f64, f64, f64),
-    virtual_indptr: Option<PyReadonlyArray1<'py, i64>>,
-    virtual_points: Option<PyReadonlyArray2<'py, f64>>,
+    virtual_indptr: Option<Bound<'py, PyAny>>,
+    virtual_points: Option<Bound<'py, PyAny>>,
     resolution: usize,
 ) -> PyDreamResult<CellArrays<'py>> {
     let points = points_of::<2>("positions", &positions)?;
     let arena = Arena::new(bounds.0, bounds.1, bounds.2, bounds.3)?;
     let agents = match (virtual_indptr, virtual_points) {
-        (Some(indptr), Some(found)) => Some((indptr.as_array().to_vec(), points_of::<2>("virtual", &found)?)),
+        (Some(indptr), Some(found)) => Some((indices_of("virtual_indptr", &indptr)?, points_of::<2>("virtual_points", &found)?)),
         _ => None,
     };
     let cells = py.detach(|| {

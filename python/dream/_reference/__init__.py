@@ -9,6 +9,8 @@ They depend on NumPy alone.
 from dream._reference.dynamics import actuator_limit, dxi_to_dxu, threshold_velocities, unicycle_step, validate
 from dream._reference.hrvo import candidate_grid, hrvo, hrvo_velocity
 from dream._reference.neighbours import neighbours, neighbours_of
+from dream._reference.obstacles import virtual_agents
+from dream._reference.voronoi import voronoi_cells
 
 __all__ = [
     "actuator_limit",
@@ -21,4 +23,6 @@ __all__ = [
     "threshold_velocities",
     "unicycle_step",
     "validate",
+    "virtual_agents",
+    "voronoi_cells",
 ]

@@ -7,7 +7,8 @@ distance d in direction u (from A to B) moving with v_B, with safety radius r:
   its right edge angle(u) - phi;
 * the VO's apex is v_B, the RVO's apex (v_A + v_B) / 2;
 * HRVO keeps the RVO edge on the side v_A is closer to and the VO edge on the other side
-  (if v_A is equally close to both, both edges are the VO's, as in the original);
+  (if v_A is equally close to both, within ``TIE`` relative to ``|v_A - RVO apex|``, both
+  edges are the VO's, as in the original);
 * a velocity is forbidden by B if it lies strictly inside both half-planes.
 
 The result is the candidate closest to v_pref (first in candidate order on ties) that no
@@ -21,6 +22,9 @@ import numpy as np
 
 from dream._checks import FloatArray
 from dream._reference.neighbours import neighbours as find_neighbours
+
+#: Relative tolerance under which v_A is equally close to both RVO edges.
+TIE = 1e-9
 
 
 def candidate_grid(v_max: float, n_angles: int = 20, n_speeds: int = 10) -> FloatArray:
@@ -61,10 +65,13 @@ def _forbidden(
     right = np.column_stack((np.cos(directions - phi), np.sin(directions - phi)))
     vo_apex = neighbour_velocities
     rvo_apex = (velocity[None, :] + neighbour_velocities) / 2
-    dist_left = np.abs(_cross(left, velocity[None, :] - rvo_apex))
-    dist_right = np.abs(_cross(right, velocity[None, :] - rvo_apex))
-    left_apex = np.where((dist_left < dist_right)[:, None], rvo_apex, vo_apex)
-    right_apex = np.where((dist_left > dist_right)[:, None], rvo_apex, vo_apex)
+    offset = velocity[None, :] - rvo_apex
+    dist_left = np.abs(_cross(left, offset))
+    dist_right = np.abs(_cross(right, offset))
+    # Near-ties (relative to |v_A - apex|) are ties: symmetric scenes must not hang on rounding.
+    tie = np.abs(dist_left - dist_right) <= TIE * np.hypot(offset[:, 0], offset[:, 1])
+    left_apex = np.where((~tie & (dist_left < dist_right))[:, None], rvo_apex, vo_apex)
+    right_apex = np.where((~tie & (dist_left > dist_right))[:, None], rvo_apex, vo_apex)
     # (k, m): right of the left edge and left of the right edge, both strictly.
     inside_left = _cross(left[:, None, :], candidates[None, :, :] - left_apex[:, None, :]) < 0
     inside_right = _cross(right[:, None, :], candidates[None, :, :] - right_apex[:, None, :]) > 0

@@ -1,0 +1,94 @@
+"""Voronoi cells bounded by a disc and the arena (reference: one robot, one half-plane at a time).
+
+Robot i's cell is the disc of ``radius`` around it (a regular polygon of ``resolution``
+vertices, the first at angle 0), clipped by the arena and then by the perpendicular-bisector
+half-plane of every other robot within ``2 radius`` (in increasing index order) and of each
+of robot i's virtual agents (in the given order). A robot whose cell is empty (outside the
+arena) gets area 0 and its own position as centroid.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dream._checks import FloatArray
+from dream._reference.neighbours import neighbours_of
+
+
+def clip(polygon: list[tuple[float, float]], point: tuple[float, float], normal: tuple[float, float]) -> list[tuple[float, float]]:
+    """The part of a convex ``polygon`` where ``(q - point) . normal <= 0`` (Sutherland-Hodgman)."""
+    out: list[tuple[float, float]] = []
+    count = len(polygon)
+    for k in range(count):
+        a, b = polygon[k], polygon[(k + 1) % count]
+        sa = (a[0] - point[0]) * normal[0] + (a[1] - point[1]) * normal[1]
+        sb = (b[0] - point[0]) * normal[0] + (b[1] - point[1]) * normal[1]
+        if sa <= 0:
+            out.append(a)
+        if (sa <= 0) != (sb <= 0):
+            t = sa / (sa - sb)
+            out.append((a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t))
+    return out
+
+
+def area_centroid(polygon: list[tuple[float, float]], fallback: tuple[float, float]) -> tuple[float, tuple[float, float]]:
+    """Area and centroid of a simple polygon (shoelace); ``fallback`` as centroid when empty."""
+    twice, cx, cy = 0.0, 0.0, 0.0
+    count = len(polygon)
+    for k in range(count):
+        a, b = polygon[k], polygon[(k + 1) % count]
+        cross = a[0] * b[1] - b[0] * a[1]
+        twice += cross
+        cx += (a[0] + b[0]) * cross
+        cy += (a[1] + b[1]) * cross
+    if count < 3 or twice <= 0:
+        return 0.0, fallback
+    return twice / 2, (cx / (3 * twice), cy / (3 * twice))
+
+
+def cell(
+    positions: FloatArray,
+    i: int,
+    radius: float,
+    bounds: tuple[float, float, float, float],
+    virtual: FloatArray,
+    resolution: int,
+) -> list[tuple[float, float]]:
+    """Robot ``i``'s cell as a counter-clockwise vertex list (empty if nothing is left)."""
+    px, py = float(positions[i, 0]), float(positions[i, 1])
+    angles = 2 * np.pi * np.arange(resolution) / resolution
+    polygon = [(px + radius * float(np.cos(a)), py + radius * float(np.sin(a))) for a in angles]
+    xmin, xmax, ymin, ymax = bounds
+    for point, normal in (((xmin, 0.0), (-1.0, 0.0)), ((xmax, 0.0), (1.0, 0.0)), ((0.0, ymin), (0.0, -1.0)), ((0.0, ymax), (0.0, 1.0))):
+        polygon = clip(polygon, point, normal)
+    others, _ = neighbours_of(positions, i, 2 * radius)
+    for qx, qy in [(float(positions[j, 0]), float(positions[j, 1])) for j in others] + [(float(x), float(y)) for x, y in virtual]:
+        polygon = clip(polygon, ((px + qx) / 2, (py + qy) / 2), (qx - px, qy - py))
+    return polygon
+
+
+def voronoi_cells(
+    positions: FloatArray,
+    *,
+    radius: float,
+    bounds: tuple[float, float, float, float],
+    virtual: tuple[np.ndarray, FloatArray] | None = None,
+    resolution: int = 64,
+) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray]:
+    """Centroids ``(n, 2)``, areas ``(n,)`` and the cells as CSR ``(vertices (m, 2), offsets (n + 1,))``.
+
+    ``virtual`` is CSR ``(indptr (n + 1,), points (k, 2))``: robot i's virtual agents are
+    ``points[indptr[i]:indptr[i + 1]]``.
+    """
+    n = len(positions)
+    centroids = np.zeros((n, 2))
+    areas = np.zeros(n)
+    offsets = np.zeros(n + 1, dtype=np.int64)
+    vertices: list[tuple[float, float]] = []
+    for i in range(n):
+        mine = np.zeros((0, 2)) if virtual is None else virtual[1][virtual[0][i] : virtual[0][i + 1]]
+        polygon = cell(positions, i, radius, bounds, mine, resolution)
+        areas[i], centroids[i] = area_centroid(polygon, (float(positions[i, 0]), float(positions[i, 1])))
+        vertices.extend(polygon)
+        offsets[i + 1] = len(vertices)
+    return centroids, areas, np.array(vertices, dtype=np.float64).reshape(-1, 2), offsets
