@@ -12,7 +12,6 @@ from typing import Any, Callable
 
 import numpy as np
 
-from dream import kernels
 from dream._checks import as_array, as_poses, check_nonnegative, check_robot_id
 from dream.world import current_world
 
@@ -78,7 +77,7 @@ class RangeRadio(Radio):
     def update(self, x: Any) -> None:
         """Exchange messages with the robots in range, given the poses ``x`` ``(3, n)``."""
         super().update(x)
-        senders, _ = kernels.neighbours_of(self._poses[:2].T, self.robot_id, self.range)
+        senders, _ = self.world.neighbours_of(self._poses, self.robot_id, self.range)
         self._exchange(self.callback, senders)
 
 

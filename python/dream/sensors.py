@@ -11,7 +11,6 @@ from typing import Any, Callable
 
 import numpy as np
 
-from dream import kernels
 from dream._checks import FloatArray, as_array, as_poses, check_nonnegative, check_robot_id
 from dream.world import current_world
 
@@ -105,8 +104,8 @@ class MovementSensor(Sensor):
         super().update(x)
         poses = self._poses
         commands = as_array(v, "v", (2, poses.shape[1]))
-        found, distances = kernels.neighbours_of(
-            poses[:2].T, self.robot_id, self.range, heading=self.rot_w, direction=self.direction, fov=self.wide
+        found, distances = self.world.neighbours_of(
+            poses, self.robot_id, self.range, heading=self.rot_w, direction=self.direction, fov=self.wide
         )
         theta = poses[2, found]
         lin, ang = commands[0, found], commands[1, found]

@@ -1,7 +1,8 @@
 """The World: everything the original DREAM kept in module globals, in one object.
 
 A world owns the radio message board, the registered timers, the clock of the last
-``update_timers`` call and a seeded random generator (sensor noise, message loss). Original
+``update_timers`` call, a seeded random generator (sensor noise, message loss) and the
+neighbour index of the current poses, built once per step for all sensors and radios. Original
 scripts use the default world through the module-level functions; ``with World(seed=1):``
 makes a fresh world current for the block, so runs in one process never see each other's
 messages or timers::
@@ -21,6 +22,8 @@ from collections.abc import Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from dream import kernels
 
 if TYPE_CHECKING:
     from dream.timers import Timer
@@ -42,6 +45,41 @@ class World:
         self.timers: list[Timer] = []
         self._board: dict[int, Any] = {}
         self._in_flight: list[tuple[int, int, Any]] = []  # (visible at, sender, data)
+        self._indexed_poses: np.ndarray | None = None  # the pose array the indexes were built for
+        self._indexed_xy = np.zeros((2, 0))  # ...and its positions then, to notice in-place changes
+        self._indexes: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+    # -- neighbours ------------------------------------------------------------------------
+    def neighbours_of(
+        self,
+        poses: np.ndarray,
+        robot_id: int,
+        radius: float,
+        *,
+        heading: float | None = None,
+        direction: float = 0.0,
+        fov: float = 2 * np.pi,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Robot ``robot_id``'s neighbours ``(indices, distances)`` in the checked poses ``(3, n)``.
+
+        Same answer as :func:`dream.kernels.neighbours_of`, but from one whole-swarm index per
+        pose array and radius (Rust grid query), shared by every sensor and radio of the step.
+        """
+        if poses is not self._indexed_poses or not np.array_equal(poses[:2], self._indexed_xy):
+            self._indexed_poses, self._indexed_xy = poses, poses[:2].copy()
+            self._indexes = {}
+        if radius not in self._indexes:
+            self._indexes[radius] = kernels.neighbours(poses[:2].T, radius)
+        indptr, indices, distances = self._indexes[radius]
+        row = slice(indptr[robot_id], indptr[robot_id + 1])
+        found, dist = indices[row], distances[row]
+        if heading is None:
+            return found, dist
+        dx = poses[0, found] - poses[0, robot_id]
+        dy = poses[1, found] - poses[1, robot_id]
+        relative = (np.arctan2(dy, dx) - (heading + direction) + np.pi) % (2 * np.pi) - np.pi
+        seen = (np.abs(relative) <= fov / 2) | (dist == 0)
+        return found[seen], dist[seen]
 
     # -- radio -----------------------------------------------------------------------------
     def publish(self, robot_id: int, data: Any, latency: int = 0) -> None:
