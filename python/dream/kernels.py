@@ -234,7 +234,7 @@ class HrvoPlanner:
         if self._rust is not None:
             return self._rust.velocity(detections, velocity, preferred, position)
         return _reference.hrvo_velocity(
-            velocity, preferred, detections[:, 1] + np.pi, detections[:, 0], detections[:, 2:4],
+            velocity, preferred, _reference.detection_directions(detections), detections[:, 0], detections[:, 2:4],
             safety=self.safety, v_max=self.v_max, position=position, bounds=self.bounds,
             candidates=self.candidates, include_preferred=self.include_preferred,
         )

@@ -10,11 +10,18 @@ import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
 from dream import _reference, kernels
-from dream._reference import candidate_grid, hrvo, hrvo_velocity
+from dream._reference import candidate_grid, hrvo
+
 
 SAFETY = 0.24
 V_MAX = 0.2
 NONE = (np.zeros(0), np.zeros(0), np.zeros((0, 2)))  # no neighbours: directions, distances, velocities
+
+
+def hrvo_velocity(velocity, preferred, angles, distances, others, **kwargs):
+    """The reference with neighbour directions given as angles, as the hand-worked cases are."""
+    units = np.column_stack((np.cos(angles), np.sin(angles))) if len(angles) else np.zeros((0, 2))
+    return _reference.hrvo_velocity(velocity, preferred, units, distances, others, **kwargs)
 
 
 # -- an independent reading of SPEC 5.1 -------------------------------------------------------------

@@ -78,16 +78,25 @@ impl Grid {
     /// Calls `visit(j)` for every point in the 3x3 block of cells around `(x, y)`: a superset
     /// of the points within `reach` of it.
     pub fn for_each_near(&self, x: f64, y: f64, mut visit: impl FnMut(usize)) {
+        self.for_each_cell_near(x, y, |members| members.iter().for_each(|&j| visit(j)));
+    }
+
+    /// Calls `visit(members)` for each non-empty cell of the 3x3 block around `(x, y)`; each
+    /// slice lists point indices in increasing order.
+    pub fn for_each_cell_near(&self, x: f64, y: f64, mut visit: impl FnMut(&[usize])) {
         let (cx, cy) = cell_of(x, y, self.cell);
         for dx in -1..=1_i64 {
             for dy in -1..=1_i64 {
                 if let Some(slot) = self.slot(cx.saturating_add(dx), cy.saturating_add(dy)) {
-                    for &j in &self.members[self.starts[slot]..self.starts[slot + 1]] {
-                        visit(j);
-                    }
+                    visit(&self.members[self.starts[slot]..self.starts[slot + 1]]);
                 }
             }
         }
+    }
+
+    /// The points of each occupied cell (a cell's points are contiguous, in increasing index).
+    pub fn occupied(&self) -> impl Iterator<Item = &[usize]> + '_ {
+        self.starts.windows(2).filter(|w| w[1] > w[0]).map(|w| &self.members[w[0]..w[1]])
     }
 
     fn slot(&self, cx: i64, cy: i64) -> Option<usize> {

@@ -1,9 +1,10 @@
 //! Hybrid Reciprocal Velocity Obstacles with candidate sampling.
 //!
 //! For robot A (previous velocity `v_A`, preferred `v_pref`) and each neighbour B at distance d
-//! in direction u (from A towards B) moving with `v_B`, with safety radius r:
-//! the cone has half-angle `phi = asin(r / max(d, r))`, a left edge along `angle(u) + phi` and a
-//! right edge along `angle(u) - phi`; the VO's apex is `v_B`, the RVO's `(v_A + v_B) / 2`; HRVO
+//! in unit direction u (from A towards B; (1, 0) for a co-located B) moving with `v_B`, with
+//! safety radius r: the cone has half-angle `phi` with `sin phi = r / max(d, r)`, its left edge
+//! is u turned by +phi and its right edge u turned by -phi (rotations by `sin phi` and
+//! `cos phi = sqrt(1 - sin^2 phi)`: no trigonometry, so Rust and NumPy agree to the bit); the VO's apex is `v_B`, the RVO's `(v_A + v_B) / 2`; HRVO
 //! keeps the RVO edge on the side `v_A` is closer to and the VO edge on the other (both VO edges
 //! on a tie, as the original; distances within [`TIE`] of each other, relative to `|v_A - apex|`,
 //! are a tie, so that symmetric scenes are decided by geometry and not by rounding). A velocity is forbidden by B when it is strictly inside both
@@ -61,8 +62,8 @@ impl HrvoParams {
 /// One neighbour as a robot perceives it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Neighbour {
-    /// Angle (rad) of the direction from the robot towards the neighbour.
-    pub direction: f64,
+    /// Unit vector from the robot towards the neighbour.
+    pub direction: Vec2,
     /// Distance between centres (m).
     pub distance: f64,
     /// The neighbour's velocity (m/s).
@@ -74,7 +75,15 @@ impl Neighbour {
     /// the detected robot towards the sensing one (the original DREAM convention).
     pub fn from_detection(detection: [f64; 4]) -> Self {
         let [distance, angle, vx, vy] = detection;
-        Self { direction: angle + std::f64::consts::PI, distance, velocity: [vx, vy] }
+        let towards = angle + std::f64::consts::PI;
+        Self { direction: [towards.cos(), towards.sin()], distance, velocity: [vx, vy] }
+    }
+
+    /// The neighbour at `offset` (its position minus the robot's) moving with `velocity`.
+    pub fn from_offset(offset: Vec2, velocity: Vec2) -> Self {
+        let distance = (offset[0] * offset[0] + offset[1] * offset[1]).sqrt();
+        let direction = if distance > 0.0 { [offset[0] / distance, offset[1] / distance] } else { [1.0, 0.0] };
+        Self { direction, distance, velocity }
     }
 }
 
@@ -112,10 +121,11 @@ struct Cone {
 
 impl Cone {
     fn new(velocity: Vec2, b: &Neighbour, safety: f64) -> Self {
-        let phi = (safety / b.distance.max(safety)).asin();
-        let (l, r) = (b.direction + phi, b.direction - phi);
-        let left = [l.cos(), l.sin()];
-        let right = [r.cos(), r.sin()];
+        let sin = if safety > 0.0 { safety / b.distance.max(safety) } else { 0.0 };
+        let cos = (1.0 - sin * sin).sqrt();
+        let [ux, uy] = b.direction;
+        let left = [ux * cos - uy * sin, ux * sin + uy * cos];
+        let right = [ux * cos + uy * sin, uy * cos - ux * sin];
         let vo = b.velocity;
         let rvo = [(velocity[0] + vo[0]) / 2.0, (velocity[1] + vo[1]) / 2.0];
         let from_rvo = [velocity[0] - rvo[0], velocity[1] - rvo[1]];
@@ -222,7 +232,7 @@ pub fn hrvo_one(
     check_finite("position", &position)?;
     check_vec2s("candidates", grid)?;
     for (index, b) in neighbours.iter().enumerate() {
-        let values = [b.direction, b.distance, b.velocity[0], b.velocity[1]];
+        let values = [b.direction[0], b.direction[1], b.distance, b.velocity[0], b.velocity[1]];
         if !values.iter().all(|v| v.is_finite()) {
             return Err(GeomError::NonFinite { arg: "detections", index });
         }
@@ -273,8 +283,7 @@ pub fn hrvo_batch(
         let row = &indices[indptr[i] as usize..indptr[i + 1] as usize];
         let around = row.iter().map(|&j| {
             let q = positions[j as usize];
-            let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
-            Neighbour { direction: dy.atan2(dx), distance: (dx * dx + dy * dy).sqrt(), velocity: velocities[j as usize] }
+            Neighbour::from_offset([q[0] - p[0], q[1] - p[1]], velocities[j as usize])
         });
         choose(scratch, velocities[i], preferred[i], p, around, grid, &params)
     };
@@ -334,7 +343,7 @@ mod tests {
 
     #[test]
     fn head_on_robot_does_not_drive_into_its_neighbour() {
-        let ahead = Neighbour { direction: 0.0, distance: 0.5, velocity: [-0.2, 0.0] };
+        let ahead = Neighbour { direction: [1.0, 0.0], distance: 0.5, velocity: [-0.2, 0.0] };
         let v = hrvo_one([0.2, 0.0], [0.2, 0.0], [0.0, 0.0], &[ahead], &grid(), &PARAMS).unwrap();
         assert_ne!(v, [0.2, 0.0]);
         // Relative to the neighbour's velocity the choice leaves the collision cone.
@@ -345,7 +354,10 @@ mod tests {
     #[test]
     fn surrounded_robot_stops() {
         let ring: Vec<Neighbour> = (0..8)
-            .map(|k| Neighbour { direction: k as f64 * TAU / 8.0, distance: 0.1, velocity: [0.0, 0.0] })
+            .map(|k| {
+                let angle = k as f64 * TAU / 8.0;
+                Neighbour { direction: [angle.cos(), angle.sin()], distance: 0.1, velocity: [0.0, 0.0] }
+            })
             .collect();
         let v = hrvo_one([0.0, 0.0], [0.2, 0.0], [0.0, 0.0], &ring, &grid(), &PARAMS).unwrap();
         assert_eq!(v, [0.0, 0.0]);
@@ -372,11 +384,8 @@ mod tests {
         for i in (0..n).step_by(37) {
             let around: Vec<Neighbour> = (0..n)
                 .filter(|&j| j != i)
-                .filter_map(|j| {
-                    let (dx, dy) = (positions[j][0] - positions[i][0], positions[j][1] - positions[i][1]);
-                    let d = (dx * dx + dy * dy).sqrt();
-                    (d <= 0.5).then_some(Neighbour { direction: dy.atan2(dx), distance: d, velocity: velocities[j] })
-                })
+                .map(|j| Neighbour::from_offset([positions[j][0] - positions[i][0], positions[j][1] - positions[i][1]], velocities[j]))
+                .filter(|b| b.distance <= 0.5)
                 .collect();
             let one = hrvo_one(velocities[i], preferred[i], positions[i], &around, &g, &PARAMS).unwrap();
             assert_eq!(batch[i], one);

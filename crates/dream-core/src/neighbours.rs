@@ -33,20 +33,31 @@ pub struct Csr {
 }
 
 impl Csr {
-    fn from_rows(rows: Vec<Vec<(usize, f64)>>) -> Self {
-        let mut csr = Csr { indptr: Vec::with_capacity(rows.len() + 1), ..Csr::default() };
-        csr.indptr.push(0);
-        let total: usize = rows.iter().map(Vec::len).sum();
-        csr.indices.reserve(total);
-        csr.distances.reserve(total);
-        for row in rows {
-            for (j, d) in row {
-                csr.indices.push(j as i64);
-                csr.distances.push(d);
+    /// Puts the blocks' rows in robot order.
+    fn from_blocks(blocks: Vec<Block>, n: usize) -> Self {
+        let mut lengths = vec![0_usize; n];
+        for block in &blocks {
+            for (&i, &length) in block.robots.iter().zip(&block.lengths) {
+                lengths[i] = length;
             }
-            csr.indptr.push(csr.indices.len() as i64);
         }
-        csr
+        let mut indptr = Vec::with_capacity(n + 1);
+        indptr.push(0_i64);
+        for &length in &lengths {
+            indptr.push(indptr[indptr.len() - 1] + length as i64);
+        }
+        let total = indptr[n] as usize;
+        let (mut indices, mut distances) = (vec![0_i64; total], vec![0.0; total]);
+        for block in &blocks {
+            let mut from = 0;
+            for (&i, &length) in block.robots.iter().zip(&block.lengths) {
+                let to = indptr[i] as usize;
+                indices[to..to + length].copy_from_slice(&block.indices[from..from + length]);
+                distances[to..to + length].copy_from_slice(&block.distances[from..from + length]);
+                from += length;
+            }
+        }
+        Csr { indptr, indices, distances }
     }
 }
 
@@ -86,50 +97,136 @@ pub fn within(
     }
     // Any cell >= radius finds every neighbour; radius 0 only needs identical points together.
     let grid = Grid::new(xs, ys, if radius > 0.0 { radius } else { 1.0 });
-    let row = |i: usize| row_of(&grid, xs, ys, i, radius, view, max_neighbours);
-    let rows: Vec<Vec<(usize, f64)>> = if n >= PARALLEL_ROWS {
-        (0..n).into_par_iter().map(row).collect()
-    } else {
-        (0..n).map(row).collect()
+    let query = Query {
+        grid: &grid,
+        xs,
+        ys,
+        radius,
+        radius_squared: radius * radius * (1.0 + 4.0 * f64::EPSILON),
+        view,
+        max_neighbours,
     };
-    Ok(Csr::from_rows(rows))
-}
-
-fn row_of(
-    grid: &Grid,
-    xs: &[f64],
-    ys: &[f64],
-    i: usize,
-    radius: f64,
-    view: Option<FieldOfView<'_>>,
-    max_neighbours: Option<usize>,
-) -> Vec<(usize, f64)> {
-    let mut row = Vec::new();
-    grid.for_each_near(xs[i], ys[i], |j| {
-        if j == i {
-            return;
-        }
-        let (dx, dy) = (xs[j] - xs[i], ys[j] - ys[i]);
-        let distance = (dx * dx + dy * dy).sqrt();
-        if distance > radius {
-            return;
-        }
-        if let Some(v) = view {
-            let relative = wrap_angle(dy.atan2(dx) - (v.headings[i] + v.direction));
-            if !(relative.abs() <= v.fov / 2.0 || distance == 0.0) {
-                return;
+    // Robots are processed cell by cell: the robots of one cell share their candidates (the
+    // 3x3 block of cells around it), gathered and sorted once.
+    let cells: Vec<&[usize]> = grid.occupied().collect();
+    let blocks: Vec<Block> = if n >= PARALLEL_ROWS {
+        let mut chunks = Vec::new();
+        let (mut first, mut robots) = (0, 0);
+        for (c, members) in cells.iter().enumerate() {
+            robots += members.len();
+            if robots >= BLOCK_ROWS {
+                chunks.push(first..c + 1);
+                (first, robots) = (c + 1, 0);
             }
         }
-        row.push((j, distance));
-    });
-    if let Some(k) = max_neighbours {
-        if row.len() > k {
-            row.sort_unstable_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
-            row.truncate(k);
+        chunks.push(first..cells.len());
+        chunks.into_par_iter().map(|range| query.block(&cells[range])).collect()
+    } else {
+        vec![query.block(&cells)]
+    };
+    Ok(Csr::from_blocks(blocks, n))
+}
+
+/// Robots per parallel task (whole cells at a time).
+const BLOCK_ROWS: usize = 1024;
+
+/// The rows of some robots, flat: row k belongs to robot `robots[k]`.
+#[derive(Debug, Default)]
+struct Block {
+    robots: Vec<usize>,
+    lengths: Vec<usize>,
+    indices: Vec<i64>,
+    distances: Vec<f64>,
+}
+
+/// One whole-swarm query's inputs, shared by all rows.
+struct Query<'a> {
+    grid: &'a Grid,
+    xs: &'a [f64],
+    ys: &'a [f64],
+    radius: f64,
+    /// A hair above radius^2: beyond it a point is surely out; below it `sqrt` decides exactly.
+    radius_squared: f64,
+    view: Option<FieldOfView<'a>>,
+    max_neighbours: Option<usize>,
+}
+
+/// Candidates shared by the robots of one cell, in increasing index order.
+#[derive(Debug, Default)]
+struct Candidates {
+    indices: Vec<usize>,
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+    /// Squared distances of the current robot's kept candidates: `(position in candidates, d^2)`.
+    kept: Vec<(usize, f64)>,
+}
+
+impl Query<'_> {
+    fn block(&self, cells: &[&[usize]]) -> Block {
+        let mut out = Block::default();
+        let mut near = Candidates::default();
+        for members in cells {
+            let first = members[0];
+            near.indices.clear();
+            self.grid.for_each_cell_near(self.xs[first], self.ys[first], |m| near.indices.extend_from_slice(m));
+            near.indices.sort_unstable();
+            near.xs.clear();
+            near.ys.clear();
+            near.xs.extend(near.indices.iter().map(|&j| self.xs[j]));
+            near.ys.extend(near.indices.iter().map(|&j| self.ys[j]));
+            for &i in *members {
+                self.row(i, &mut near, &mut out);
+            }
         }
+        out
     }
-    row.sort_unstable_by_key(|&(j, _)| j);
-    row
+
+    fn row(&self, i: usize, near: &mut Candidates, out: &mut Block) {
+        let (x, y) = (self.xs[i], self.ys[i]);
+        // No data-dependent branch in the hot loop: every candidate is written, the length only
+        // advances for those whose squared distance may be in range.
+        let kept = &mut near.kept;
+        kept.clear();
+        kept.resize(near.indices.len(), (0, 0.0));
+        let mut count = 0;
+        for k in 0..near.indices.len() {
+            let (dx, dy) = (near.xs[k] - x, near.ys[k] - y);
+            let squared = dx * dx + dy * dy;
+            kept[count] = (k, squared);
+            count += usize::from(squared <= self.radius_squared && near.indices[k] != i);
+        }
+        kept.truncate(count);
+        let start = out.indices.len();
+        for &(k, squared) in kept.iter() {
+            let distance = squared.sqrt();
+            if distance > self.radius {
+                continue;
+            }
+            if let Some(v) = self.view {
+                let relative = wrap_angle((near.ys[k] - y).atan2(near.xs[k] - x) - (v.headings[i] + v.direction));
+                if !(relative.abs() <= v.fov / 2.0 || distance == 0.0) {
+                    continue;
+                }
+            }
+            out.indices.push(near.indices[k] as i64);
+            out.distances.push(distance);
+        }
+        if let Some(limit) = self.max_neighbours.filter(|&limit| out.indices.len() - start > limit) {
+            let mut row: Vec<(i64, f64)> =
+                out.indices[start..].iter().copied().zip(out.distances[start..].iter().copied()).collect();
+            row.sort_unstable_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+            row.truncate(limit);
+            row.sort_unstable_by_key(|&(j, _)| j);
+            out.indices.truncate(start);
+            out.distances.truncate(start);
+            for (j, d) in row {
+                out.indices.push(j);
+                out.distances.push(d);
+            }
+        }
+        out.robots.push(i);
+        out.lengths.push(out.indices.len() - start);
+    }
 }
 
 #[cfg(test)]

@@ -7,7 +7,7 @@ They depend on NumPy alone.
 """
 
 from dream._reference.dynamics import actuator_limit, dxi_to_dxu, threshold_velocities, unicycle_step, validate
-from dream._reference.hrvo import candidate_grid, hrvo, hrvo_velocity
+from dream._reference.hrvo import candidate_grid, detection_directions, hrvo, hrvo_velocity, unit_directions
 from dream._reference.neighbours import neighbours, neighbours_of
 from dream._reference.obstacles import virtual_agents
 from dream._reference.voronoi import voronoi_cells
@@ -15,6 +15,7 @@ from dream._reference.voronoi import voronoi_cells
 __all__ = [
     "actuator_limit",
     "candidate_grid",
+    "detection_directions",
     "dxi_to_dxu",
     "hrvo",
     "hrvo_velocity",
@@ -22,6 +23,7 @@ __all__ = [
     "neighbours_of",
     "threshold_velocities",
     "unicycle_step",
+    "unit_directions",
     "validate",
     "virtual_agents",
     "voronoi_cells",

@@ -1,10 +1,12 @@
 """Hybrid Reciprocal Velocity Obstacles with candidate sampling (reference implementation).
 
 For robot A (own previous velocity v_A, preferred velocity v_pref) and each neighbour B at
-distance d in direction u (from A to B) moving with v_B, with safety radius r:
+distance d in unit direction u (from A to B; (1, 0) for a co-located B) moving with v_B, with
+safety radius r:
 
-* half-angle ``phi = asin(r / max(d, r))``; the cone's left edge has direction angle(u) + phi,
-  its right edge angle(u) - phi;
+* half-angle phi with ``sin phi = r / max(d, r)``; the cone's left edge is u turned by +phi,
+  its right edge u turned by -phi (computed with ``sin phi`` and ``sqrt(1 - sin^2 phi)``,
+  without trigonometry, exactly as the Rust kernel);
 * the VO's apex is v_B, the RVO's apex (v_A + v_B) / 2;
 * HRVO keeps the RVO edge on the side v_A is closer to and the VO edge on the other side
   (if v_A is equally close to both, within ``TIE`` relative to ``|v_A - RVO apex|``, both
@@ -44,6 +46,22 @@ def candidate_grid(v_max: float, n_angles: int = 20, n_speeds: int = 10) -> Floa
     return np.vstack((np.zeros((1, 2)), polar))
 
 
+def unit_directions(offsets: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Unit vectors ``(k, 2)`` along ``offsets`` ``(k, 2)`` ((1, 0) for a zero offset) and their lengths."""
+    distances = np.sqrt(offsets[:, 0] * offsets[:, 0] + offsets[:, 1] * offsets[:, 1])
+    units = np.tile([1.0, 0.0], (len(offsets), 1))
+    apart = distances > 0
+    units[apart] = offsets[apart] / distances[apart, None]
+    return units, distances
+
+
+def detection_directions(detections: FloatArray) -> FloatArray:
+    """Unit vectors ``(k, 2)`` towards the robots of seed-format detections ``[distance, angle, vx, vy]``
+    (whose angle points from the detected robot towards the sensing one)."""
+    towards = detections[:, 1] + np.pi
+    return np.column_stack((np.cos(towards), np.sin(towards)))
+
+
 def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
     """z of the cross product of 2-vectors along the last axis."""
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
@@ -60,9 +78,11 @@ def _forbidden(
     """Boolean ``(m,)``: candidates inside the HRVO of at least one neighbour."""
     if len(directions) == 0:
         return np.zeros(len(candidates), dtype=bool)
-    phi = np.arcsin(safety / np.maximum(distances, safety))
-    left = np.column_stack((np.cos(directions + phi), np.sin(directions + phi)))
-    right = np.column_stack((np.cos(directions - phi), np.sin(directions - phi)))
+    sin = safety / np.maximum(distances, safety) if safety > 0 else np.zeros(len(distances))
+    cos = np.sqrt(1.0 - sin * sin)
+    ux, uy = directions[:, 0], directions[:, 1]
+    left = np.column_stack((ux * cos - uy * sin, ux * sin + uy * cos))
+    right = np.column_stack((ux * cos + uy * sin, uy * cos - ux * sin))
     vo_apex = neighbour_velocities
     rvo_apex = (velocity[None, :] + neighbour_velocities) / 2
     offset = velocity[None, :] - rvo_apex
@@ -98,8 +118,10 @@ def hrvo_velocity(
     ----------
     velocity, preferred : (2,)
         The robot's previous velocity v_A and its preferred velocity (m/s).
-    directions, distances : (k,)
-        Angle (rad) of the direction from the robot to each neighbour, and the distance (m).
+    directions : (k, 2)
+        Unit vectors from the robot towards each neighbour (see :func:`unit_directions`).
+    distances : (k,)
+        Distance to each neighbour (m).
     neighbour_velocities : (k, 2)
         Each neighbour's velocity (m/s).
     position : (2,), optional
@@ -159,12 +181,12 @@ def hrvo(
     out = np.zeros((n, 2))
     for i in range(n):
         js = np.asarray(indices[indptr[i] : indptr[i + 1]], dtype=np.int64)
-        offsets = positions[js] - positions[i]
+        directions, distances = unit_directions(positions[js] - positions[i])
         out[i] = hrvo_velocity(
             velocities[i],
             preferred[i],
-            np.arctan2(offsets[:, 1], offsets[:, 0]),
-            np.sqrt(offsets[:, 0] ** 2 + offsets[:, 1] ** 2),
+            directions,
+            distances,
             velocities[js],
             safety=safety,
             v_max=v_max,
