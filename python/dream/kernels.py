@@ -382,8 +382,10 @@ def virtual_agents(
     For robot p and each convex obstacle whose closest point c is within ``range``, the agent
     is p mirrored across ``c - n (robot_radius + margin)`` (n the unit vector from p to c): the
     cell's boundary then stays ``robot_radius + margin`` before the obstacle, so the robot's
-    body does not touch it. ``mirror_at_surface=True`` mirrors across c itself, as the original
-    did. A robot inside an obstacle gets no agent for it.
+    body does not touch it. A robot already closer than that gets its boundary 1 um ahead of
+    itself (its cell keeps to its own side and its centroid leads it away).
+    ``mirror_at_surface=True`` mirrors across c itself, as the original did. A robot inside an
+    obstacle gets no agent for it.
 
     Parameters
     ----------

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 
 from dream import _core, _reference, kernels
-from dream._reference.obstacles import closest_point
+from dream._reference.obstacles import GAP, closest_point
 from dream.errors import GeometryError
 
 SAFETY = 0.24
@@ -515,14 +515,14 @@ def test_virtual_agents_bisector_lies_the_offset_before_the_surface(rng, robot_r
         for agent, surface, distance in zip(mine, c[sensed], d[sensed]):
             middle = (p[i] + agent) / 2
             to_c, to_m = surface - p[i], middle - p[i]
-            # the bisector's foot is `offset` from the closest point, on the line from p to it
-            assert abs(np.hypot(*(surface - middle)) - offset) <= 1e-9
+            # the bisector's foot is on the segment from p to its closest point...
             assert abs(to_c[0] * to_m[1] - to_c[1] * to_m[0]) <= 1e-9
-            if distance >= offset:  # on the segment from p to the closest point
-                assert -1e-9 <= to_m @ to_c <= to_c @ to_c + 1e-9
+            assert -1e-9 <= to_m @ to_c <= to_c @ to_c + 1e-9
+            if distance - offset >= GAP:  # ...`offset` before the surface
+                assert abs(np.hypot(*(surface - middle)) - offset) <= 1e-9
                 checked += 1
-            else:  # on the far side of p
-                assert to_m @ to_c <= 1e-9
+            else:  # ...or, for a robot already closer, just ahead of it
+                assert abs(np.hypot(*to_m) - GAP) <= 1e-9
     assert checked > 20
 
 
@@ -554,7 +554,8 @@ def test_virtual_agents_keep_voronoi_cells_the_offset_clear_of_obstacles(rng, wh
                 cell = vertices[offsets[i] : offsets[i + 1]]
                 clearance = (surface - cell) @ u
                 message = f"robot {i} at {distance:.3f} m: its cell reaches {clearance.min():.3f} m from the surface"
-                assert np.all(clearance >= offset - 1e-9), message
+                # A robot already closer than the offset keeps its cell behind itself.
+                assert np.all(clearance >= min(offset, distance - GAP) - 1e-9), message
 
 
 def test_virtual_agents_mirror_at_surface_puts_the_bisector_on_the_obstacle(rng):
@@ -886,7 +887,7 @@ def test_core_hrvo_rejects_invalid_csr(indptr, indices, reason):
     ],
 )
 def test_core_voronoi_cells_rejects_invalid_virtual_csr(indptr, points):
-    with pytest.raises(ValueError, match="virtual indptr"):
+    with pytest.raises(ValueError, match="virtual"):
         call_cells(virtual_indptr=np.array(indptr, dtype=np.int64), virtual_points=points)()
 
 

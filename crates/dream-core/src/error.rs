@@ -21,9 +21,9 @@ pub enum GeomError {
         rule: &'static str,
         got: f64,
     },
-    /// CSR neighbour lists that do not describe one row per robot with valid robot ids.
-    #[error("`neighbours` is not a valid CSR of {robots} rows: {reason}")]
-    InvalidNeighbours { robots: usize, reason: String },
+    /// Ragged rows (CSR) that do not fit: wrong length, decreasing offsets, ids out of range.
+    #[error("`{arg}` is not a valid CSR of {rows} rows: {reason}")]
+    InvalidCsr { arg: &'static str, rows: usize, reason: String },
     /// An obstacle whose vertices enclose no area.
     #[error("obstacle {0} is degenerate: its vertices enclose no area")]
     DegenerateObstacle(usize),

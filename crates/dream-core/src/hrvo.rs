@@ -176,12 +176,27 @@ fn choose(
     }
     scratch.candidates.extend_from_slice(grid);
 
-    let valid = |v: Vec2, cones: &[Cone]| {
+    // Candidates are tested nearest first; the cone that forbade the last one is asked first,
+    // since neighbouring candidates are usually forbidden by the same neighbour.
+    let mut blocker = 0;
+    let mut valid = |v: Vec2, cones: &[Cone]| {
         let inside = params.bounds.is_none_or(|b| {
             let (x, y) = (position[0] + v[0], position[1] + v[1]);
             b.xmin < x && x < b.xmax && b.ymin < y && y < b.ymax
         });
-        inside && !cones.iter().any(|c| c.forbids(v))
+        if !inside {
+            return false;
+        }
+        if cones.get(blocker).is_some_and(|c| c.forbids(v)) {
+            return false;
+        }
+        match cones.iter().position(|c| c.forbids(v)) {
+            Some(k) => {
+                blocker = k;
+                false
+            }
+            None => true,
+        }
     };
 
     scratch.order.clear();
@@ -190,13 +205,20 @@ fn choose(
         (dx * dx + dy * dy, k)
     }));
     let by_distance = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
+    // Most robots take their nearest candidate (a free way): find it with one scan first.
+    let Some(&nearest) = scratch.order.iter().min_by(|a, b| by_distance(a, b)) else {
+        return [0.0, 0.0];
+    };
+    if valid(scratch.candidates[nearest.1], &scratch.cones) {
+        return scratch.candidates[nearest.1];
+    }
     let first = FIRST_BATCH.min(scratch.order.len());
     if first < scratch.order.len() {
         scratch.order.select_nth_unstable_by(first, by_distance);
     }
     let (head, tail) = scratch.order.split_at_mut(first);
     head.sort_unstable_by(by_distance);
-    for &(_, k) in head.iter() {
+    for &(_, k) in head.iter().skip(1) {
         if valid(scratch.candidates[k], &scratch.cones) {
             return scratch.candidates[k];
         }
@@ -236,6 +258,9 @@ pub fn hrvo_one(
         if !values.iter().all(|v| v.is_finite()) {
             return Err(GeomError::NonFinite { arg: "detections", index });
         }
+        if b.distance < 0.0 {
+            return Err(GeomError::InvalidParameter { arg: "detection distance", rule: ">= 0", got: b.distance });
+        }
     }
     Ok(choose(&mut Scratch::default(), velocity, preferred, position, neighbours.iter().copied(), grid, &params))
 }
@@ -264,6 +289,9 @@ pub fn hrvo_batch(
     check_vec2s("velocities", velocities)?;
     check_vec2s("preferred", preferred)?;
     check_vec2s("candidates", grid)?;
+    if !(radius.is_finite() && radius >= 0.0) {
+        return Err(GeomError::InvalidParameter { arg: "radius", rule: ">= 0", got: radius });
+    }
     let found;
     let (indptr, indices) = match neighbours {
         Some(csr) => {
@@ -298,9 +326,9 @@ pub fn hrvo_batch(
 /// Checks that `(indptr, indices)` has `n` rows of ids in `[0, n)`.
 ///
 /// # Errors
-/// [`GeomError::InvalidNeighbours`] saying what is wrong.
+/// [`GeomError::InvalidCsr`] saying what is wrong.
 pub fn check_csr(indptr: &[i64], indices: &[i64], n: usize) -> Result<()> {
-    let fail = |reason: String| Err(GeomError::InvalidNeighbours { robots: n, reason });
+    let fail = |reason: String| Err(GeomError::InvalidCsr { arg: "neighbours", rows: n, reason });
     if indptr.len() != n + 1 {
         return fail(format!("indptr has {} entries, expected {}", indptr.len(), n + 1));
     }

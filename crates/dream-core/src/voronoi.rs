@@ -15,6 +15,9 @@ use crate::error::{check_finite, check_len, GeomError, Result};
 use crate::hrvo::Vec2;
 use crate::neighbours;
 
+/// Largest number of vertices of a cell's disc (far beyond any use; keeps memory bounded).
+pub const MAX_RESOLUTION: usize = 1 << 20;
+
 /// Rows below this count run on one thread.
 const PARALLEL_ROBOTS: usize = 256;
 
@@ -109,15 +112,16 @@ pub fn voronoi_cells(
     if !(radius.is_finite() && radius > 0.0) {
         return Err(GeomError::InvalidParameter { arg: "radius", rule: "> 0", got: radius });
     }
-    if resolution < 3 {
-        return Err(GeomError::InvalidParameter { arg: "resolution", rule: ">= 3", got: resolution as f64 });
+    if !(3..=MAX_RESOLUTION).contains(&resolution) {
+        return Err(GeomError::InvalidParameter { arg: "resolution", rule: "between 3 and 2^20", got: resolution as f64 });
     }
     if let Some((indptr, points)) = virtual_agents {
         check_len("virtual indptr", n + 1, indptr.len())?;
         check_finite("virtual", points.as_flattened())?;
         let ok = indptr[0] == 0 && indptr[n] == points.len() as i64 && indptr.windows(2).all(|w| w[0] <= w[1]);
         if !ok {
-            return Err(GeomError::InvalidNeighbours { robots: n, reason: "virtual indptr must rise from 0 to len(points)".into() });
+            let reason = "its offsets must rise from 0 to the number of points".into();
+            return Err(GeomError::InvalidCsr { arg: "virtual", rows: n, reason });
         }
     }
     let (xs, ys): (Vec<f64>, Vec<f64>) = positions.iter().map(|p| (p[0], p[1])).unzip();

@@ -64,6 +64,20 @@ pub fn indices_of(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<Vec<i64
     Ok(values)
 }
 
+/// A count given from Python (`int`): negative values are a `ValueError` naming `arg`.
+pub fn count_of(arg: &str, value: i64) -> PyDreamResult<usize> {
+    usize::try_from(value).map_err(|_| value_error(format!("`{arg}` must be >= 0, got {value}")))
+}
+
+/// Both halves of an optional CSR pair, or neither.
+pub fn both<T>(first: (&str, Option<T>), second: (&str, Option<T>)) -> PyDreamResult<Option<(T, T)>> {
+    match (first.1, second.1) {
+        (Some(a), Some(b)) => Ok(Some((a, b))),
+        (None, None) => Ok(None),
+        _ => Err(value_error(format!("give both `{}` and `{}`, or neither", first.0, second.0))),
+    }
+}
+
 /// Fails unless the two arrays describe the same number of robots.
 pub fn same_count(arg: &str, expected: usize, got: usize, rows: usize) -> PyDreamResult<()> {
     if expected == got {

@@ -5,7 +5,7 @@ use dream_core::hrvo::{self as core, HrvoParams, Neighbour, Vec2};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
-use crate::arrays::{indices_of, points_of, vector_of};
+use crate::arrays::{both, indices_of, points_of, vector_of};
 use crate::errors::PyDreamResult;
 
 fn params(
@@ -45,9 +45,9 @@ pub fn hrvo<'py>(
     let v = points_of::<2>("velocities", &velocities)?;
     let pref = points_of::<2>("preferred", &preferred)?;
     let grid = points_of::<2>("candidates", &candidates)?;
-    let csr = match (indptr, indices) {
-        (Some(a), Some(b)) => Some((indices_of("indptr", &a)?, indices_of("indices", &b)?)),
-        _ => None,
+    let csr = match both(("indptr", indptr), ("indices", indices))? {
+        Some((a, b)) => Some((indices_of("indptr", &a)?, indices_of("indices", &b)?)),
+        None => None,
     };
     let params = params(safety, v_max, bounds, include_preferred)?;
     let chosen = py.detach(|| {

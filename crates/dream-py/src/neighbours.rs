@@ -4,7 +4,7 @@ use dream_core::neighbours::{self as core, FieldOfView};
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 
-use crate::arrays::{points_of, vector_of};
+use crate::arrays::{count_of, points_of, vector_of};
 use crate::errors::PyDreamResult;
 
 type CsrArrays<'py> = (Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<f64>>);
@@ -19,9 +19,10 @@ pub fn neighbours<'py>(
     headings: Option<Bound<'py, PyAny>>,
     direction: f64,
     fov: f64,
-    max_neighbours: Option<usize>,
+    max_neighbours: Option<i64>,
 ) -> PyDreamResult<CsrArrays<'py>> {
     let points = points_of::<2>("positions", &positions)?;
+    let max_neighbours = max_neighbours.map(|k| count_of("max_neighbours", k)).transpose()?;
     let headings = headings.map(|h| vector_of("headings", &h, Some(points.len()))).transpose()?;
     let csr = py.detach(|| {
         let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|p| (p[0], p[1])).unzip();

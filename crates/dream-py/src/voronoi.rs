@@ -5,7 +5,7 @@ use dream_core::voronoi as core;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
-use crate::arrays::{indices_of, points_of};
+use crate::arrays::{both, count_of, indices_of, points_of};
 use crate::errors::PyDreamResult;
 
 type CellArrays<'py> = (
@@ -25,13 +25,14 @@ pub fn voronoi_cells<'py>(
     bounds: (f64, f64, f64, f64),
     virtual_indptr: Option<Bound<'py, PyAny>>,
     virtual_points: Option<Bound<'py, PyAny>>,
-    resolution: usize,
+    resolution: i64,
 ) -> PyDreamResult<CellArrays<'py>> {
+    let resolution = count_of("resolution", resolution)?;
     let points = points_of::<2>("positions", &positions)?;
     let arena = Arena::new(bounds.0, bounds.1, bounds.2, bounds.3)?;
-    let agents = match (virtual_indptr, virtual_points) {
-        (Some(indptr), Some(found)) => Some((indices_of("virtual_indptr", &indptr)?, points_of::<2>("virtual_points", &found)?)),
-        _ => None,
+    let agents = match both(("virtual_indptr", virtual_indptr), ("virtual_points", virtual_points))? {
+        Some((indptr, found)) => Some((indices_of("virtual_indptr", &indptr)?, points_of::<2>("virtual_points", &found)?)),
+        None => None,
     };
     let cells = py.detach(|| {
         let agents = agents.as_ref().map(|(indptr, found)| (indptr.as_slice(), found.as_slice()));

@@ -1,8 +1,10 @@
 """Obstacles as virtual agents (reference: every robot against every obstacle edge).
 
-For robot p and a convex obstacle whose closest point c is within ``range``, the virtual agent
-is the mirror image of p across ``c - n * offset`` (n the unit vector from p to c), so the
-bisector lies ``offset`` before the surface. A robot inside or on an obstacle gets no agent.
+For robot p and a convex obstacle whose closest point c is within ``range`` (distance d, unit
+direction n from p to c), the virtual agent sits at ``p + 2 t n`` with
+``t = max(d - offset, GAP)``: the bisector lies ``offset`` before the surface, or ``GAP`` ahead
+of a robot already closer than that. A robot inside or on an obstacle gets no agent for it.
+Each obstacle is the convex hull of its vertices; a hull of area <= ``MIN_AREA`` is degenerate.
 """
 
 from __future__ import annotations
@@ -12,16 +14,39 @@ import numpy as np
 from dream._checks import FloatArray
 from dream.errors import GeometryError
 
-
-def _counter_clockwise(polygon: FloatArray) -> FloatArray:
-    centre = polygon.mean(axis=0)
-    return polygon[np.argsort(np.arctan2(polygon[:, 1] - centre[1], polygon[:, 0] - centre[0]))]
+GAP = 1e-6  #: least distance (m) from a robot to the bisector of its virtual agent
+MIN_AREA = 1e-12  #: obstacles with a smaller convex hull (m^2) have no extent
 
 
-def closest_point(polygon: FloatArray, p: FloatArray) -> FloatArray | None:
-    """Closest point of the convex ``polygon`` ``(k, 2)`` to ``p``; ``None`` if p is inside."""
-    ring = _counter_clockwise(polygon)
-    starts, ends = ring, np.roll(ring, -1, axis=0)
+def convex_hull(points: FloatArray) -> FloatArray:
+    """Counter-clockwise convex hull ``(h, 2)`` (Andrew's monotone chain; collinear points dropped)."""
+    ordered = sorted({(float(x), float(y)) for x, y in points})
+    if len(ordered) < 3:
+        return np.array(ordered, dtype=np.float64).reshape(-1, 2)
+
+    def turn(o: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    chains = []
+    for sequence in (ordered, ordered[::-1]):
+        chain: list[tuple[float, float]] = []
+        for p in sequence:
+            while len(chain) >= 2 and turn(chain[-2], chain[-1], p) <= 0:
+                chain.pop()
+            chain.append(p)
+        chains.append(chain[:-1])
+    return np.array(chains[0] + chains[1], dtype=np.float64)
+
+
+def polygon_area(polygon: FloatArray) -> float:
+    """Area of a counter-clockwise polygon (shoelace)."""
+    x, y = polygon[:, 0], polygon[:, 1]
+    return float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)) / 2
+
+
+def closest_point(hull: FloatArray, p: FloatArray) -> FloatArray | None:
+    """Closest point of the convex ``hull`` (counter-clockwise) to ``p``; ``None`` if p is inside."""
+    starts, ends = hull, np.roll(hull, -1, axis=0)
     edges = ends - starts
     to_p = p - starts
     if np.all(edges[:, 0] * to_p[:, 1] - edges[:, 1] * to_p[:, 0] >= 0):
@@ -36,24 +61,31 @@ def virtual_agents(
 ) -> tuple[np.ndarray, FloatArray]:
     """Virtual agents of every robot as CSR ``(indptr (n + 1,), points (m, 2))``, obstacles in order.
 
-    Obstacle k is the convex polygon ``vertices[offsets[k]:offsets[k + 1]]``.
+    Obstacle k is the convex hull of ``vertices[offsets[k]:offsets[k + 1]]``.
+
+    Raises
+    ------
+    GeometryError
+        If an obstacle's hull has no area (fewer than 3 distinct points, or collinear).
     """
+    hulls = []
     for k, (start, stop) in enumerate(zip(offsets[:-1], offsets[1:])):
-        ring = _counter_clockwise(vertices[start:stop])
-        twice_area = np.sum(ring[:, 0] * np.roll(ring[:, 1], -1) - np.roll(ring[:, 0], -1) * ring[:, 1])
-        if len(ring) < 3 or twice_area <= 1e-12:
+        hull = convex_hull(vertices[start:stop])
+        if len(hull) < 3 or polygon_area(hull) <= MIN_AREA:
             raise GeometryError(f"obstacle {k} is degenerate: its vertices enclose no area")
+        hulls.append(hull)
     indptr = [0]
     points: list[FloatArray] = []
     for p in positions:
-        for start, stop in zip(offsets[:-1], offsets[1:]):
-            c = closest_point(vertices[start:stop], p)
+        for hull in hulls:
+            c = closest_point(hull, p)
             if c is None:
                 continue
-            distance = float(np.hypot(*(c - p)))
+            d = c - p
+            distance = float(np.sqrt(d[0] * d[0] + d[1] * d[1]))
             if distance > range or distance == 0:
                 continue
-            surface = c - (c - p) / distance * offset
-            points.append(2 * surface - p)
+            reach = 2 * max(distance - offset, GAP)
+            points.append(p + reach * (d / distance))
         indptr.append(len(points))
     return np.array(indptr, dtype=np.int64), np.array(points, dtype=np.float64).reshape(-1, 2)

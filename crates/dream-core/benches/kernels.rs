@@ -1,0 +1,86 @@
+//! Criterion benchmarks of the core kernels on swarms with ~10 neighbours per robot.
+//!
+//!     cargo bench -p dream-core
+
+use std::f64::consts::PI;
+use std::hint::black_box;
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use dream_core::dynamics::{self, Arena, Wheels};
+use dream_core::hrvo::{self, HrvoParams, Vec2};
+use dream_core::{neighbours, voronoi};
+
+/// `n` points spread so that about 10 lie within `radius` of each (a deterministic scatter).
+fn swarm(n: usize, radius: f64) -> (Vec<f64>, Vec<f64>, f64) {
+    let side = (n as f64 * PI * radius * radius / 10.0).sqrt();
+    let xs = (0..n).map(|i| (i as f64 * 0.754_877_666).fract() * side).collect();
+    let ys = (0..n).map(|i| (i as f64 * 0.569_840_290).fract() * side).collect();
+    (xs, ys, side)
+}
+
+fn points(xs: &[f64], ys: &[f64]) -> Vec<Vec2> {
+    xs.iter().zip(ys).map(|(&x, &y)| [x, y]).collect()
+}
+
+fn bench_neighbours(c: &mut Criterion) {
+    let mut group = c.benchmark_group("neighbours");
+    for n in [1_000, 10_000, 100_000] {
+        let (xs, ys, _) = swarm(n, 0.5);
+        group.bench_with_input(BenchmarkId::new("n", n), &n, |b, _| {
+            b.iter(|| neighbours::within(black_box(&xs), black_box(&ys), 0.5, None, None).unwrap())
+        });
+    }
+    group.finish();
+}
+
+fn bench_hrvo(c: &mut Criterion) {
+    let mut group = c.benchmark_group("hrvo");
+    let grid = hrvo::candidate_grid(0.2, 20, 10);
+    let params = HrvoParams { safety: 0.24, v_max: 0.2, bounds: None, include_preferred: true };
+    for n in [100, 1_000, 10_000] {
+        let (xs, ys, _) = swarm(n, 0.5);
+        let p = points(&xs, &ys);
+        let v: Vec<Vec2> = (0..n).map(|i| [0.1 * (i as f64).sin(), 0.1 * (i as f64).cos()]).collect();
+        let pref: Vec<Vec2> = (0..n).map(|i| [0.2 * (3.0 * i as f64).cos(), 0.2 * (3.0 * i as f64).sin()]).collect();
+        group.bench_with_input(BenchmarkId::new("n", n), &n, |b, _| {
+            b.iter(|| hrvo::hrvo_batch(black_box(&p), &v, &pref, None, 0.5, &grid, &params).unwrap())
+        });
+    }
+    group.finish();
+}
+
+fn bench_voronoi(c: &mut Criterion) {
+    let mut group = c.benchmark_group("voronoi");
+    for n in [100, 1_000, 10_000] {
+        let (xs, ys, side) = swarm(n, 0.5);
+        let p = points(&xs, &ys);
+        let arena = Arena::new(0.0, side, 0.0, side).unwrap();
+        group.bench_with_input(BenchmarkId::new("n", n), &n, |b, _| {
+            b.iter(|| voronoi::voronoi_cells(black_box(&p), 0.5, &arena, None, 64).unwrap())
+        });
+    }
+    group.finish();
+}
+
+fn bench_dynamics(c: &mut Criterion) {
+    let mut group = c.benchmark_group("dynamics");
+    let wheels = Wheels::new(0.016, 0.105, 12.5).unwrap();
+    for n in [100, 1_000, 10_000] {
+        let (xs, ys, side) = swarm(n, 0.5);
+        let poses: Vec<f64> = xs.iter().chain(&ys).copied().chain((0..n).map(|i| i as f64 % 6.0 - 3.0)).collect();
+        let commands: Vec<f64> = (0..2 * n).map(|i| 0.3 * ((i as f64) * 0.37).sin()).collect();
+        let arena = Arena::new(0.0, side, 0.0, side).unwrap();
+        group.bench_with_input(BenchmarkId::new("n", n), &n, |b, _| {
+            b.iter(|| {
+                let counts = dynamics::validate(black_box(&poses), &commands, n, &arena, 0.11, &wheels).unwrap();
+                let mut next = poses.clone();
+                dynamics::unicycle_step(&mut next, &commands, n, 0.033).unwrap();
+                (counts, next)
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_neighbours, bench_hrvo, bench_voronoi, bench_dynamics);
+criterion_main!(benches);
