@@ -2,18 +2,22 @@
 //!
 //! For robot A (previous velocity `v_A`, preferred `v_pref`) and each neighbour B at distance d
 //! in unit direction u (from A towards B; (1, 0) for a co-located B) moving with `v_B`, with
-//! safety radius r: the cone has half-angle `phi` with `sin phi = r / max(d, r)`, its left edge
-//! is u turned by +phi and its right edge u turned by -phi (rotations by `sin phi` and
-//! `cos phi = sqrt(1 - sin^2 phi)`: no trigonometry, so Rust and NumPy agree to the bit); the VO's apex is `v_B`, the RVO's `(v_A + v_B) / 2`; HRVO
-//! keeps the RVO edge on the side `v_A` is closer to and the VO edge on the other (both VO edges
-//! on a tie, as the original; distances within [`TIE`] of each other, relative to `|v_A - apex|`,
-//! are a tie, so that symmetric scenes are decided by geometry and not by rounding). A velocity is forbidden by B when it is strictly inside both
-//! half-planes.
+//! safety radius r:
+//! - the cone has half-angle phi with `sin phi = r / max(d, r)`; its left edge is u turned by
+//!   +phi, its right edge u turned by -phi (rotations by `sin phi` and `sqrt(1 - sin^2 phi)`:
+//!   no trigonometry, so Rust and NumPy agree to the bit);
+//! - the VO's apex is `v_B`, the RVO's `(v_A + v_B) / 2`; HRVO keeps the RVO edge on the side
+//!   `v_A` is closer to and the VO edge on the other (both VO edges on a tie, as the original;
+//!   distances within [`TIE`] of each other, relative to `|v_A - apex|`, are a tie, so that
+//!   symmetric scenes are decided by geometry and not by rounding);
+//! - a velocity v is forbidden by B when it is strictly inside both half-planes:
+//!   `left x (v - apex_left) < 0` and `right x (v - apex_right) > 0`.
 //!
 //! The chosen velocity is the candidate closest to `v_pref` (first in candidate order on ties)
 //! that no neighbour forbids and, with bounds, keeps `position + v` strictly inside; zero if
-//! none does. Candidates are tested in order of distance and the first valid one returned, so
-//! most are never tested. The arithmetic matches the NumPy reference operation by operation.
+//! none does. A free preferred velocity is taken after one test per neighbour; otherwise every
+//! candidate is tested against every half-plane in branch-free loops. The arithmetic matches
+//! the NumPy reference operation by operation.
 
 use std::f64::consts::TAU;
 
@@ -30,8 +34,6 @@ pub type Vec2 = [f64; 2];
 const PARALLEL_ROBOTS: usize = 256;
 /// Relative tolerance under which `v_A` is equally close to both RVO edges.
 pub const TIE: f64 = 1e-9;
-/// Candidates sorted up front; the rest are sorted only if none of these is valid.
-const FIRST_BATCH: usize = 16;
 
 /// Parameters shared by every robot of an HRVO call.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -110,7 +112,7 @@ fn cross(a: Vec2, b: Vec2) -> f64 {
     a[0] * b[1] - a[1] * b[0]
 }
 
-/// The two half-planes of one neighbour's HRVO.
+/// The two half-planes of one neighbour's HRVO: edge directions and the apexes they pass through.
 #[derive(Debug, Clone, Copy)]
 struct Cone {
     left: Vec2,
@@ -131,17 +133,18 @@ impl Cone {
         let from_rvo = [velocity[0] - rvo[0], velocity[1] - rvo[1]];
         let (to_left, to_right) = (cross(left, from_rvo).abs(), cross(right, from_rvo).abs());
         let tie = (to_left - to_right).abs() <= TIE * from_rvo[0].hypot(from_rvo[1]);
-        Cone {
-            left,
-            left_apex: if !tie && to_left < to_right { rvo } else { vo },
-            right,
-            right_apex: if !tie && to_left > to_right { rvo } else { vo },
-        }
+        let left_apex = if !tie && to_left < to_right { rvo } else { vo };
+        let right_apex = if !tie && to_left > to_right { rvo } else { vo };
+        Cone { left, left_apex, right, right_apex }
     }
 
-    fn forbids(&self, v: Vec2) -> bool {
-        cross(self.left, [v[0] - self.left_apex[0], v[1] - self.left_apex[1]]) < 0.0
-            && cross(self.right, [v[0] - self.right_apex[0], v[1] - self.right_apex[1]]) > 0.0
+    /// Strictly right of the left edge and strictly left of the right edge. The differences to
+    /// the apexes come first: a candidate on an edge then stays on it, whatever the rounding.
+    fn forbids(&self, vx: f64, vy: f64) -> bool {
+        let [l0, l1] = self.left;
+        let [r0, r1] = self.right;
+        let ([la0, la1], [ra0, ra1]) = (self.left_apex, self.right_apex);
+        (l0 * (vy - la1) - l1 * (vx - la0) < 0.0) & (r0 * (vy - ra1) - r1 * (vx - ra0) > 0.0)
     }
 }
 
@@ -149,8 +152,12 @@ impl Cone {
 #[derive(Debug, Default)]
 struct Scratch {
     cones: Vec<Cone>,
-    candidates: Vec<Vec2>,
-    order: Vec<(f64, usize)>,
+    /// Candidates as columns (x, y), their squared distances to the preferred velocity, and
+    /// whether a neighbour or the arena rules them out.
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+    distances: Vec<f64>,
+    blocked: Vec<u64>,
 }
 
 /// One robot's HRVO velocity.
@@ -166,70 +173,53 @@ fn choose(
     grid: &[Vec2],
     params: &HrvoParams,
 ) -> Vec2 {
-    scratch.cones.clear();
-    scratch.cones.extend(neighbours.map(|b| Cone::new(velocity, &b, params.safety)));
-    scratch.candidates.clear();
-    if params.include_preferred {
-        let norm = preferred[0].hypot(preferred[1]);
-        let scale = if norm > params.v_max { params.v_max / norm } else { 1.0 };
-        scratch.candidates.push(if scale < 1.0 { [preferred[0] * scale, preferred[1] * scale] } else { preferred });
-    }
-    scratch.candidates.extend_from_slice(grid);
-
-    // Candidates are tested nearest first; the cone that forbade the last one is asked first,
-    // since neighbouring candidates are usually forbidden by the same neighbour.
-    let mut blocker = 0;
-    let mut valid = |v: Vec2, cones: &[Cone]| {
-        let inside = params.bounds.is_none_or(|b| {
-            let (x, y) = (position[0] + v[0], position[1] + v[1]);
+    let Scratch { cones, xs, ys, distances, blocked } = scratch;
+    cones.clear();
+    cones.extend(neighbours.map(|b| Cone::new(velocity, &b, params.safety)));
+    let inside = |vx: f64, vy: f64| {
+        params.bounds.is_none_or(|b| {
+            let (x, y) = (position[0] + vx, position[1] + vy);
             b.xmin < x && x < b.xmax && b.ymin < y && y < b.ymax
-        });
-        if !inside {
-            return false;
-        }
-        if cones.get(blocker).is_some_and(|c| c.forbids(v)) {
-            return false;
-        }
-        match cones.iter().position(|c| c.forbids(v)) {
-            Some(k) => {
-                blocker = k;
-                false
-            }
-            None => true,
-        }
+        })
     };
-
-    scratch.order.clear();
-    scratch.order.extend(scratch.candidates.iter().enumerate().map(|(k, v)| {
-        let (dx, dy) = (v[0] - preferred[0], v[1] - preferred[1]);
-        (dx * dx + dy * dy, k)
+    // The preferred velocity, when within the speed limit, is at distance 0: nothing comes
+    // before it, so a free way costs one test per neighbour.
+    let [px, py] = preferred;
+    let norm = px.hypot(py);
+    if params.include_preferred && norm <= params.v_max && inside(px, py) && !cones.iter().any(|c| c.forbids(px, py)) {
+        return preferred;
+    }
+    xs.clear();
+    ys.clear();
+    if params.include_preferred {
+        let scale = if norm > params.v_max { params.v_max / norm } else { 1.0 };
+        let first = if scale < 1.0 { [px * scale, py * scale] } else { preferred };
+        xs.push(first[0]);
+        ys.push(first[1]);
+    }
+    xs.extend(grid.iter().map(|v| v[0]));
+    ys.extend(grid.iter().map(|v| v[1]));
+    // Every candidate against every half-plane, without branches (the loops vectorise), then
+    // the nearest candidate left (first in order on ties).
+    distances.clear();
+    distances.extend(xs.iter().zip(ys.iter()).map(|(&x, &y)| {
+        let (dx, dy) = (x - px, y - py);
+        dx * dx + dy * dy
     }));
-    let by_distance = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
-    // Most robots take their nearest candidate (a free way): find it with one scan first.
-    let Some(&nearest) = scratch.order.iter().min_by(|a, b| by_distance(a, b)) else {
-        return [0.0, 0.0];
-    };
-    if valid(scratch.candidates[nearest.1], &scratch.cones) {
-        return scratch.candidates[nearest.1];
-    }
-    let first = FIRST_BATCH.min(scratch.order.len());
-    if first < scratch.order.len() {
-        scratch.order.select_nth_unstable_by(first, by_distance);
-    }
-    let (head, tail) = scratch.order.split_at_mut(first);
-    head.sort_unstable_by(by_distance);
-    for &(_, k) in head.iter().skip(1) {
-        if valid(scratch.candidates[k], &scratch.cones) {
-            return scratch.candidates[k];
+    blocked.clear();
+    blocked.extend(xs.iter().zip(ys.iter()).map(|(&x, &y)| u64::from(!inside(x, y))));
+    for cone in cones.iter() {
+        for ((b, &x), &y) in blocked.iter_mut().zip(xs.iter()).zip(ys.iter()) {
+            *b |= u64::from(cone.forbids(x, y));
         }
     }
-    tail.sort_unstable_by(by_distance);
-    for &(_, k) in tail.iter() {
-        if valid(scratch.candidates[k], &scratch.cones) {
-            return scratch.candidates[k];
+    let mut best: Option<(f64, usize)> = None;
+    for (k, (&d, &b)) in distances.iter().zip(blocked.iter()).enumerate() {
+        if b == 0 && best.is_none_or(|(bd, _)| d < bd) {
+            best = Some((d, k));
         }
     }
-    [0.0, 0.0]
+    best.map_or([0.0, 0.0], |(_, k)| [xs[k], ys[k]])
 }
 
 fn check_vec2s(arg: &'static str, values: &[Vec2]) -> Result<()> {

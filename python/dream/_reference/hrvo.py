@@ -11,7 +11,8 @@ safety radius r:
 * HRVO keeps the RVO edge on the side v_A is closer to and the VO edge on the other side
   (if v_A is equally close to both, within ``TIE`` relative to ``|v_A - RVO apex|``, both
   edges are the VO's, as in the original);
-* a velocity is forbidden by B if it lies strictly inside both half-planes.
+* a velocity v is forbidden by B if it lies strictly inside both half-planes:
+  ``left x (v - apex_left) < 0`` and ``right x (v - apex_right) > 0``.
 
 The result is the candidate closest to v_pref (first in candidate order on ties) that no
 neighbour forbids and, when ``bounds`` is given, keeps ``position + v`` strictly inside the
@@ -92,7 +93,7 @@ def _forbidden(
     tie = np.abs(dist_left - dist_right) <= TIE * np.hypot(offset[:, 0], offset[:, 1])
     left_apex = np.where((~tie & (dist_left < dist_right))[:, None], rvo_apex, vo_apex)
     right_apex = np.where((~tie & (dist_left > dist_right))[:, None], rvo_apex, vo_apex)
-    # (k, m): right of the left edge and left of the right edge, both strictly.
+    # (k, m): strictly right of the left edge and strictly left of the right edge.
     inside_left = _cross(left[:, None, :], candidates[None, :, :] - left_apex[:, None, :]) < 0
     inside_right = _cross(right[:, None, :], candidates[None, :, :] - right_apex[:, None, :]) > 0
     return np.any(inside_left & inside_right, axis=0)
