@@ -3,9 +3,11 @@
     python benches/bench_kernels.py            # all tables (a few minutes: the references are slow)
     python benches/bench_kernels.py --quick    # smaller sizes only
 
-Swarms are uniform in a square sized for ~10 neighbours per robot within the query radius.
-References that would take minutes (O(n^2) or Python loops at the largest sizes) are not run:
-their cell says so.
+The swarm is a jittered square lattice (spacing 0.56 m, jitter +-0.14 m, so robots stay
+0.28 m apart) with ~10 robots within 1 m of each: the sensing range of the experiments.
+Neighbours and HRVO query within 1 m; Voronoi cells have radius 0.5 m (clipped by the robots
+within 1 m). References that would take minutes (O(n^2) or Python loops at the largest sizes)
+are not run: their cell says so.
 """
 
 from __future__ import annotations
@@ -21,13 +23,15 @@ from dream import _core, _reference, backends, kernels
 from dream.specs import RPS, ArenaSpec
 
 WHEELS = dict(diameter=RPS.diameter, wheel_radius=RPS.wheel_radius, base_length=RPS.base_length, max_wheel=RPS.max_wheel)
-NEIGHBOURS = 10
+RANGE = 1.0  #: sensing range (m)
+SPACING = RANGE * math.sqrt(math.pi / 10)  #: lattice spacing for ~10 robots within RANGE
 
 
-def swarm(n: int, radius: float, seed: int = 0) -> np.ndarray:
-    """Positions ``(n, 2)`` with about NEIGHBOURS robots within ``radius`` of each."""
-    side = math.sqrt(n * math.pi * radius**2 / NEIGHBOURS)
-    return np.random.default_rng(seed).uniform(0, side, (n, 2))
+def swarm(n: int, seed: int = 0) -> np.ndarray:
+    """Positions ``(n, 2)`` on a jittered lattice, ~10 robots within RANGE of each."""
+    columns = math.ceil(math.sqrt(n))
+    lattice = np.column_stack(np.divmod(np.arange(n), columns)).astype(np.float64) * SPACING
+    return lattice + np.random.default_rng(seed).uniform(-SPACING / 4, SPACING / 4, (n, 2))
 
 
 def row(name: str, fast_call, slow_call, run_slow: bool, repeat: int = 5) -> list[object]:
@@ -61,26 +65,26 @@ def dynamics_rows(sizes) -> list[list[object]]:
 def neighbour_rows(sizes) -> list[list[object]]:
     rows = []
     for n in sizes:
-        p = swarm(n, 0.5)
-        rows.append(row(f"neighbours/n={n}", lambda: _core.neighbours(p, 0.5), lambda: _reference.neighbours(p, 0.5), n <= 10_000))
+        p = swarm(n)
+        rows.append(row(f"neighbours/n={n}", lambda: _core.neighbours(p, RANGE), lambda: _reference.neighbours(p, RANGE), n <= 10_000))
     return rows
 
 
 def hrvo_rows(sizes) -> list[list[object]]:
-    """Whole-swarm HRVO with the neighbour search (radius 0.5) included."""
+    """Whole-swarm HRVO with the neighbour search included; random velocities and goals."""
     rows = []
     grid = _reference.candidate_grid(0.2)
     for n in sizes:
-        p = swarm(n, 0.5)
+        p = swarm(n)
         rng = np.random.default_rng(2)
         v = rng.uniform(-0.14, 0.14, (n, 2))
         angle = rng.uniform(-np.pi, np.pi, n)
         pref = 0.2 * np.column_stack((np.cos(angle), np.sin(angle)))
 
         def rust() -> None:
-            _core.hrvo(p, v, pref, None, None, radius=0.5, safety=0.24, v_max=0.2, bounds=None, candidates=grid, include_preferred=True)
+            _core.hrvo(p, v, pref, None, None, radius=RANGE, safety=0.24, v_max=0.2, bounds=None, candidates=grid, include_preferred=True)
 
-        rows.append(row(f"hrvo/n={n}", rust, lambda: _reference.hrvo(p, v, pref, radius=0.5), n <= 10_000))
+        rows.append(row(f"hrvo/n={n}", rust, lambda: _reference.hrvo(p, v, pref, radius=RANGE), n <= 10_000))
     return rows
 
 
@@ -88,9 +92,8 @@ def voronoi_rows(sizes) -> list[list[object]]:
     """Cells of radius 0.5 (the disc polygon has 64 vertices) in an arena that fits the swarm."""
     rows = []
     for n in sizes:
-        p = swarm(n, 0.5)
-        side = float(p.max()) + 0.01
-        box = (0.0, side, 0.0, side)
+        p = swarm(n)
+        box = (float(p[:, 0].min()) - 0.2, float(p[:, 0].max()) + 0.2, float(p[:, 1].min()) - 0.2, float(p[:, 1].max()) + 0.2)
         rows.append(row(
             f"voronoi/n={n}",
             lambda: _core.voronoi_cells(p, radius=0.5, bounds=box),

@@ -1,4 +1,4 @@
-//! Criterion benchmarks of the core kernels on swarms with ~10 neighbours per robot.
+//! Criterion benchmarks of the core kernels on swarms with ~10 robots within 1 m of each.
 //!
 //!     cargo bench -p dream-core
 
@@ -10,12 +10,14 @@ use dream_core::dynamics::{self, Arena, Wheels};
 use dream_core::hrvo::{self, HrvoParams, Vec2};
 use dream_core::{neighbours, voronoi};
 
-/// `n` points spread so that about 10 lie within `radius` of each (a deterministic scatter).
-fn swarm(n: usize, radius: f64) -> (Vec<f64>, Vec<f64>, f64) {
-    let side = (n as f64 * PI * radius * radius / 10.0).sqrt();
-    let xs = (0..n).map(|i| (i as f64 * 0.754_877_666).fract() * side).collect();
-    let ys = (0..n).map(|i| (i as f64 * 0.569_840_290).fract() * side).collect();
-    (xs, ys, side)
+/// `n` robots on a jittered lattice with ~10 within 1 m of each (a deterministic jitter).
+fn swarm(n: usize) -> (Vec<f64>, Vec<f64>, f64) {
+    let spacing = (PI / 10.0).sqrt();
+    let columns = (n as f64).sqrt().ceil() as usize;
+    let jitter = |i: usize, k: f64| ((i as f64 * k).fract() - 0.5) * spacing / 2.0;
+    let xs = (0..n).map(|i| (i / columns) as f64 * spacing + jitter(i, 0.754_877_666)).collect();
+    let ys = (0..n).map(|i| (i % columns) as f64 * spacing + jitter(i, 0.569_840_290)).collect();
+    (xs, ys, columns as f64 * spacing)
 }
 
 fn points(xs: &[f64], ys: &[f64]) -> Vec<Vec2> {
@@ -25,9 +27,9 @@ fn points(xs: &[f64], ys: &[f64]) -> Vec<Vec2> {
 fn bench_neighbours(c: &mut Criterion) {
     let mut group = c.benchmark_group("neighbours");
     for n in [1_000, 10_000, 100_000] {
-        let (xs, ys, _) = swarm(n, 0.5);
+        let (xs, ys, _) = swarm(n);
         group.bench_with_input(BenchmarkId::new("n", n), &n, |b, _| {
-            b.iter(|| neighbours::within(black_box(&xs), black_box(&ys), 0.5, None, None).unwrap())
+            b.iter(|| neighbours::within(black_box(&xs), black_box(&ys), 1.0, None, None).unwrap())
         });
     }
     group.finish();
@@ -38,12 +40,12 @@ fn bench_hrvo(c: &mut Criterion) {
     let grid = hrvo::candidate_grid(0.2, 20, 10);
     let params = HrvoParams { safety: 0.24, v_max: 0.2, bounds: None, include_preferred: true };
     for n in [100, 1_000, 10_000] {
-        let (xs, ys, _) = swarm(n, 0.5);
+        let (xs, ys, _) = swarm(n);
         let p = points(&xs, &ys);
         let v: Vec<Vec2> = (0..n).map(|i| [0.1 * (i as f64).sin(), 0.1 * (i as f64).cos()]).collect();
         let pref: Vec<Vec2> = (0..n).map(|i| [0.2 * (3.0 * i as f64).cos(), 0.2 * (3.0 * i as f64).sin()]).collect();
         group.bench_with_input(BenchmarkId::new("n", n), &n, |b, _| {
-            b.iter(|| hrvo::hrvo_batch(black_box(&p), &v, &pref, None, 0.5, &grid, &params).unwrap())
+            b.iter(|| hrvo::hrvo_batch(black_box(&p), &v, &pref, None, 1.0, &grid, &params).unwrap())
         });
     }
     group.finish();
@@ -52,9 +54,9 @@ fn bench_hrvo(c: &mut Criterion) {
 fn bench_voronoi(c: &mut Criterion) {
     let mut group = c.benchmark_group("voronoi");
     for n in [100, 1_000, 10_000] {
-        let (xs, ys, side) = swarm(n, 0.5);
+        let (xs, ys, side) = swarm(n);
         let p = points(&xs, &ys);
-        let arena = Arena::new(0.0, side, 0.0, side).unwrap();
+        let arena = Arena::new(-1.0, side, -1.0, side).unwrap();
         group.bench_with_input(BenchmarkId::new("n", n), &n, |b, _| {
             b.iter(|| voronoi::voronoi_cells(black_box(&p), 0.5, &arena, None, 64).unwrap())
         });
@@ -66,10 +68,10 @@ fn bench_dynamics(c: &mut Criterion) {
     let mut group = c.benchmark_group("dynamics");
     let wheels = Wheels::new(0.016, 0.105, 12.5).unwrap();
     for n in [100, 1_000, 10_000] {
-        let (xs, ys, side) = swarm(n, 0.5);
+        let (xs, ys, side) = swarm(n);
         let poses: Vec<f64> = xs.iter().chain(&ys).copied().chain((0..n).map(|i| i as f64 % 6.0 - 3.0)).collect();
         let commands: Vec<f64> = (0..2 * n).map(|i| 0.3 * ((i as f64) * 0.37).sin()).collect();
-        let arena = Arena::new(0.0, side, 0.0, side).unwrap();
+        let arena = Arena::new(-1.0, side, -1.0, side).unwrap();
         group.bench_with_input(BenchmarkId::new("n", n), &n, |b, _| {
             b.iter(|| {
                 let counts = dynamics::validate(black_box(&poses), &commands, n, &arena, 0.11, &wheels).unwrap();
