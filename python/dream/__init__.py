@@ -31,7 +31,7 @@ from dream.specs import (
     T_WIDTH,
 )
 from dream.timers import Timer, create_timer, update_timers
-from dream.world import World, current_world
+from dream.world import World, current_world, reset_default_world
 
 __version__ = "0.1.0"
 

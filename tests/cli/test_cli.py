@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from dream.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -14,7 +16,8 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def test_cli_list_names_the_experiments(capsys):
     assert main(["list"]) == 0
-    assert "hrvo-circle" in capsys.readouterr().out
+    listed = capsys.readouterr().out
+    assert "hrvo-circle" in listed and "line-consensus" in listed
 
 
 def test_cli_run_prints_summary_and_writes_json(tmp_path, capsys):
@@ -33,9 +36,10 @@ def test_cli_run_reports_bad_input_without_traceback(capsys):
     assert "at most 50" in err and "Traceback" not in err
 
 
-def test_example_script_runs():
+@pytest.mark.parametrize("script", ["hrvo_circle.py", "line_consensus.py"])
+def test_example_script_runs(script):
     done = subprocess.run(
-        [sys.executable, str(ROOT / "examples" / "hrvo_circle.py"), "--steps", "120", "--backend", "fast"],
+        [sys.executable, str(ROOT / "examples" / script), "--steps", "120", "--backend", "fast"],
         capture_output=True, text=True, timeout=120, check=False,
     )
     assert done.returncode == 0, done.stderr

@@ -74,4 +74,4 @@ class ExperimentResult:
             ("steps/s", f"{self.steps_per_second:.0f}"),
         ]
         width = max(len(name) for name, _ in rows)
-        return "\n".join(f"{name:<{width}}  {value}" for name, value in rows)
+        return "\n".join(f"{name:<{width}}  {value:.4g}" if isinstance(value, float) else f"{name:<{width}}  {value}" for name, value in rows)

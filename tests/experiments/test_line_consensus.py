@@ -1,0 +1,59 @@
+"""Outcomes of the line-consensus experiment."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dream.experiments import line_consensus as lc
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_line_consensus_forms_the_line_without_collision_on_rps(seed):
+    result = lc.run(n=6, seed=seed, backend="robotarium")
+    assert result.completed_step is not None
+    assert result.measures["y_spread"] < lc.TOLERANCE
+    assert result.measures["spacing_error"] < lc.TOLERANCE
+    assert result.collisions == 0 and result.boundary == 0
+
+
+def test_line_consensus_orders_robots_by_id_along_x():
+    result = lc.run(n=6, seed=2, backend="fast", trace=True)
+    x = result.trace[-1, 0]
+    np.testing.assert_allclose(x[:-1] - x[1:], lc.SPACING, atol=lc.TOLERANCE)
+
+
+def test_line_consensus_uses_the_thesis_graph_for_six_robots():
+    adjacency = lc.graph(6, np.random.default_rng(0))
+    np.testing.assert_array_equal(adjacency, lc.THESIS_GRAPH)
+    np.testing.assert_array_equal(adjacency, adjacency.T)
+
+
+@pytest.mark.parametrize("n", [3, 12, 40])
+def test_line_consensus_graph_for_other_sizes_is_connected_and_symmetric(n):
+    adjacency = lc.graph(n, np.random.default_rng(n))
+    np.testing.assert_array_equal(adjacency, adjacency.T)
+    assert np.all(np.diag(adjacency) == 0)
+    reached, frontier = {0}, [0]
+    while frontier:
+        i = frontier.pop()
+        for j in np.flatnonzero(adjacency[i]):
+            if j not in reached:
+                reached.add(int(j))
+                frontier.append(int(j))
+    assert len(reached) == n
+
+
+def test_line_errors_measure_spread_and_spacing():
+    poses = np.array([[0.6, 0.3, 0.0], [0.01, -0.01, 0.0], [0.0, 0.0, 0.0]])
+    spread, error = lc.line_errors(poses)
+    assert spread == pytest.approx(0.02)
+    assert error == pytest.approx(0.0, abs=1e-12)
+    poses[0, 0] = 0.65
+    assert lc.line_errors(poses)[1] == pytest.approx(0.05)
+
+
+def test_line_consensus_scales_on_the_fast_backend():
+    result = lc.run(n=12, seed=1, backend="fast")
+    assert result.backend == "fast" and result.n == 12
+    assert result.completed_step is not None and result.collisions == 0
