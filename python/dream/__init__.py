@@ -14,7 +14,8 @@ from dream import kernels, specs
 from dream.backends import Backend, Fast, Robotarium, initial_poses, make_robotarium
 from dream.radios import GraphRadio, Radio, RangeRadio
 from dream.robot import Robot, RobotHRVO
-from dream.sensors import MovementSensor, OdometrySensor, Sensor
+from dream.obstacles import Obstacle
+from dream.sensors import MovementSensor, ObstacleSensor, OdometrySensor, Sensor
 from dream.specs import (
     R_AC_MAX,
     R_R_LENGTH,

@@ -16,6 +16,7 @@ __all__ = [
     "hrvo",
     "HrvoPlanner",
     "voronoi_cells",
+    "voronoi_cell",
     "virtual_agents",
 ]
 
@@ -104,3 +105,8 @@ def voronoi_cells(
 
 def virtual_agents(positions: _Floats, vertices: _Floats, offsets: _Ints, *, range: float, offset: float) -> tuple[_Ints, _Floats]:
     """CSR (indptr (n+1,), points (m, 2)) of every robot's virtual agents for convex obstacles."""
+
+def voronoi_cell(
+    position: _Floats, others: _Floats, virtual_points: _Floats, *, radius: float, bounds: _Bounds, resolution: int = 64
+) -> tuple[_Floats, float, _Floats]:
+    """One robot's cell: (centroid (2,), area, counter-clockwise vertices (m, 2))."""

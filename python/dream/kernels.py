@@ -368,6 +368,60 @@ def voronoi_cells(
     return VoronoiCells(centroids, areas, vertices if polygons else None, offsets if polygons else None)
 
 
+def voronoi_cell(
+    position: Any,
+    others: Any,
+    *,
+    radius: float = 1.0,
+    bounds: Bounds = ROBOTARIUM.bounds,
+    virtual: Any = None,
+    resolution: int = 64,
+) -> tuple[FloatArray, float, FloatArray]:
+    """One robot's cell, as :func:`voronoi_cells` computes it, from what that robot knows.
+
+    Parameters
+    ----------
+    position : (2,)
+    others : (k, 2)
+        Positions of the other robots it knows of (those beyond ``2 radius`` change nothing).
+    virtual : (j, 2), optional
+        Its virtual agents (see :func:`obstacle_agents`).
+
+    Returns
+    -------
+    centroid : (2,), area : float, vertices : (m, 2)
+        The centroid is ``position`` when the cell is empty.
+    """
+    p = as_array(position, "position", (2,))
+    q = as_array(others, "others", (None, 2))
+    v = np.zeros((0, 2)) if virtual is None else as_array(virtual, "virtual", (None, 2))
+    if not (np.isfinite(radius) and radius > 0):
+        raise ValueError(f"`radius` must be finite and > 0, got {radius}")
+    if not 3 <= resolution <= 2**20:
+        raise ValueError(f"`resolution` must be between 3 and 2^20, got {resolution}")
+    box = _checked_bounds(bounds)
+    assert box is not None
+    if _core is None:
+        return _reference.voronoi_cell(p, q, v, radius=radius, bounds=box, resolution=resolution)
+    return _core.voronoi_cell(p, q, v, radius=radius, bounds=box, resolution=resolution)
+
+
+def obstacle_agents(
+    position: Any,
+    closest_points: Any,
+    *,
+    robot_radius: float = GRITSBOT.radius,
+    margin: float = 0.0,
+    mirror_at_surface: bool = False,
+) -> FloatArray:
+    """One robot's virtual agents ``(k, 2)`` from the closest points ``(k, 2)`` of the obstacles it
+    senses (an :class:`~dream.sensors.ObstacleSensor` reading); see :func:`virtual_agents`."""
+    p = as_array(position, "position", (2,))
+    c = as_array(closest_points, "closest_points", (None, 2))
+    offset = 0.0 if mirror_at_surface else check_nonnegative(robot_radius, "robot_radius") + check_nonnegative(margin, "margin")
+    return _reference.agents_from_closest(p, c, offset)
+
+
 def virtual_agents(
     positions: Any,
     obstacles: tuple[Any, Any],
@@ -430,6 +484,8 @@ __all__ = [
     "threshold_velocities",
     "unicycle_step",
     "validate",
+    "obstacle_agents",
     "virtual_agents",
+    "voronoi_cell",
     "voronoi_cells",
 ]

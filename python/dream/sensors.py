@@ -7,12 +7,16 @@ its origin and reports through a callback. Noise is Gaussian with standard devia
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
 from dream._checks import FloatArray, as_array, as_poses, check_nonnegative, check_robot_id
 from dream.world import current_world
+
+if TYPE_CHECKING:
+    from dream.obstacles import Obstacle
 
 #: Distance ahead of a robot's centre at which its velocity is estimated (m).
 PROJECTION_DISTANCE = 0.05
@@ -133,4 +137,37 @@ class OdometrySensor(Sensor):
         """Read the pose from ``x`` ``(3, n)`` and call the callback."""
         super().update(x)
         self.ret = self.add_noise([self.pos_x, self.pos_y, self.rot_w], self.noise)
+        self.callback(self.ret)
+
+
+class ObstacleSensor(Sensor):
+    """Measures the closest point of every obstacle within ``range`` (m, inclusive).
+
+    The callback receives an array ``(k, 2)`` of closest points in world coordinates, obstacles
+    in the given order (noise, if any, is added to every coordinate). An obstacle the robot is
+    inside of is not reported. The sensor reads the obstacles' current positions, so moving
+    obstacles are seen where they are.
+    """
+
+    def __init__(
+        self,
+        robot_id: int,
+        tag: str,
+        callback: Callable[[FloatArray], Any],
+        obstacles: Sequence[Obstacle],
+        range: float = 1.0,  # noqa: A002 (as the other sensors)
+        noise: float = 0.0,
+    ) -> None:
+        super().__init__(robot_id, tag)
+        self.callback = callback
+        self.obstacles = obstacles
+        self.range = check_nonnegative(range, "range")
+        self.noise = check_nonnegative(noise, "noise")
+
+    def update(self, x: Any) -> None:
+        """Measure from the attached robot's pose in ``x`` ``(3, n)`` and call the callback."""
+        super().update(x)
+        here = np.array([self.pos_x, self.pos_y])
+        found = [c for c in (o.closest_point(here) for o in self.obstacles) if c is not None and np.hypot(*(c - here)) <= self.range]
+        self.ret = self.add_noise(np.array(found).reshape(-1, 2), self.noise)
         self.callback(self.ret)

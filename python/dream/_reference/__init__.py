@@ -9,11 +9,12 @@ They depend on NumPy alone.
 from dream._reference.dynamics import actuator_limit, dxi_to_dxu, threshold_velocities, unicycle_step, validate
 from dream._reference.hrvo import candidate_grid, detection_directions, hrvo, hrvo_velocity, unit_directions
 from dream._reference.neighbours import neighbours, neighbours_of
-from dream._reference.obstacles import virtual_agents
-from dream._reference.voronoi import voronoi_cells
+from dream._reference.obstacles import agents_from_closest, virtual_agents
+from dream._reference.voronoi import voronoi_cell, voronoi_cells
 
 __all__ = [
     "actuator_limit",
+    "agents_from_closest",
     "candidate_grid",
     "detection_directions",
     "dxi_to_dxu",
@@ -26,5 +27,6 @@ __all__ = [
     "unit_directions",
     "validate",
     "virtual_agents",
+    "voronoi_cell",
     "voronoi_cells",
 ]

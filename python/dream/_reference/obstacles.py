@@ -77,15 +77,22 @@ def virtual_agents(
     indptr = [0]
     points: list[FloatArray] = []
     for p in positions:
-        for hull in hulls:
-            c = closest_point(hull, p)
-            if c is None:
-                continue
-            d = c - p
-            distance = float(np.sqrt(d[0] * d[0] + d[1] * d[1]))
-            if distance > range or distance == 0:
-                continue
-            reach = 2 * max(distance - offset, GAP)
-            points.append(p + reach * (d / distance))
+        sensed = [c for c in (closest_point(hull, p) for hull in hulls) if c is not None]
+        agents = agents_from_closest(p, np.array(sensed).reshape(-1, 2), offset, range)
+        points.extend(agents)
         indptr.append(len(points))
     return np.array(indptr, dtype=np.int64), np.array(points, dtype=np.float64).reshape(-1, 2)
+
+
+def agents_from_closest(p: FloatArray, closest: FloatArray, offset: float, range: float = np.inf) -> FloatArray:  # noqa: A002
+    """Virtual agents ``(k, 2)`` of a robot at ``p`` for obstacle closest points ``(m, 2)``
+    within ``range`` (points at distance 0, i.e. touching, give none)."""
+    agents = []
+    for c in closest:
+        d = c - p
+        distance = float(np.sqrt(d[0] * d[0] + d[1] * d[1]))
+        if distance > range or distance == 0:
+            continue
+        reach = 2 * max(distance - offset, GAP)
+        agents.append(p + reach * (d / distance))
+    return np.array(agents, dtype=np.float64).reshape(-1, 2)

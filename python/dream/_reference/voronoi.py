@@ -47,24 +47,41 @@ def area_centroid(polygon: list[tuple[float, float]], fallback: tuple[float, flo
 
 
 def cell(
-    positions: FloatArray,
-    i: int,
+    position: tuple[float, float],
+    agents: list[tuple[float, float]],
     radius: float,
     bounds: tuple[float, float, float, float],
-    virtual: FloatArray,
     resolution: int,
 ) -> list[tuple[float, float]]:
-    """Robot ``i``'s cell as a counter-clockwise vertex list (empty if nothing is left)."""
-    px, py = float(positions[i, 0]), float(positions[i, 1])
+    """The cell of a robot at ``position`` clipped by ``agents`` (robots, then virtual agents), in
+    order: a counter-clockwise vertex list (empty if nothing is left)."""
+    px, py = position
     angles = 2 * np.pi * np.arange(resolution) / resolution
     polygon = [(px + radius * float(np.cos(a)), py + radius * float(np.sin(a))) for a in angles]
     xmin, xmax, ymin, ymax = bounds
     for point, normal in (((xmin, 0.0), (-1.0, 0.0)), ((xmax, 0.0), (1.0, 0.0)), ((0.0, ymin), (0.0, -1.0)), ((0.0, ymax), (0.0, 1.0))):
         polygon = clip(polygon, point, normal)
-    others, _ = neighbours_of(positions, i, 2 * radius)
-    for qx, qy in [(float(positions[j, 0]), float(positions[j, 1])) for j in others] + [(float(x), float(y)) for x, y in virtual]:
+    for qx, qy in agents:
         polygon = clip(polygon, ((px + qx) / 2, (py + qy) / 2), (qx - px, qy - py))
     return polygon
+
+
+def voronoi_cell(
+    position: FloatArray,
+    others: FloatArray,
+    virtual: FloatArray,
+    *,
+    radius: float,
+    bounds: tuple[float, float, float, float],
+    resolution: int = 64,
+) -> tuple[FloatArray, float, FloatArray]:
+    """One robot's cell: ``(centroid (2,), area, vertices (m, 2))``, clipped by ``others`` ``(k, 2)``
+    then ``virtual`` ``(j, 2)``."""
+    p = (float(position[0]), float(position[1]))
+    agents = [(float(x), float(y)) for x, y in others] + [(float(x), float(y)) for x, y in virtual]
+    polygon = cell(p, agents, radius, bounds, resolution)
+    area, centroid = area_centroid(polygon, p)
+    return np.array(centroid), area, np.array(polygon, dtype=np.float64).reshape(-1, 2)
 
 
 def voronoi_cells(
@@ -87,7 +104,9 @@ def voronoi_cells(
     vertices: list[tuple[float, float]] = []
     for i in range(n):
         mine = np.zeros((0, 2)) if virtual is None else virtual[1][virtual[0][i] : virtual[0][i + 1]]
-        polygon = cell(positions, i, radius, bounds, mine, resolution)
+        others, _ = neighbours_of(positions, i, 2 * radius)
+        agents = [(float(positions[j, 0]), float(positions[j, 1])) for j in others] + [(float(x), float(y)) for x, y in mine]
+        polygon = cell((float(positions[i, 0]), float(positions[i, 1])), agents, radius, bounds, resolution)
         areas[i], centroids[i] = area_centroid(polygon, (float(positions[i, 0]), float(positions[i, 1])))
         vertices.extend(polygon)
         offsets[i + 1] = len(vertices)

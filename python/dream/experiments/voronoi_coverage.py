@@ -1,0 +1,181 @@
+"""Voronoi coverage (thesis 3.3): robots spread over the arena, each to its cell's centroid.
+
+Fifteen robots start packed in the bottom-right corner, among two large static rectangles and
+two small rectangles that wander and bounce off the walls. Each robot knows its own pose
+(odometry), the positions of the robots within radio range (range radio) and the closest
+points of the obstacles it senses (obstacle sensor). Its cell is the disc of radius 1 m around
+it clipped by the arena, by the bisectors with the robots it hears, and by virtual agents that
+keep the cell (and the robot's body) off the obstacles; it moves to the cell's centroid and
+stops within 0.05 m of it. No HRVO: the cells themselves keep the robots apart.
+
+Success: no robot-robot collision, no contact with the static obstacles, the locational
+coverage cost falls, and without moving obstacles the team comes to rest.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from dream import kernels
+from dream.backends import make_robotarium
+from dream.experiments.result import ExperimentResult
+from dream.obstacles import Obstacle
+from dream.radios import RangeRadio
+from dream.robot import Robot
+from dream.sensors import ObstacleSensor, OdometrySensor
+from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec
+from dream.timers import create_timer, update_timers
+from dream.world import World
+
+NAME = "voronoi-coverage"
+CELL_RADIUS = 1.0  #: radius of the disc a robot's cell starts from (m)
+ARRIVAL = 0.05  #: a robot this close to its centroid stops (m; 0.02 on the real lab)
+MARGIN = 0.02  #: extra clearance kept from obstacles beyond the robot's radius (m)
+GAIN = 1.0  #: proportional gain towards the centroid (1/s)
+REST_STEPS = 60  #: steps without any command after which the team is at rest
+
+
+def thesis_obstacles(rng: np.random.Generator, moving: bool = True) -> list[Obstacle]:
+    """Two large static rectangles and (optionally) two small ones moving in random directions."""
+    obstacles = [Obstacle((-0.75, 0.45), (0.6, 0.3)), Obstacle((0.25, -0.3), (0.3, 0.55))]
+    if moving:
+        for centre in ((-0.9, -0.55), (0.9, 0.6)):
+            angle = rng.uniform(-math.pi, math.pi)
+            obstacles.append(Obstacle(centre, (0.15, 0.15), velocity=0.05 * np.array([math.cos(angle), math.sin(angle)])))
+    return obstacles
+
+
+def corner_poses(n: int, rng: np.random.Generator, arena: ArenaSpec = ROBOTARIUM, spacing: float = 0.2) -> np.ndarray:
+    """Poses ``(3, n)`` packed in rows of five from the bottom-right corner, random headings."""
+    columns = 5
+    k = np.arange(n)
+    x = arena.xmax - 0.15 - spacing * (k % columns)
+    y = arena.ymin + 0.15 + spacing * (k // columns)
+    return np.vstack((x, y, rng.uniform(-math.pi, math.pi, n)))
+
+
+def coverage_cost(positions: np.ndarray, arena: ArenaSpec, obstacles: list[Obstacle], step: float = 0.02) -> float:
+    """Locational cost: the integral over the free arena of the squared distance to the nearest robot.
+
+    Approximated on a grid of ``step`` (m); points inside obstacles are not counted. ``positions``
+    is ``(2, n)``.
+    """
+    xs = np.arange(arena.xmin + step / 2, arena.xmax, step)
+    ys = np.arange(arena.ymin + step / 2, arena.ymax, step)
+    qx, qy = (g.ravel() for g in np.meshgrid(xs, ys))
+    free = np.ones(len(qx), dtype=bool)
+    for obstacle in obstacles:
+        local = np.column_stack((qx, qy)) - obstacle.center
+        c, s = math.cos(obstacle.angle), math.sin(obstacle.angle)
+        u, v = local[:, 0] * c + local[:, 1] * s, -local[:, 0] * s + local[:, 1] * c
+        free &= ~((np.abs(u) < obstacle.size[0] / 2) & (np.abs(v) < obstacle.size[1] / 2))
+    squared = (qx[free, None] - positions[0]) ** 2 + (qy[free, None] - positions[1]) ** 2
+    return float(squared.min(axis=1).sum() * step * step)
+
+
+class CoverageRobot(Robot):
+    """A robot that moves to the centroid of its obstacle-aware Voronoi cell.
+
+    Callbacks: :meth:`update_odom`, :meth:`update_radio` (``(id, x, y)`` messages in, its own
+    out), :meth:`update_obstacles` (closest points from the obstacle sensor) and :meth:`update`.
+    """
+
+    def __init__(self, robot_id: int, tag: str, arena: ArenaSpec = ROBOTARIUM, **kwargs: Any) -> None:
+        super().__init__(robot_id, tag, **kwargs)
+        self.arena = arena
+        self.others = np.zeros((0, 2))
+        self.obstacle_points = np.zeros((0, 2))
+        self.centroid: np.ndarray | None = None
+
+    def update_odom(self, pose: np.ndarray) -> None:
+        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in pose)
+
+    def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
+        self.others = np.array([(x, y) for _, x, y in messages]).reshape(-1, 2)
+        return (self.robot_id, self.pos_x, self.pos_y) if self.has_pose else None
+
+    def update_obstacles(self, closest_points: np.ndarray) -> None:
+        self.obstacle_points = closest_points
+
+    def update(self, dxu: np.ndarray) -> None:
+        self.dxi = np.zeros(2)
+        if self.has_pose:
+            here = np.array([self.pos_x, self.pos_y])
+            agents = kernels.obstacle_agents(here, self.obstacle_points, robot_radius=self.spec.radius, margin=MARGIN)
+            self.centroid, _, _ = kernels.voronoi_cell(here, self.others, radius=CELL_RADIUS, bounds=self.arena.bounds, virtual=agents)
+            offset = self.centroid - here
+            distance = math.hypot(offset[0], offset[1])
+            if distance >= ARRIVAL:
+                self.dxi = GAIN * offset * min(1.0, self.v_max / (GAIN * distance))
+        self.dxi_to_dxu()
+        self.actuator_limit()
+        dxu[:, self.robot_id] = self.dxu
+
+
+def run(
+    n: int = 15,
+    seed: int = 0,
+    backend: str = "auto",
+    steps: int | None = None,
+    *,
+    moving_obstacles: bool = True,
+    trace: bool = False,
+    progress: Any = None,
+) -> ExperimentResult:
+    """Run the coverage experiment for ``steps`` (default 1500), stopping early once the team rests.
+
+    ``measures``: the coverage cost at the start and the end (m^4), the iterations in which a
+    robot's body touched a static obstacle, and how many robots were still moving at the end.
+    """
+    cap = 1500 if steps is None else steps
+    arena = ROBOTARIUM
+    with World(seed) as world:
+        obstacles = thesis_obstacles(world.rng, moving_obstacles)
+        sim = make_robotarium(n, backend, corner_poses(n, world.rng, arena), arena=arena)
+        for i in range(n):
+            robot = CoverageRobot(i, f"robot_{i}", arena=arena)
+            odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
+            sensor = ObstacleSensor(i, f"obstacles_{i}", robot.update_obstacles, obstacles, range=CELL_RADIUS)
+            radio = RangeRadio(i, f"radio_{i}", robot.update_radio, range=2 * CELL_RADIUS)
+            create_timer(i, 10 + i % 5, [
+                {"delay": 2, "tag": "odom", "call": odometry.update},
+                {"delay": 3, "tag": "obstacles", "call": sensor.update},
+                {"delay": 5, "tag": "radio", "call": radio.update},
+                {"delay": 5, "tag": "robot", "call": robot.update},
+            ])
+
+        dxu = np.zeros((2, n))
+        start_cost = coverage_cost(sim.poses[:2], arena, obstacles)
+        static = [o for o in obstacles if not o.moving]
+        contacts, still, done_at = 0, 0, None
+        poses = [sim.poses] if trace else []
+        start = time.perf_counter()
+        for t in range(cap):
+            x = sim.get_poses()
+            update_timers(t, {"odom": (x,), "obstacles": (x,), "radio": (x,), "robot": (dxu,)})
+            sim.set_velocities(np.arange(n), dxu)
+            sim.step()
+            for obstacle in obstacles:
+                obstacle.step(sim.time_step, arena)
+            now = sim.poses
+            contacts += any(o.distance(now[:2, i]) < GRITSBOT.radius for o in static for i in range(n))
+            still = still + 1 if t > 20 + n % 5 and not dxu.any() else 0
+            if trace:
+                poses.append(now)
+            if progress is not None:
+                progress(t + 1, cap)
+            if still >= REST_STEPS:
+                done_at = t + 1
+                break
+        wall = time.perf_counter() - start
+    measures = {
+        "cost_start": start_cost,
+        "cost_end": coverage_cost(sim.poses[:2], arena, obstacles),
+        "static_contacts": contacts,
+        "moving_at_end": int(np.count_nonzero(np.any(dxu != 0, axis=0))),
+    }
+    return ExperimentResult.from_backend(NAME, seed, sim, done_at, wall, measures, np.array(poses) if trace else None)

@@ -1,0 +1,78 @@
+"""Outcomes of the Voronoi coverage experiment, and the obstacle and sensor it introduces."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from dream import Obstacle, ObstacleSensor
+from dream.experiments import voronoi_coverage as vc
+from dream.specs import ROBOTARIUM
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_voronoi_coverage_spreads_without_contact_and_comes_to_rest(seed):
+    result = vc.run(seed=seed, backend="robotarium", moving_obstacles=False)
+    assert result.collisions == 0 and result.boundary == 0
+    assert result.measures["static_contacts"] == 0
+    assert result.measures["cost_end"] < 0.3 * result.measures["cost_start"]
+    assert result.completed_step is not None  # the team came to rest
+    assert result.measures["moving_at_end"] == 0
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_voronoi_coverage_with_moving_obstacles_keeps_clear_of_the_static_ones(seed):
+    result = vc.run(seed=seed, backend="fast", moving_obstacles=True, steps=900)
+    assert result.collisions == 0
+    assert result.measures["static_contacts"] == 0
+    assert result.measures["cost_end"] < result.measures["cost_start"]
+
+
+def test_coverage_cost_is_lower_for_spread_robots():
+    packed = vc.corner_poses(15, np.random.default_rng(0))[:2]
+    xs, ys = np.meshgrid(np.linspace(-1.3, 1.3, 5), np.linspace(-0.7, 0.7, 3))
+    spread = np.vstack((xs.ravel(), ys.ravel()))
+    assert vc.coverage_cost(spread, ROBOTARIUM, []) < vc.coverage_cost(packed, ROBOTARIUM, [])
+
+
+def test_coverage_cost_of_one_robot_matches_the_integral():
+    # One robot at the centre of a 2 x 2 square: the integral of x^2 + y^2 is 2 * (2 * 2^3/12) = 8/3.
+    square = ROBOTARIUM.__class__(-1.0, 1.0, -1.0, 1.0)
+    assert vc.coverage_cost(np.zeros((2, 1)), square, [], step=0.01) == pytest.approx(8 / 3, rel=1e-3)
+
+
+def test_obstacle_closest_point_distance_and_polygon():
+    box = Obstacle((1.0, 0.0), (0.4, 0.2), angle=np.pi / 2)  # turned: 0.2 wide, 0.4 tall
+    assert_allclose(box.closest_point((0.0, 0.0)), [0.9, 0.0], atol=1e-12)
+    assert box.distance((1.0, 0.5)) == pytest.approx(0.3)
+    assert box.closest_point((1.0, 0.1)) is None
+    assert box.distance((1.0, 0.1)) == 0.0
+    corners = box.polygon
+    assert corners.shape == (4, 2)
+    assert_allclose(corners.min(axis=0), [0.9, -0.2], atol=1e-12)
+
+
+def test_moving_obstacle_bounces_off_the_walls():
+    box = Obstacle((1.5, 0.0), (0.15, 0.15), velocity=(0.5, 0.0))
+    for _ in range(10):
+        box.step(0.033, ROBOTARIUM)
+        assert box.polygon[:, 0].max() <= ROBOTARIUM.xmax + 1e-12
+    assert box.velocity[0] < 0
+
+
+@pytest.mark.parametrize(("size", "velocity"), [((0.0, 1.0), (0, 0)), ((1.0, 1.0), (np.nan, 0))])
+def test_obstacle_rejects_bad_input(size, velocity):
+    with pytest.raises(ValueError):
+        Obstacle((0.0, 0.0), size, velocity=velocity)
+
+
+def test_obstacle_sensor_reports_closest_points_in_range():
+    seen = []
+    obstacles = [Obstacle((0.5, 0.0), (0.2, 0.2)), Obstacle((3.0, 0.0), (0.2, 0.2))]
+    sensor = ObstacleSensor(0, "obstacles", seen.append, obstacles, range=1.0)
+    sensor.update(np.array([[0.0], [0.0], [0.0]]))
+    assert_allclose(seen[-1], [[0.4, 0.0]], atol=1e-12)  # the far one is out of range
+    obstacles[0].center[:] = (5.0, 5.0)  # moved away: the sensor sees where it is now
+    sensor.update(np.array([[0.0], [0.0], [0.0]]))
+    assert seen[-1].shape == (0, 2)
