@@ -20,12 +20,14 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
+from dream import kernels
 from dream.backends import make_robotarium
 from dream.experiments.result import ExperimentResult
+from dream.frames import Frame
 from dream.radios import RangeRadio
 from dream.robot import RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
@@ -121,6 +123,21 @@ class CircleRobot(RobotHRVO):
         dxu[:, self.robot_id] = self.dxu
 
 
+def circle_frame(step: int, sim: Any, robots: list[CircleRobot], radio_range: float = 1.0) -> Frame:
+    """What a renderer shows of the circle experiment: goals, HRVO velocities, radio links."""
+    poses = sim.poses
+    indptr, indices, _ = kernels.neighbours(poses[:2].T, radio_range)
+    links = np.column_stack((np.repeat(np.arange(len(robots)), np.diff(indptr)), indices))
+    circles = min((r.state for r in robots), default=0)
+    return Frame(
+        step, sim.arena, poses,
+        goals=np.array([r.current_goal for r in robots]).reshape(-1, 2),
+        velocities=np.array([r.dxi for r in robots]).reshape(-1, 2),
+        links=links[links[:, 0] < links[:, 1]],
+        title=f"{NAME}: circles {circles}/{CIRCLES}, collisions {sim.violations.collision}",
+    )
+
+
 def default_steps(n: int) -> int:
     """An iteration cap that every seed finishes well within (the run stops when done)."""
     return 4000 + 40 * n
@@ -134,6 +151,7 @@ def run(
     *,
     trace: bool = False,
     progress: Any = None,
+    record: Callable[[Frame], None] | None = None,
 ) -> ExperimentResult:
     """Run the circle experiment until every robot completes the third circle (or ``steps``).
 
@@ -150,6 +168,8 @@ def run(
         Record the poses of every step in ``result.trace``.
     progress : callable, optional
         Called as ``progress(step, cap)`` after every step.
+    record : callable, optional
+        Called with a :class:`~dream.frames.Frame` after every step (see :mod:`dream.viz`).
 
     Returns
     -------
@@ -187,6 +207,8 @@ def run(
                 poses.append(sim.poses)
             if progress is not None:
                 progress(t + 1, cap)
+            if record is not None:
+                record(circle_frame(t + 1, sim, robots))
             if all(robot.state >= CIRCLES for robot in robots):
                 done_at = t + 1
                 break

@@ -12,12 +12,13 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from dream.backends import make_robotarium
 from dream.experiments.result import ExperimentResult
+from dream.frames import Frame
 from dream.radios import GraphRadio
 from dream.robot import RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
@@ -121,6 +122,7 @@ def run(
     radio_gap: int = 10,
     trace: bool = False,
     progress: Any = None,
+    record: Callable[[Frame], None] | None = None,
 ) -> ExperimentResult:
     """Run until the line has formed (both errors below 0.02 m) or ``steps`` (default 3000).
 
@@ -157,6 +159,15 @@ def run(
                 poses.append(sim.poses)
             if progress is not None:
                 progress(t + 1, cap)
+            if record is not None:
+                spread, error = line_errors(sim.poses, spacing)
+                record(Frame(
+                    t + 1, sim.arena, sim.poses,
+                    goals=np.array([np.full(2, np.nan) if r.target is None else r.target for r in robots]),
+                    velocities=np.array([r.dxi for r in robots]).reshape(-1, 2),
+                    links=np.argwhere(np.triu(adjacency) > 0),
+                    title=f"{NAME}: y spread {spread:.3f} m, spacing error {error:.3f} m",
+                ))
             if max(line_errors(sim.poses, spacing)) < TOLERANCE:
                 done_at = t + 1
                 break

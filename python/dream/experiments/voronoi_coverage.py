@@ -16,13 +16,14 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from dream import kernels
 from dream.backends import make_robotarium
 from dream.experiments.result import ExperimentResult
+from dream.frames import Frame
 from dream.obstacles import Obstacle
 from dream.radios import RangeRadio
 from dream.robot import Robot
@@ -90,6 +91,7 @@ class CoverageRobot(Robot):
         self.others = np.zeros((0, 2))
         self.obstacle_points = np.zeros((0, 2))
         self.centroid: np.ndarray | None = None
+        self.cell = np.zeros((0, 2))  # the last cell computed, for drawing
 
     def update_odom(self, pose: np.ndarray) -> None:
         self.pos_x, self.pos_y, self.rot_w = (float(v) for v in pose)
@@ -106,7 +108,9 @@ class CoverageRobot(Robot):
         if self.has_pose:
             here = np.array([self.pos_x, self.pos_y])
             agents = kernels.obstacle_agents(here, self.obstacle_points, robot_radius=self.spec.radius, margin=MARGIN)
-            self.centroid, _, _ = kernels.voronoi_cell(here, self.others, radius=CELL_RADIUS, bounds=self.arena.bounds, virtual=agents)
+            self.centroid, _, self.cell = kernels.voronoi_cell(
+                here, self.others, radius=CELL_RADIUS, bounds=self.arena.bounds, virtual=agents
+            )
             offset = self.centroid - here
             distance = math.hypot(offset[0], offset[1])
             if distance >= ARRIVAL:
@@ -125,6 +129,7 @@ def run(
     moving_obstacles: bool = True,
     trace: bool = False,
     progress: Any = None,
+    record: Callable[[Frame], None] | None = None,
 ) -> ExperimentResult:
     """Run the coverage experiment for ``steps`` (default 1500), stopping early once the team rests.
 
@@ -136,8 +141,10 @@ def run(
     with World(seed) as world:
         obstacles = thesis_obstacles(world.rng, moving_obstacles)
         sim = make_robotarium(n, backend, corner_poses(n, world.rng, arena), arena=arena)
+        robots = []
         for i in range(n):
             robot = CoverageRobot(i, f"robot_{i}", arena=arena)
+            robots.append(robot)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             sensor = ObstacleSensor(i, f"obstacles_{i}", robot.update_obstacles, obstacles, range=CELL_RADIUS)
             radio = RangeRadio(i, f"radio_{i}", robot.update_radio, range=2 * CELL_RADIUS)
@@ -168,6 +175,14 @@ def run(
                 poses.append(now)
             if progress is not None:
                 progress(t + 1, cap)
+            if record is not None:
+                record(Frame(
+                    t + 1, arena, now,
+                    goals=np.array([np.full(2, np.nan) if r.centroid is None else r.centroid for r in robots]),
+                    obstacles=[o.polygon for o in obstacles],
+                    cells=[r.cell for r in robots],
+                    title=f"{NAME}: static contacts {contacts}, collisions {sim.violations.collision}",
+                ))
             if still >= REST_STEPS:
                 done_at = t + 1
                 break
