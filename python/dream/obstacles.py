@@ -63,11 +63,13 @@ class Obstacle:
         closest = self.closest_point(point)
         return 0.0 if closest is None else float(np.hypot(*(closest - np.asarray(point, dtype=np.float64))))
 
-    def step(self, dt: float, arena: ArenaSpec) -> None:
-        """Move by ``velocity * dt``, bouncing off the arena's walls."""
+    def step(self, dt: float, arena: ArenaSpec | None = None) -> None:
+        """Move by ``velocity * dt``, bouncing off the walls of ``arena`` if one is given."""
         if not self.moving:
             return
         self.center = self.center + self.velocity * dt
+        if arena is None:
+            return
         corners = self.polygon
         for axis, (low, high) in enumerate(((arena.xmin, arena.xmax), (arena.ymin, arena.ymax))):
             below, above = low - corners[:, axis].min(), corners[:, axis].max() - high

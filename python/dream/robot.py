@@ -156,6 +156,7 @@ class RobotHRVO(Robot):
             safety=safety, v_max=self.v_max, n_angles=n_angles, n_speeds=n_speeds, include_preferred=include_preferred
         )
         self.detections: FloatArray = np.zeros((0, 4))
+        self.sidestep = 0  # decisions left keeping to the right (see `steer`)
 
     def HRVO(self, detections: Any, desired_velocity: Any) -> FloatArray:  # noqa: N802 (original name)
         """Choose a collision-free velocity close to ``desired_velocity`` and store it in ``dxi``.
@@ -184,3 +185,22 @@ class RobotHRVO(Robot):
         planner = self.planner if self.check_boundaries else self._free_planner
         self.dxi = planner.velocity(d, np.asarray(self.dxi, dtype=np.float64), preferred, np.array([self.pos_x, self.pos_y]))
         return self.dxi
+
+    def steer(self, detections: Any, desired_velocity: Any, sidestep_updates: int = 10) -> FloatArray:
+        """:meth:`HRVO`, for a robot that must not wait forever.
+
+        HRVO stops a robot whose way is blocked by a robot within the safety radius (every free
+        velocity points away from its goal). Once that happens, the robot keeps to its right
+        (prefers its desired velocity turned by -90 degrees) for the next ``sidestep_updates``
+        decisions: robots that all turn the same way circulate around each other instead of
+        facing off.
+        """
+        wanted = np.asarray(desired_velocity, dtype=np.float64)
+        if self.sidestep > 0:
+            wanted = np.array([wanted[1], -wanted[0]])
+            self.sidestep -= 1
+        chosen = self.HRVO(detections, wanted)
+        if not chosen.any() and np.any(desired_velocity):
+            self.sidestep = sidestep_updates
+        return chosen
+

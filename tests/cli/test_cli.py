@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_cli_list_names_the_experiments(capsys):
     assert main(["list"]) == 0
     listed = capsys.readouterr().out
-    assert all(name in listed for name in ("hrvo-circle", "line-consensus", "voronoi-coverage"))
+    assert all(name in listed for name in ("hrvo-circle", "line-consensus", "voronoi-coverage", "affine-formation"))
 
 
 def test_cli_run_prints_summary_and_writes_json(tmp_path, capsys):
@@ -36,7 +36,7 @@ def test_cli_run_reports_bad_input_without_traceback(capsys):
     assert "at most 50" in err and "Traceback" not in err
 
 
-@pytest.mark.parametrize("script", ["hrvo_circle.py", "line_consensus.py", "voronoi_coverage.py"])
+@pytest.mark.parametrize("script", ["hrvo_circle.py", "line_consensus.py", "voronoi_coverage.py", "affine_formation.py"])
 def test_example_script_runs(script):
     done = subprocess.run(
         [sys.executable, str(ROOT / "examples" / script), "--steps", "120", "--backend", "fast"],

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from types import ModuleType
 
-from dream.experiments import hrvo_circle, line_consensus, voronoi_coverage
+from dream.experiments import affine_formation, hrvo_circle, line_consensus, voronoi_coverage
 from dream.experiments.result import ExperimentResult
 
 #: CLI name -> module with a ``run(n, seed, backend, steps, ...)`` function.
-EXPERIMENTS: dict[str, ModuleType] = {module.NAME: module for module in (hrvo_circle, line_consensus, voronoi_coverage)}
+EXPERIMENTS: dict[str, ModuleType] = {module.NAME: module for module in (hrvo_circle, line_consensus, voronoi_coverage, affine_formation)}
 
-__all__ = ["EXPERIMENTS", "ExperimentResult", "hrvo_circle", "line_consensus", "voronoi_coverage"]
+__all__ = ["EXPERIMENTS", "ExperimentResult", "affine_formation", "hrvo_circle", "line_consensus", "voronoi_coverage"]

@@ -8,8 +8,8 @@ movement sensor. Success: every robot finishes the third circle with zero collis
 
 HRVO leaves a robot standing when a robot within the safety radius blocks the way to its
 goal (every free velocity points away from it); the original then waited forever, stalling
-some runs. Here a blocked robot keeps to its right for a few decisions, so that blocked robots
-circulate around each other the same way.
+some runs. Here robots steer with :meth:`~dream.RobotHRVO.steer`: a blocked robot keeps to
+its right for a few decisions, so that blocked robots circulate around each other.
 
 For N > 10 the circle grows so that neighbouring goals stay at least 0.3 m apart (with 50
 robots on the original 0.85 m circle they would be 0.107 m apart, closer than a robot's
@@ -40,7 +40,6 @@ CIRCLES = 3
 RADIUS = 0.85  #: the thesis's circle (m)
 GOAL_SPACING = 0.3  #: least distance between neighbouring goals (m)
 ARRIVAL = 0.05  #: a robot within this distance of its goal has arrived (m)
-SIDESTEP_UPDATES = 10  #: controller updates a blocked robot spends stepping to its right
 
 
 def circle_radius(n: int) -> float:
@@ -80,7 +79,6 @@ class CircleRobot(RobotHRVO):
         self.state = 0  # goals reached so far
         self.change_state = True  # the current goal has not been reached yet
         self.desired_velocity = np.zeros(2)
-        self.sidestep = 0  # controller updates left to keep to the right of the blocked way
 
     def update_odom(self, pose: np.ndarray) -> None:
         self.pos_x, self.pos_y, self.rot_w = (float(v) for v in pose)
@@ -108,16 +106,7 @@ class CircleRobot(RobotHRVO):
                     self.change_state = False
             else:
                 self.desired_velocity = self.v_max * offset / distance
-        wanted = self.desired_velocity
-        if self.sidestep > 0:
-            # Keep to the right: all robots turning the same way circulate instead of facing off.
-            wanted = np.array([wanted[1], -wanted[0]])
-            self.sidestep -= 1
-        self.HRVO(self.detections, wanted)
-        if not self.dxi.any() and self.desired_velocity.any():
-            # HRVO stops a robot whose way is blocked by a robot within the safety radius (the
-            # free velocities all point away from its goal): step aside instead of waiting.
-            self.sidestep = SIDESTEP_UPDATES
+        self.steer(self.detections, self.desired_velocity)
         self.dxi_to_dxu()
         self.actuator_limit()
         dxu[:, self.robot_id] = self.dxu

@@ -1,0 +1,272 @@
+"""Affine formation manoeuvres (thesis 3.4): followers track what three leaders do, by stress.
+
+Seven robots: leaders 0-2 know the planned manoeuvres, followers 3-6 only the positions their
+weighted neighbours send by radio. Followers obey ``p_i' = -k sum_j w_ij (p_i - p_j)`` with the
+thesis's stress weights w (forward Euler, dt = their timer gap), through HRVO so that they do
+not run into the leaders, who ignore them. The nominal configuration (formation units)
+``(2,0), (1,1), (1,-1), (0,1), (0,-1), (-1,1), (-1,-1)`` is in stress equilibrium with w, so
+the followers converge to the affine image of it that the leaders span:
+``-Omega_ff^-1 Omega_fl p_leaders``.
+
+The leaders start in their triangle at the centre, the followers at the arena's corners. Then
+two pairs of bars sweep from right to left: for the wide gap the leaders compress the
+formation, for the narrow gap they make it collinear (sheared, so that no two robots meet),
+and after each they return to the nominal shape.
+
+Success: follower error below 0.05 m before the first bars arrive, no robot touching a bar,
+zero collisions.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any, Callable
+
+import numpy as np
+
+from dream.backends import make_robotarium
+from dream.experiments.result import ExperimentResult
+from dream.frames import Frame
+from dream.obstacles import Obstacle
+from dream.radios import GraphRadio
+from dream.robot import RobotHRVO
+from dream.sensors import MovementSensor, OdometrySensor
+from dream.specs import GRITSBOT, ROBOTARIUM
+from dream.timers import create_timer, update_timers
+from dream.world import World
+
+NAME = "affine-formation"
+LEADERS = 3
+#: Stress weights from the thesis (symmetric; leaders 0-2, followers 3-6).
+WEIGHTS = np.array(
+    [
+        [0, 0.2741, 0.2741, -0.137, -0.137, 0, 0],
+        [0.2741, 0, 0, 0.5482, 0, 0, -0.137],
+        [0.2741, 0, 0, 0, 0.5482, -0.137, 0],
+        [-0.137, 0.5482, 0, 0, 0.0685, 0.2741, 0],
+        [-0.137, 0, 0.5482, 0.0685, 0, 0, 0.2741],
+        [0, 0, -0.137, 0.2741, 0, 0, 0.137],
+        [0, -0.137, 0, 0, 0.2741, 0.137, 0],
+    ]
+)
+#: The nominal configuration, in formation units.
+NOMINAL = np.array([[2, 0], [1, 1], [1, -1], [0, 1], [0, -1], [-1, 1], [-1, -1]], dtype=np.float64)
+SCALE = 0.3  #: metres per formation unit
+GAIN = 8.0  #: the followers' stress gain k (1/s)
+SAFETY = 0.15  #: the followers' HRVO safety radius (m): the formation's robots are 0.3 m apart
+FINE = 0.03  #: below this desired speed (m/s) a follower moves without HRVO
+SETTLE = 1200  #: steps for the followers to take their places before the first manoeuvre
+LEAD = 600  #: steps between the leaders' change of shape and the bars' entry
+RECOVER = 450  #: steps back in the nominal shape between two passes
+ENTRY = 0.15  #: the bars enter and leave this far beyond the walls (m)
+TIME_STEP = 0.033  #: the Robotarium's step (s)
+BAR_SPEED = 0.15  #: bars sweep leftwards at this speed (m/s)
+BAR_WIDTH = 0.1  #: thickness of a bar (m)
+GAPS = (0.55, 0.3)  #: the wide and the narrow gap between a pair of bars (m)
+#: Affine maps (formation units -> formation units) the leaders use: nominal, for the wide gap
+#: (compressed), for the narrow gap (collinear; the shear keeps the robots 1/3 unit apart).
+SHAPES = {
+    "nominal": np.eye(2),
+    "compressed": np.diag([1.0, 0.5]),
+    "collinear": np.array([[2.5, 2.5 / 3], [0.0, 0.0]]),
+}
+
+
+def stress_matrix(weights: np.ndarray = WEIGHTS) -> np.ndarray:
+    """Omega: ``Omega_ij = -w_ij`` off the diagonal, row sums on it."""
+    return np.diag(weights.sum(axis=1)) - weights
+
+
+def follower_targets(leaders: np.ndarray, weights: np.ndarray = WEIGHTS) -> np.ndarray:
+    """Where the followers converge for leaders at ``leaders`` ``(3, 2)``: ``-Omega_ff^-1 Omega_fl p_l``."""
+    omega = stress_matrix(weights)
+    return -np.linalg.solve(omega[LEADERS:, LEADERS:], omega[LEADERS:, :LEADERS] @ leaders)
+
+
+def formation(shape: str) -> np.ndarray:
+    """World positions ``(7, 2)`` of the formation in ``shape``, centred on the arena's centre."""
+    centred = NOMINAL - NOMINAL.mean(axis=0)
+    return SCALE * centred @ SHAPES[shape].T
+
+
+def corner_starts(rng: np.random.Generator) -> np.ndarray:
+    """Initial poses ``(3, 7)``: leaders in their triangle, followers in the four corners."""
+    positions = np.vstack((formation("nominal")[:LEADERS], [[1.35, 0.75], [1.35, -0.75], [-1.35, 0.75], [-1.35, -0.75]]))
+    return np.vstack((positions.T, rng.uniform(-math.pi, math.pi, len(positions))))
+
+
+def bars(gap: float, x: float) -> list[Obstacle]:
+    """A pair of bars at ``x`` leaving a gap of ``gap`` centred on y = 0."""
+    height = ROBOTARIUM.ymax - gap / 2
+    return [
+        Obstacle((x, gap / 2 + height / 2), (BAR_WIDTH, height), velocity=(-BAR_SPEED, 0.0)),
+        Obstacle((x, -gap / 2 - height / 2), (BAR_WIDTH, height), velocity=(-BAR_SPEED, 0.0)),
+    ]
+
+
+class Leader(RobotHRVO):
+    """A leader: goes to its place in the planned shape; ignores the followers."""
+
+    def __init__(self, robot_id: int, tag: str, **kwargs: Any) -> None:
+        super().__init__(robot_id, tag, **kwargs)
+        self.goal = formation("nominal")[robot_id]
+
+    def update_odom(self, pose: np.ndarray) -> None:
+        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in pose)
+
+    def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
+        return (self.robot_id, self.pos_x, self.pos_y) if self.has_pose else None
+
+    def update(self, dxu: np.ndarray) -> None:
+        desired = np.zeros(2)
+        if self.has_pose:
+            desired = 1.5 * (self.goal - (self.pos_x, self.pos_y))
+            speed = math.hypot(desired[0], desired[1])
+            if speed > self.v_max:
+                desired *= self.v_max / speed
+        self.HRVO(np.zeros((0, 4)), desired)
+        self.dxi_to_dxu()
+        self.actuator_limit()
+        dxu[:, self.robot_id] = self.dxu
+
+
+class Follower(RobotHRVO):
+    """A follower: the stress control law on the positions received by radio, through HRVO."""
+
+    def __init__(self, robot_id: int, tag: str, weights: np.ndarray = WEIGHTS, **kwargs: Any) -> None:
+        super().__init__(robot_id, tag, **kwargs)
+        self.weights = weights[robot_id]
+        self.heard: dict[int, np.ndarray] = {}
+
+    def update_odom(self, pose: np.ndarray) -> None:
+        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in pose)
+
+    def update_sensor(self, detections: np.ndarray) -> None:
+        self.detections = detections
+
+    def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
+        for j, x, y in messages:
+            self.heard[j] = np.array([x, y])
+        return (self.robot_id, self.pos_x, self.pos_y) if self.has_pose else None
+
+    def update(self, dxu: np.ndarray) -> None:
+        desired = np.zeros(2)
+        if self.has_pose:
+            here = np.array([self.pos_x, self.pos_y])
+            pull = sum((self.weights[j] * (here - there) for j, there in self.heard.items()), np.zeros(2))
+            desired = -GAIN * pull
+            speed = math.hypot(desired[0], desired[1])
+            if speed > self.v_max:
+                desired *= self.v_max / speed
+        if math.hypot(desired[0], desired[1]) < FINE:
+            # Close to its place: the formation keeps robots >= 0.3 m apart, and velocity
+            # obstacles (no time horizon) would forbid the last centimetres towards a neighbour.
+            self.dxi = desired
+        else:
+            self.steer(self.detections, desired)
+        self.dxi_to_dxu()
+        self.actuator_limit()
+        dxu[:, self.robot_id] = self.dxu
+
+
+def schedule() -> list[tuple[int, int, int, str, float]]:
+    """The two bar passes as ``(deform, enter, leave, shape, gap)`` steps: the leaders take the
+    shape at ``deform``, the bars enter at the right wall at ``enter`` and have left at the left
+    wall at ``leave``, when the leaders return to the nominal shape."""
+    crossing = round((ROBOTARIUM.width + 2 * ENTRY) / (BAR_SPEED * TIME_STEP))
+    passes, t = [], SETTLE
+    for shape, gap in zip(("compressed", "collinear"), GAPS):
+        passes.append((t, t + LEAD, t + LEAD + crossing, shape, gap))
+        t += LEAD + crossing + RECOVER
+    return passes
+
+
+def run(
+    n: int = 7,
+    seed: int = 0,
+    backend: str = "auto",
+    steps: int | None = None,
+    *,
+    trace: bool = False,
+    progress: Any = None,
+    record: Callable[[Frame], None] | None = None,
+) -> ExperimentResult:
+    """Run the formation through both pairs of bars (default: until 30 s after the last has left).
+
+    ``measures``: the followers' error to their affine target just before the first bars set
+    off and at the end (m), the iterations in which a robot touched a bar, and the largest
+    error while bars are on the arena.
+    """
+    if n != 7:
+        raise ValueError(f"the affine formation has 7 robots (3 leaders, 4 followers), got n={n}")
+    passes = schedule()
+    cap = passes[-1][2] + 2 * RECOVER if steps is None else steps
+    with World(seed) as world:
+        sim = make_robotarium(n, backend, corner_starts(world.rng))
+        adjacency = (WEIGHTS != 0).astype(float)
+        robots: list[Leader | Follower] = []
+        for i in range(n):
+            robot: Leader | Follower = Leader(i, f"leader_{i}") if i < LEADERS else Follower(i, f"follower_{i}", safety=SAFETY)
+            odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
+            radio = GraphRadio(i, f"radio_{i}", robot.update_radio, adjacency)
+            entries = [
+                {"delay": 2, "tag": "odom", "call": odometry.update},
+                {"delay": 4, "tag": "radio", "call": radio.update},
+                {"delay": 4, "tag": "robot", "call": robot.update},
+            ]
+            if isinstance(robot, Follower):
+                movement = MovementSensor(i, f"movement_{i}", robot.update_sensor, range=0.6)
+                entries.insert(1, {"delay": 3, "tag": "movement", "call": movement.update})
+            create_timer(i, 10 + i, entries)
+            robots.append(robot)
+
+        dxu = np.zeros((2, n))
+        obstacles: list[Obstacle] = []
+        poses = [sim.poses] if trace else []
+        contacts, settled_error, deformed_error = 0, math.nan, 0.0
+        start = time.perf_counter()
+        for t in range(cap):
+            for deform, enter, leave, shape, gap in passes:
+                if t in (deform, leave):
+                    for leader in robots[:LEADERS]:
+                        leader.goal = formation(shape if t == deform else "nominal")[leader.robot_id]
+                if t == enter:
+                    obstacles = bars(gap, ROBOTARIUM.xmax + ENTRY)
+                if t == leave:
+                    obstacles = []
+            x = sim.get_poses()
+            update_timers(t, {"odom": (x,), "movement": (x, dxu), "radio": (x,), "robot": (dxu,)})
+            sim.set_velocities(np.arange(n), dxu)
+            sim.step()
+            for bar in obstacles:
+                bar.step(sim.time_step)
+            now = sim.poses
+            error = float(np.linalg.norm(now[:2, LEADERS:].T - follower_targets(now[:2, :LEADERS].T), axis=1).max())
+            if t + 1 == passes[0][0]:
+                settled_error = error
+            if obstacles:
+                deformed_error = max(deformed_error, error)
+            contacts += any(bar.distance(now[:2, i]) < GRITSBOT.radius for bar in obstacles for i in range(n))
+            if trace:
+                poses.append(now)
+            if progress is not None:
+                progress(t + 1, cap)
+            if record is not None:
+                record(Frame(
+                    t + 1, sim.arena, now,
+                    goals=np.vstack(([r.goal for r in robots[:LEADERS]], follower_targets(now[:2, :LEADERS].T))),
+                    velocities=np.array([r.dxi for r in robots]),
+                    links=np.argwhere(np.triu(WEIGHTS) != 0),
+                    obstacles=[bar.polygon for bar in obstacles],
+                    title=f"{NAME}: follower error {error:.3f} m, bar contacts {contacts}",
+                ))
+        wall = time.perf_counter() - start
+    measures = {
+        "error_before_bars": settled_error,
+        "error_end": error,
+        "error_while_deformed": deformed_error,
+        "bar_contacts": contacts,
+    }
+    done = passes[-1][2] if cap >= passes[-1][2] and contacts == 0 else None
+    return ExperimentResult.from_backend(NAME, seed, sim, done, wall, measures, np.array(poses) if trace else None)

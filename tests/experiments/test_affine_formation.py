@@ -1,0 +1,53 @@
+"""Outcomes of the affine-formation experiment, and the stress algebra behind it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from dream.experiments import affine_formation as af
+
+
+def test_nominal_configuration_is_in_stress_equilibrium():
+    # The thesis's weights are rounded to 4 digits: equilibrium holds to that precision.
+    assert_allclose(af.stress_matrix() @ af.NOMINAL, 0.0, atol=3e-4)
+    assert_allclose(af.WEIGHTS, af.WEIGHTS.T)
+
+
+def test_follower_targets_are_the_affine_image_of_the_nominal():
+    rng = np.random.default_rng(3)
+    a, b = rng.normal(size=(2, 2)), rng.normal(size=2)
+    image = af.NOMINAL @ a.T + b
+    assert_allclose(af.follower_targets(image[: af.LEADERS]), image[af.LEADERS :], atol=2e-2)
+    # The followers' part of the stress matrix is positive definite: the control law converges.
+    assert np.linalg.eigvalsh(af.stress_matrix()[af.LEADERS :, af.LEADERS :]).min() > 0
+
+
+@pytest.mark.parametrize("shape", sorted(af.SHAPES))
+def test_every_shape_keeps_robots_apart(shape):
+    points = af.formation(shape)
+    gaps = np.linalg.norm(points[:, None] - points[None], axis=2) + 10 * np.eye(len(points))
+    assert gaps.min() >= 0.24
+
+
+def test_deformed_shapes_fit_their_gaps():
+    diameter = 0.11
+    for shape, gap in zip(("compressed", "collinear"), af.GAPS):
+        assert np.ptp(af.formation(shape)[:, 1]) + diameter < gap
+    assert np.ptp(af.formation("nominal")[:, 1]) + diameter > af.GAPS[0]  # so it must deform
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_affine_formation_converges_then_passes_both_gaps_without_contact(seed):
+    result = af.run(seed=seed, backend="robotarium")
+    assert result.measures["error_before_bars"] < 0.05
+    assert result.measures["bar_contacts"] == 0
+    assert result.collisions == 0 and result.boundary == 0
+    assert result.completed_step is not None
+    assert result.measures["error_end"] < 0.05  # back in the nominal shape
+
+
+def test_affine_formation_has_seven_robots():
+    with pytest.raises(ValueError, match="7 robots"):
+        af.run(n=8)
