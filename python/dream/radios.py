@@ -12,7 +12,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from dream._checks import as_array, as_poses, check_nonnegative, check_robot_id
+from dream._checks import as_array, check_nonnegative, check_robot_id
 from dream.world import current_world
 
 Callback = Callable[[list[Any]], Any]
@@ -41,7 +41,7 @@ class Radio:
 
     def update(self, x: Any) -> None:
         """Take the attached robot's pose from the pose array ``x`` ``(3, n)``."""
-        poses = as_poses(x, "x")
+        poses = self.world.checked_poses(x)
         check_robot_id(self.robot_id, poses.shape[1], "x")
         self.pos_x, self.pos_y, self.rot_w = (float(v) for v in poses[:, self.robot_id])
         self._poses = poses

@@ -30,7 +30,7 @@ def test_hrvo_circle_fast_backend_follows_rps_trajectories():
 
 
 def test_hrvo_circle_robots_wait_for_their_first_pose():
-    # Robot i's timer starts after 20 + i steps: until then it has no pose and must not move
+    # Robot i's timer starts after 20 + i % 10 steps: until then it has no pose and must not move
     # (only the heading's re-wrapping may change its last bit).
     result = hrvo_circle.run(n=10, seed=1, backend="fast", steps=60, trace=True)
     for i in range(10):

@@ -175,7 +175,7 @@ def run(
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             movement = MovementSensor(i, f"movement_{i}", robot.update_sensor)
             radio = RangeRadio(i, f"radio_{i}", robot.update_radio)
-            create_timer(i, 20 + i, [
+            create_timer(i, 20 + i % 10, [
                 {"delay": 2 + i % 2, "tag": "odom", "call": odometry.update},
                 {"delay": 3 + i % 2, "tag": "movement", "call": movement.update},
                 {"delay": 30, "tag": "radio", "call": radio.update},
