@@ -94,6 +94,30 @@ fn cell(p: Vec2, radius: f64, arena: &Arena, agents: impl Iterator<Item = Vec2>,
     polygon
 }
 
+/// One robot's cell at `p`, clipped by the robots `others` (those beyond `2 radius` change
+/// nothing) and its virtual `agents`, in that order: counter-clockwise vertices, empty if
+/// nothing is left.
+///
+/// # Errors
+/// Non-finite input, a non-positive radius or a resolution outside 3..=2^20.
+pub fn voronoi_cell(p: Vec2, others: &[Vec2], agents: &[Vec2], radius: f64, arena: &Arena, resolution: usize) -> Result<Vec<Vec2>> {
+    check_finite("position", &p)?;
+    check_finite("others", others.as_flattened())?;
+    check_finite("virtual", agents.as_flattened())?;
+    check_cell_parameters(radius, resolution)?;
+    Ok(cell(p, radius, arena, others.iter().chain(agents).copied(), resolution))
+}
+
+fn check_cell_parameters(radius: f64, resolution: usize) -> Result<()> {
+    if !(radius.is_finite() && radius > 0.0) {
+        return Err(GeomError::InvalidParameter { arg: "radius", rule: "> 0", got: radius });
+    }
+    if !(3..=MAX_RESOLUTION).contains(&resolution) {
+        return Err(GeomError::InvalidParameter { arg: "resolution", rule: "between 3 and 2^20", got: resolution as f64 });
+    }
+    Ok(())
+}
+
 /// Cells of every robot. `virtual_agents` is CSR `(indptr, points)`: robot i's virtual agents
 /// are `points[indptr[i]..indptr[i + 1]]`.
 ///
@@ -109,12 +133,7 @@ pub fn voronoi_cells(
 ) -> Result<Cells> {
     let n = positions.len();
     check_finite("positions", positions.as_flattened())?;
-    if !(radius.is_finite() && radius > 0.0) {
-        return Err(GeomError::InvalidParameter { arg: "radius", rule: "> 0", got: radius });
-    }
-    if !(3..=MAX_RESOLUTION).contains(&resolution) {
-        return Err(GeomError::InvalidParameter { arg: "resolution", rule: "between 3 and 2^20", got: resolution as f64 });
-    }
+    check_cell_parameters(radius, resolution)?;
     if let Some((indptr, points)) = virtual_agents {
         check_len("virtual indptr", n + 1, indptr.len())?;
         check_finite("virtual", points.as_flattened())?;

@@ -23,6 +23,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(hrvo::hrvo, m)?)?;
     m.add_class::<hrvo::PyHrvoPlanner>()?;
     m.add_function(wrap_pyfunction!(voronoi::voronoi_cells, m)?)?;
+    m.add_function(wrap_pyfunction!(voronoi::voronoi_cell, m)?)?;
     m.add_function(wrap_pyfunction!(obstacles::virtual_agents, m)?)?;
     Ok(())
 }

@@ -5,7 +5,7 @@ use dream_core::voronoi as core;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
-use crate::arrays::{both, count_of, indices_of, points_of};
+use crate::arrays::{both, count_of, indices_of, points_of, vector_of};
 use crate::errors::PyDreamResult;
 
 type CellArrays<'py> = (
@@ -45,4 +45,28 @@ pub fn voronoi_cells<'py>(
         cells.vertices.into_flattened().into_pyarray(py).reshape([m, 2])?,
         cells.offsets.into_pyarray(py),
     ))
+}
+
+/// One robot's cell: `(centroid (2,), area, vertices (m, 2))`, clipped by `others` `(k, 2)` and `virtual_points` `(j, 2)`.
+#[pyfunction]
+#[pyo3(signature = (position, others, virtual_points, *, radius, bounds, resolution=64))]
+pub fn voronoi_cell<'py>(
+    py: Python<'py>,
+    position: Bound<'py, PyAny>,
+    others: Bound<'py, PyAny>,
+    virtual_points: Bound<'py, PyAny>,
+    radius: f64,
+    bounds: (f64, f64, f64, f64),
+    resolution: i64,
+) -> PyDreamResult<(Bound<'py, PyArray1<f64>>, f64, Bound<'py, PyArray2<f64>>)> {
+    let p = vector_of("position", &position, Some(2))?;
+    let p = [p[0], p[1]];
+    let others = points_of::<2>("others", &others)?;
+    let agents = points_of::<2>("virtual_points", &virtual_points)?;
+    let resolution = count_of("resolution", resolution)?;
+    let arena = Arena::new(bounds.0, bounds.1, bounds.2, bounds.3)?;
+    let polygon = core::voronoi_cell(p, &others, &agents, radius, &arena, resolution)?;
+    let (area, centroid) = core::area_centroid(&polygon, p);
+    let m = polygon.len();
+    Ok((centroid.to_vec().into_pyarray(py), area, polygon.into_flattened().into_pyarray(py).reshape([m, 2])?))
 }
