@@ -156,7 +156,8 @@ class RobotHRVO(Robot):
             safety=safety, v_max=self.v_max, n_angles=n_angles, n_speeds=n_speeds, include_preferred=include_preferred
         )
         self.detections: FloatArray = np.zeros((0, 4))
-        self.sidestep = 0  # decisions left keeping to the right (see `steer`)
+        self.sidestep = 0  # decisions left stepping aside (see `steer`)
+        self.side = 1.0  # 1: to the right, -1: to the left
 
     def HRVO(self, detections: Any, desired_velocity: Any) -> FloatArray:  # noqa: N802 (original name)
         """Choose a collision-free velocity close to ``desired_velocity`` and store it in ``dxi``.
@@ -193,14 +194,15 @@ class RobotHRVO(Robot):
         velocity points away from its goal). Once that happens, the robot keeps to its right
         (prefers its desired velocity turned by -90 degrees) for the next ``sidestep_updates``
         decisions: robots that all turn the same way circulate around each other instead of
-        facing off.
+        facing off. A robot blocked again while stepping aside (by a wall, say) turns the other
+        way.
         """
         wanted = np.asarray(desired_velocity, dtype=np.float64)
         if self.sidestep > 0:
-            wanted = np.array([wanted[1], -wanted[0]])
+            wanted = self.side * np.array([wanted[1], -wanted[0]])
             self.sidestep -= 1
         chosen = self.HRVO(detections, wanted)
         if not chosen.any() and np.any(desired_velocity):
+            self.side = -self.side if self.sidestep > 0 else 1.0
             self.sidestep = sidestep_updates
         return chosen
-

@@ -60,3 +60,22 @@ def test_hrvo_circle_scales_beyond_ten_robots_on_fast():
     result = hrvo_circle.run(n=24, seed=0, backend="fast", steps=300)
     assert result.n == 24 and result.backend == "fast"
     assert result.collisions == 0
+
+
+def test_hrvo_circle_thousand_robots_on_fast_do_not_collide():
+    result = hrvo_circle.run(n=1000, seed=0, backend="fast", steps=200)
+    assert result.n == 1000 and result.steps == 200
+    assert result.collisions == 0 and result.boundary == 0
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_hrvo_circle_batch_mode_completes_three_circles(seed):
+    result = hrvo_circle.run_batch(n=10, seed=seed)
+    assert result.measures["circles_completed"] == 3
+    assert result.completed_step is not None and result.collisions == 0 and result.boundary == 0
+
+
+def test_hrvo_circle_batch_mode_runs_large_swarms_without_collision():
+    result = hrvo_circle.run_batch(n=3000, seed=0, steps=60)
+    assert result.n == 3000 and result.steps == 60
+    assert result.collisions == 0

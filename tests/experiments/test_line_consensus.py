@@ -57,3 +57,8 @@ def test_line_consensus_scales_on_the_fast_backend():
     result = lc.run(n=12, seed=1, backend="fast")
     assert result.backend == "fast" and result.n == 12
     assert result.completed_step is not None and result.collisions == 0
+
+
+def test_line_consensus_thousand_robots_on_fast_do_not_collide():
+    result = lc.run(n=1000, seed=0, backend="fast", steps=150)
+    assert result.n == 1000 and result.collisions == 0

@@ -76,3 +76,10 @@ def test_obstacle_sensor_reports_closest_points_in_range():
     obstacles[0].center[:] = (5.0, 5.0)  # moved away: the sensor sees where it is now
     sensor.update(np.array([[0.0], [0.0], [0.0]]))
     assert seen[-1].shape == (0, 2)
+
+
+def test_voronoi_coverage_thousand_robots_spread_without_collision():
+    result = vc.run(n=1000, seed=0, backend="fast", steps=60)
+    assert result.n == 1000 and result.collisions == 0
+    assert result.measures["static_contacts"] == 0
+    assert result.measures["cost_end"] < result.measures["cost_start"]

@@ -31,7 +31,7 @@ from dream.frames import Frame
 from dream.radios import RangeRadio
 from dream.robot import RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
-from dream.specs import ROBOTARIUM, ArenaSpec
+from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec
 from dream.timers import create_timer, update_timers
 from dream.world import World
 
@@ -40,6 +40,8 @@ CIRCLES = 3
 RADIUS = 0.85  #: the thesis's circle (m)
 GOAL_SPACING = 0.3  #: least distance between neighbouring goals (m)
 ARRIVAL = 0.05  #: a robot within this distance of its goal has arrived (m)
+GRITSBOT_RADIUS = GRITSBOT.radius
+GRITSBOT_V_MAX = GRITSBOT.v_max
 
 
 def circle_radius(n: int) -> float:
@@ -204,3 +206,92 @@ def run(
         wall = time.perf_counter() - start
     measures = {"circles_completed": min((r.state for r in robots), default=CIRCLES), "circle_radius": circle_radius(n)}
     return ExperimentResult.from_backend(NAME, seed, sim, done_at, wall, measures, np.array(poses) if trace else None)
+
+
+def run_batch(
+    n: int = 10_000,
+    seed: int = 0,
+    steps: int | None = None,
+    *,
+    radio_gap: int = 30,
+    progress: Any = None,
+) -> ExperimentResult:
+    """The circle experiment for very large swarms: whole-swarm kernel calls every step.
+
+    The same behaviour as :func:`run` (goals, arrival, HRVO with the same parameters, stepping
+    aside when blocked, progress spread by range radio every ``radio_gap`` steps), on the Fast
+    backend, but every robot decides every step through one :func:`dream.kernels.hrvo` call.
+    Each robot's progress vector becomes a bitset: the robots it knows to have reached at
+    least its own number of goals (n^2 / 8 bytes in all, merged by bitwise OR over radio
+    links, reset when the robot reaches its next goal); a robot moves on when its set is full,
+    which is when every entry of the original's vector equals its own state. Neighbours'
+    velocities are their last chosen velocities.
+    """
+    cap = default_steps(n) if steps is None else steps
+    goals = circle_goals(n)
+    arena = circle_arena(n)
+    bounds = arena.shrunk(GRITSBOT.radius)
+    sim = make_robotarium(n, "fast", arena=arena, seed=seed)
+    everyone = np.arange(n)
+    state = np.zeros(n, dtype=np.int64)  # goals reached
+    heading_for = np.zeros(n, dtype=np.int64)  # index of the goal being approached
+    unreached = np.ones(n, dtype=bool)  # ...which has not been reached yet
+    known = np.zeros((n, (n + 7) // 8), dtype=np.uint8)  # robots known to have state >= own state
+    known[everyone, everyone // 8] = 128 >> (everyone % 8)
+    full = np.packbits(np.ones(n, dtype=bool))
+    sidestep = np.zeros(n, dtype=np.int64)
+    side = np.ones(n)
+    dxi = np.zeros((n, 2))
+    done_at = None
+    start = time.perf_counter()
+    for t in range(cap):
+        x = sim.get_poses()
+        p = x[:2].T
+        offset = goals[everyone, heading_for] - p
+        distance = np.hypot(offset[:, 0], offset[:, 1])
+        arrived = distance < ARRIVAL
+        reached = arrived & unreached
+        state += reached
+        unreached &= ~arrived
+        known[reached] = 0  # a new level: start over from itself
+        known[reached, everyone[reached] // 8] = 128 >> (everyone[reached] % 8)
+        if t % radio_gap == 0:
+            _merge_known(known, state, p)
+            moving_on = (known == full).all(axis=1) & (state < CIRCLES) & ~unreached
+            heading_for[moving_on] = state[moving_on]
+            unreached |= moving_on
+        desired = np.where(arrived[:, None], 0.0, offset * (GRITSBOT.v_max / np.maximum(distance, 1e-12))[:, None])
+        aside = sidestep > 0
+        turned = side[:, None] * np.column_stack((desired[:, 1], -desired[:, 0]))
+        wanted = np.where(aside[:, None], turned, desired)
+        sidestep = np.maximum(sidestep - 1, 0)
+        dxi = kernels.hrvo(p, dxi, wanted, radius=1.0, bounds=bounds)
+        blocked = ~dxi.any(axis=1) & desired.any(axis=1)
+        side[blocked] = np.where(aside[blocked], -side[blocked], 1.0)  # as RobotHRVO.steer
+        sidestep[blocked] = 10
+        sim.set_velocities(everyone, kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, x)))
+        sim.step()
+        if progress is not None:
+            progress(t + 1, cap)
+        if np.all(state >= CIRCLES):
+            done_at = t + 1
+            break
+    wall = time.perf_counter() - start
+    measures = {"circles_completed": int(state.min(initial=CIRCLES)), "circle_radius": circle_radius(n)}
+    return ExperimentResult.from_backend(NAME + " (batch)", seed, sim, done_at, wall, measures)
+
+
+def _merge_known(known: np.ndarray, state: np.ndarray, positions: np.ndarray, radio_range: float = 1.0) -> None:
+    """One radio exchange: each robot ORs in the sets of the robots in range at its level or above."""
+    indptr, indices, _ = kernels.neighbours(positions, radio_range)
+    rows = np.repeat(np.arange(len(state)), np.diff(indptr))
+    useful = state[indices] >= state[rows]
+    rows, senders = rows[useful], indices[useful]
+    before = known.copy()
+    # Row by row would be a Python loop; instead OR in one neighbour slot at a time.
+    order = np.argsort(rows, kind="stable")
+    rows, senders = rows[order], senders[order]
+    slot = np.arange(len(rows)) - np.searchsorted(rows, rows)
+    for k in range(int(slot.max(initial=-1)) + 1):
+        pick = slot == k
+        known[rows[pick]] |= before[senders[pick]]

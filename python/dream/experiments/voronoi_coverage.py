@@ -40,19 +40,34 @@ GAIN = 1.0  #: proportional gain towards the centroid (1/s)
 REST_STEPS = 60  #: steps without any command after which the team is at rest
 
 
-def thesis_obstacles(rng: np.random.Generator, moving: bool = True) -> list[Obstacle]:
-    """Two large static rectangles and (optionally) two small ones moving in random directions."""
-    obstacles = [Obstacle((-0.75, 0.45), (0.6, 0.3)), Obstacle((0.25, -0.3), (0.3, 0.55))]
+def scale_for(n: int) -> float:
+    """How much the arena and the obstacles grow for ``n`` robots (1 up to the thesis's 15)."""
+    return max(1.0, math.sqrt(n / 15))
+
+
+def coverage_arena(n: int) -> ArenaSpec:
+    """The Robotarium for up to 15 robots; beyond, an arena of its shape with the same density."""
+    scale = scale_for(n)
+    return ROBOTARIUM if scale == 1.0 else ArenaSpec.centred(ROBOTARIUM.width * scale, ROBOTARIUM.height * scale)
+
+
+def thesis_obstacles(rng: np.random.Generator, moving: bool = True, scale: float = 1.0) -> list[Obstacle]:
+    """Two large static rectangles and (optionally) two small ones moving in random directions,
+    placed and sized for an arena ``scale`` times the Robotarium's."""
+    obstacles = [Obstacle((-0.75 * scale, 0.45 * scale), (0.6 * scale, 0.3 * scale)),
+                 Obstacle((0.25 * scale, -0.3 * scale), (0.3 * scale, 0.55 * scale))]
     if moving:
         for centre in ((-0.9, -0.55), (0.9, 0.6)):
             angle = rng.uniform(-math.pi, math.pi)
-            obstacles.append(Obstacle(centre, (0.15, 0.15), velocity=0.05 * np.array([math.cos(angle), math.sin(angle)])))
+            obstacles.append(Obstacle(np.array(centre) * scale, (0.15 * scale, 0.15 * scale),
+                                      velocity=0.05 * np.array([math.cos(angle), math.sin(angle)])))
     return obstacles
 
 
 def corner_poses(n: int, rng: np.random.Generator, arena: ArenaSpec = ROBOTARIUM, spacing: float = 0.2) -> np.ndarray:
-    """Poses ``(3, n)`` packed in rows of five from the bottom-right corner, random headings."""
-    columns = 5
+    """Poses ``(3, n)`` packed in rows from the bottom-right corner (five per row in the
+    Robotarium, more in a larger arena), random headings."""
+    columns = max(5, math.ceil(5 * arena.width / ROBOTARIUM.width))
     k = np.arange(n)
     x = arena.xmax - 0.15 - spacing * (k % columns)
     y = arena.ymin + 0.15 + spacing * (k // columns)
@@ -137,9 +152,9 @@ def run(
     robot's body touched a static obstacle, and how many robots were still moving at the end.
     """
     cap = 1500 if steps is None else steps
-    arena = ROBOTARIUM
+    arena = coverage_arena(n)
     with World(seed) as world:
-        obstacles = thesis_obstacles(world.rng, moving_obstacles)
+        obstacles = thesis_obstacles(world.rng, moving_obstacles, scale_for(n))
         sim = make_robotarium(n, backend, corner_poses(n, world.rng, arena), arena=arena)
         robots = []
         for i in range(n):
@@ -156,7 +171,8 @@ def run(
             ])
 
         dxu = np.zeros((2, n))
-        start_cost = coverage_cost(sim.poses[:2], arena, obstacles)
+        sampling = 0.02 * scale_for(n)
+        start_cost = coverage_cost(sim.poses[:2], arena, obstacles, sampling)
         static = [o for o in obstacles if not o.moving]
         contacts, still, done_at = 0, 0, None
         poses = [sim.poses] if trace else []
@@ -189,7 +205,7 @@ def run(
         wall = time.perf_counter() - start
     measures = {
         "cost_start": start_cost,
-        "cost_end": coverage_cost(sim.poses[:2], arena, obstacles),
+        "cost_end": coverage_cost(sim.poses[:2], arena, obstacles, sampling),
         "static_contacts": contacts,
         "moving_at_end": int(np.count_nonzero(np.any(dxu != 0, axis=0))),
     }
