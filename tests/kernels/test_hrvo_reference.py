@@ -224,7 +224,6 @@ def test_hrvo_velocity_head_on_pair_both_avoid():
     positions = np.array([[-0.5, 0.0], [0.5, 0.0]])
     velocities = np.array([[0.2, 0.0], [-0.2, 0.0]])
     chosen = hrvo(positions, velocities, velocities.copy())
-    phi = math.asin(SAFETY / 1.0)
     for i, j in ((0, 1), (1, 0)):
         direction = math.atan2(*(positions[j] - positions[i])[::-1])
         # the preferred velocity (straight at the other) is forbidden, so it is not chosen

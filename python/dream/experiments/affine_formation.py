@@ -32,7 +32,7 @@ from dream.obstacles import Obstacle
 from dream.radios import GraphRadio
 from dream.robot import RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
-from dream.specs import GRITSBOT, ROBOTARIUM
+from dream.specs import GRITSBOT, ROBOTARIUM, RPS
 from dream.timers import create_timer, update_timers
 from dream.world import World
 
@@ -60,7 +60,6 @@ SETTLE = 1200  #: steps for the followers to take their places before the first 
 LEAD = 600  #: steps between the leaders' change of shape and the bars' entry
 RECOVER = 450  #: steps back in the nominal shape between two passes
 ENTRY = 0.15  #: the bars enter and leave this far beyond the walls (m)
-TIME_STEP = 0.033  #: the Robotarium's step (s)
 BAR_SPEED = 0.15  #: bars sweep leftwards at this speed (m/s)
 BAR_WIDTH = 0.1  #: thickness of a bar (m)
 GAPS = (0.55, 0.3)  #: the wide and the narrow gap between a pair of bars (m)
@@ -174,7 +173,7 @@ def schedule() -> list[tuple[int, int, int, str, float]]:
     """The two bar passes as ``(deform, enter, leave, shape, gap)`` steps: the leaders take the
     shape at ``deform``, the bars enter at the right wall at ``enter`` and have left at the left
     wall at ``leave``, when the leaders return to the nominal shape."""
-    crossing = round((ROBOTARIUM.width + 2 * ENTRY) / (BAR_SPEED * TIME_STEP))
+    crossing = round((ROBOTARIUM.width + 2 * ENTRY) / (BAR_SPEED * RPS.time_step))
     passes, t = [], SETTLE
     for shape, gap in zip(("compressed", "collinear"), GAPS):
         passes.append((t, t + LEAD, t + LEAD + crossing, shape, gap))

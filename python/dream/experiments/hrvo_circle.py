@@ -40,8 +40,6 @@ CIRCLES = 3
 RADIUS = 0.85  #: the thesis's circle (m)
 GOAL_SPACING = 0.3  #: least distance between neighbouring goals (m)
 ARRIVAL = 0.05  #: a robot within this distance of its goal has arrived (m)
-GRITSBOT_RADIUS = GRITSBOT.radius
-GRITSBOT_V_MAX = GRITSBOT.v_max
 
 
 def circle_radius(n: int) -> float:
@@ -169,7 +167,7 @@ def run(
     """
     cap = default_steps(n) if steps is None else steps
     goals = circle_goals(n)
-    with World(seed) as world:
+    with World(seed):
         sim = make_robotarium(n, backend, arena=circle_arena(n), seed=seed)
         robots = []
         for i in range(n):
