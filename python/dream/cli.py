@@ -64,7 +64,11 @@ def _positive_int(text: str) -> int:
 
 
 def benches_dir() -> Path:
-    """Where the repository keeps its benchmarks: ``python/dream/../../benches``."""
+    """The repository's ``benches/``: in the current directory (a checkout, whatever the install),
+    else beside the package's source (an editable install)."""
+    here = Path.cwd() / "benches"
+    if (here / "bench_kernels.py").is_file():
+        return here
     return Path(__file__).resolve().parents[2] / "benches"
 
 
@@ -74,7 +78,7 @@ def _bench(full: bool) -> int:
     missing = [str(script) for script, _ in scripts if not script.is_file()]
     if missing:
         print(f"dream: error: no benchmarks at {benches} (missing {', '.join(missing)}); `dream bench` runs the "
-              "benchmarks of a source checkout: install with `pip install -e .` from the repository", file=sys.stderr)
+              "benchmarks of a source checkout: run it from the repository's top folder", file=sys.stderr)
         return 2
     for script, flags in scripts:
         print(f"$ python {script.name} {' '.join(flags)}".rstrip(), flush=True)
