@@ -79,3 +79,11 @@ def test_hrvo_circle_batch_mode_runs_large_swarms_without_collision():
     result = hrvo_circle.run_batch(n=3000, seed=0, steps=60)
     assert result.n == 3000 and result.steps == 60
     assert result.collisions == 0
+
+
+def test_hrvo_circle_fifty_robots_on_rps_do_not_collide():
+    # rps's arena cannot grow: the thesis's circle, goals closer than a diameter, no collision.
+    result = hrvo_circle.run(n=50, seed=0, backend="robotarium", steps=600)
+    assert result.backend == "robotarium" and result.n == 50
+    assert result.measures["circle_radius"] == hrvo_circle.RADIUS
+    assert result.collisions == 0 and result.boundary == 0

@@ -22,3 +22,12 @@ def test_record_receives_one_frame_per_step(name):
     if frames[-1].links is not None:
         assert frames[-1].links.shape[1] == 2 and np.all(frames[-1].links < n)
     assert name in frames[-1].title
+
+
+@pytest.mark.parametrize("name", sorted(EXPERIMENTS))
+def test_same_seed_same_trajectories(name):
+    first = EXPERIMENTS[name].run(steps=150, backend="fast", seed=5, trace=True)
+    second = EXPERIMENTS[name].run(steps=150, backend="fast", seed=5, trace=True)
+    assert_array_equal(first.trace, second.trace)
+    other = EXPERIMENTS[name].run(steps=150, backend="fast", seed=6, trace=True)
+    assert not np.array_equal(first.trace, other.trace)

@@ -42,23 +42,24 @@ GOAL_SPACING = 0.3  #: least distance between neighbouring goals (m)
 ARRIVAL = 0.05  #: a robot within this distance of its goal has arrived (m)
 
 
-def circle_radius(n: int) -> float:
-    """The thesis's 0.85 m, grown so that neighbouring goals are >= 0.3 m apart."""
-    return RADIUS if n < 2 else max(RADIUS, GOAL_SPACING / (2 * math.sin(math.pi / n)))
+def circle_radius(n: int, grow: bool = True) -> float:
+    """The thesis's 0.85 m, grown (unless ``grow`` is false) so that neighbouring goals are
+    >= 0.3 m apart."""
+    return RADIUS if n < 2 or not grow else max(RADIUS, GOAL_SPACING / (2 * math.sin(math.pi / n)))
 
 
-def circle_arena(n: int) -> ArenaSpec:
+def circle_arena(n: int, grow: bool = True) -> ArenaSpec:
     """The Robotarium arena while the circle fits in it, else a larger arena of its shape."""
-    radius = circle_radius(n)
+    radius = circle_radius(n, grow)
     if radius <= RADIUS:
         return ROBOTARIUM
     scale = radius / RADIUS
     return ArenaSpec.centred(ROBOTARIUM.width * scale, ROBOTARIUM.height * scale)
 
 
-def circle_goals(n: int) -> np.ndarray:
+def circle_goals(n: int, grow: bool = True) -> np.ndarray:
     """Goals ``(n, 3, 2)``: robot i's point on the circle, its antipode, then the point again."""
-    radius = circle_radius(n)
+    radius = circle_radius(n, grow)
     angles = 2 * np.pi * np.arange(n) / max(n, 1)
     here = radius * np.column_stack((np.cos(angles), np.sin(angles)))
     return np.stack((here, -here, here), axis=1)
@@ -166,9 +167,12 @@ def run(
         ``measures``: ``circles_completed`` (by every robot) and the circle radius.
     """
     cap = default_steps(n) if steps is None else steps
-    goals = circle_goals(n)
+    # On the real Robotarium the arena cannot grow: keep the thesis's circle (beyond 17 robots
+    # its goals are closer than a robot's diameter, so the robots cannot all arrive).
+    grow = backend != "robotarium"
+    goals = circle_goals(n, grow)
     with World(seed):
-        sim = make_robotarium(n, backend, arena=circle_arena(n), seed=seed)
+        sim = make_robotarium(n, backend, arena=circle_arena(n, grow), seed=seed)
         robots = []
         for i in range(n):
             robot = CircleRobot(i, f"robot_{i}", goals[i], n, arena=sim.arena)
@@ -202,7 +206,7 @@ def run(
                 done_at = t + 1
                 break
         wall = time.perf_counter() - start
-    measures = {"circles_completed": min((r.state for r in robots), default=CIRCLES), "circle_radius": circle_radius(n)}
+    measures = {"circles_completed": min((r.state for r in robots), default=CIRCLES), "circle_radius": circle_radius(n, grow)}
     return ExperimentResult.from_backend(NAME, seed, sim, done_at, wall, measures, np.array(poses) if trace else None)
 
 
