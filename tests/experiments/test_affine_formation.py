@@ -51,3 +51,25 @@ def test_affine_formation_converges_then_passes_both_gaps_without_contact(seed):
 def test_affine_formation_has_seven_robots():
     with pytest.raises(ValueError, match="7 robots"):
         af.run(n=8)
+
+
+def test_affine_formation_tiles_several_formations():
+    result = af.run(n=14, seed=0, backend="fast")
+    assert result.measures["error_before_bars"] < 0.05
+    assert result.measures["bar_contacts"] == 0 and result.collisions == 0
+    assert result.completed_step is not None
+
+
+def test_affine_formation_thousand_robots_on_fast_do_not_collide():
+    result = af.run(n=1001, seed=0, backend="fast", steps=100)
+    assert result.n == 1001 and result.collisions == 0 and result.boundary == 0
+
+
+def test_affine_formation_tiles_are_robotarium_sized():
+    centres = af.tile_centres(5)
+    arena = af.tiled_arena(5)
+    assert len(centres) == 5
+    assert np.all(np.abs(centres[:, 0]) + 1.6 <= arena.xmax + 1e-9)
+    assert np.all(np.abs(centres[:, 1]) + 1.0 <= arena.ymax + 1e-9)
+    gaps = np.linalg.norm(centres[:, None] - centres[None], axis=2) + 10 * np.eye(5)
+    assert gaps.min() >= 2.0 - 1e-9

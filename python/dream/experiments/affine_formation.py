@@ -32,7 +32,7 @@ from dream.obstacles import Obstacle
 from dream.radios import GraphRadio
 from dream.robot import RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
-from dream.specs import GRITSBOT, ROBOTARIUM, RPS
+from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec
 from dream.timers import create_timer, update_timers
 from dream.world import World
 
@@ -89,19 +89,53 @@ def formation(shape: str) -> np.ndarray:
     return SCALE * centred @ SHAPES[shape].T
 
 
-def corner_starts(rng: np.random.Generator) -> np.ndarray:
-    """Initial poses ``(3, 7)``: leaders in their triangle, followers in the four corners."""
-    positions = np.vstack((formation("nominal")[:LEADERS], [[1.35, 0.75], [1.35, -0.75], [-1.35, 0.75], [-1.35, -0.75]]))
+def tile_centres(groups: int) -> np.ndarray:
+    """Centres ``(groups, 2)`` of the Robotarium-sized tiles, one formation each, in a near-square grid."""
+    columns = math.ceil(math.sqrt(groups))
+    rows = math.ceil(groups / columns)
+    k = np.arange(groups)
+    return np.column_stack(((k % columns - (columns - 1) / 2) * ROBOTARIUM.width, (k // columns - (rows - 1) / 2) * ROBOTARIUM.height))
+
+
+def tiled_arena(groups: int) -> ArenaSpec:
+    """The Robotarium for one formation; for more, the grid of Robotarium-sized tiles."""
+    if groups == 1:
+        return ROBOTARIUM
+    columns = math.ceil(math.sqrt(groups))
+    return ArenaSpec.centred(columns * ROBOTARIUM.width, math.ceil(groups / columns) * ROBOTARIUM.height)
+
+
+def corner_starts(rng: np.random.Generator, centres: np.ndarray = np.zeros((1, 2))) -> np.ndarray:
+    """Initial poses ``(3, 7 g)``: in each tile, leaders in their triangle and followers in the four corners."""
+    tile = np.vstack((formation("nominal")[:LEADERS], [[1.35, 0.75], [1.35, -0.75], [-1.35, 0.75], [-1.35, -0.75]]))
+    positions = np.vstack([tile + centre for centre in centres])
     return np.vstack((positions.T, rng.uniform(-math.pi, math.pi, len(positions))))
 
 
-def bars(gap: float, x: float) -> list[Obstacle]:
-    """A pair of bars at ``x`` leaving a gap of ``gap`` centred on y = 0."""
+def bars(gap: float, x: float, centre: np.ndarray = np.zeros(2)) -> list[Obstacle]:
+    """A pair of bars at ``x`` (relative to the tile ``centre``) leaving a gap of ``gap`` in the middle."""
     height = ROBOTARIUM.ymax - gap / 2
     return [
-        Obstacle((x, gap / 2 + height / 2), (BAR_WIDTH, height), velocity=(-BAR_SPEED, 0.0)),
-        Obstacle((x, -gap / 2 - height / 2), (BAR_WIDTH, height), velocity=(-BAR_SPEED, 0.0)),
+        Obstacle(centre + (x, gap / 2 + height / 2), (BAR_WIDTH, height), velocity=(-BAR_SPEED, 0.0)),
+        Obstacle(centre + (x, -gap / 2 - height / 2), (BAR_WIDTH, height), velocity=(-BAR_SPEED, 0.0)),
     ]
+
+
+def follower_positions(positions: np.ndarray, leader: np.ndarray) -> np.ndarray:
+    """Each formation's follower targets ``(4 g, 2)`` for robots at ``positions`` ``(7 g, 2)``."""
+    groups = len(positions) // 7
+    blocks = positions.reshape(groups, 7, 2)
+    return np.vstack([follower_targets(block[:LEADERS]) for block in blocks])
+
+
+def _touching(obstacles: list[Obstacle], positions: np.ndarray) -> np.ndarray:
+    """Which robots ``(n,)`` touch an (axis-aligned) bar: centre closer than the robot radius."""
+    touching = np.zeros(len(positions), dtype=bool)
+    for bar in obstacles:
+        low, high = bar.center - bar.size / 2, bar.center + bar.size / 2
+        gap = np.maximum(np.maximum(low - positions, positions - high), 0.0)
+        touching |= np.hypot(gap[:, 0], gap[:, 1]) < GRITSBOT.radius
+    return touching
 
 
 class Leader(RobotHRVO):
@@ -109,7 +143,7 @@ class Leader(RobotHRVO):
 
     def __init__(self, robot_id: int, tag: str, **kwargs: Any) -> None:
         super().__init__(robot_id, tag, **kwargs)
-        self.goal = formation("nominal")[robot_id]
+        self.goal = formation("nominal")[robot_id % 7]
 
     def update_odom(self, pose: np.ndarray) -> None:
         self.pos_x, self.pos_y, self.rot_w = (float(v) for v in pose)
@@ -193,20 +227,32 @@ def run(
 ) -> ExperimentResult:
     """Run the formation through both pairs of bars (default: until 30 s after the last has left).
 
+    ``n`` is 7 (the thesis's formation) or a multiple of 7: then each group of seven has its
+    own Robotarium-sized tile of a larger arena, its own bars and the same manoeuvres.
+
     ``measures``: the followers' error to their affine target just before the first bars set
-    off and at the end (m), the iterations in which a robot touched a bar, and the largest
-    error while bars are on the arena.
+    off and at the end (m, largest over the formations), the iterations in which a robot
+    touched a bar, and the largest error while bars are on the arena.
     """
-    if n != 7:
-        raise ValueError(f"the affine formation has 7 robots (3 leaders, 4 followers), got n={n}")
+    if n < 7 or n % 7:
+        raise ValueError(f"the affine formation has 7 robots (3 leaders, 4 followers) per group: n must be a multiple of 7, got n={n}")
+    groups = n // 7
+    centres = tile_centres(groups)
+    weights = np.kron(np.eye(groups), WEIGHTS)
+    leader = np.arange(n) % 7 < LEADERS
     passes = schedule()
     cap = passes[-1][2] + 2 * RECOVER if steps is None else steps
     with World(seed) as world:
-        sim = make_robotarium(n, backend, corner_starts(world.rng))
-        adjacency = (WEIGHTS != 0).astype(float)
+        sim = make_robotarium(n, backend, corner_starts(world.rng, centres), arena=tiled_arena(groups))
+        adjacency = (weights != 0).astype(float)
         robots: list[Leader | Follower] = []
         for i in range(n):
-            robot: Leader | Follower = Leader(i, f"leader_{i}") if i < LEADERS else Follower(i, f"follower_{i}", safety=SAFETY)
+            robot: Leader | Follower
+            if leader[i]:
+                robot = Leader(i, f"leader_{i}", arena=sim.arena)
+                robot.goal = formation("nominal")[i % 7] + centres[i // 7]
+            else:
+                robot = Follower(i, f"follower_{i}", weights, safety=SAFETY, arena=sim.arena)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             radio = GraphRadio(i, f"radio_{i}", robot.update_radio, adjacency)
             entries = [
@@ -217,7 +263,7 @@ def run(
             if isinstance(robot, Follower):
                 movement = MovementSensor(i, f"movement_{i}", robot.update_sensor, range=0.6)
                 entries.insert(1, {"delay": 3, "tag": "movement", "call": movement.update})
-            create_timer(i, 10 + i, entries)
+            create_timer(i, 10 + i % 7, entries)
             robots.append(robot)
 
         dxu = np.zeros((2, n))
@@ -228,10 +274,12 @@ def run(
         for t in range(cap):
             for deform, enter, leave, shape, gap in passes:
                 if t in (deform, leave):
-                    for leader in robots[:LEADERS]:
-                        leader.goal = formation(shape if t == deform else "nominal")[leader.robot_id]
+                    for robot in robots:
+                        if isinstance(robot, Leader):
+                            place = formation(shape if t == deform else "nominal")[robot.robot_id % 7]
+                            robot.goal = place + centres[robot.robot_id // 7]
                 if t == enter:
-                    obstacles = bars(gap, ROBOTARIUM.xmax + ENTRY)
+                    obstacles = [bar for centre in centres for bar in bars(gap, ROBOTARIUM.xmax + ENTRY, centre)]
                 if t == leave:
                     obstacles = []
             x = sim.get_poses()
@@ -241,22 +289,26 @@ def run(
             for bar in obstacles:
                 bar.step(sim.time_step)
             now = sim.poses
-            error = float(np.linalg.norm(now[:2, LEADERS:].T - follower_targets(now[:2, :LEADERS].T), axis=1).max())
+            targets = follower_positions(now[:2].T, leader)
+            error = float(np.linalg.norm(now[:2, ~leader].T - targets, axis=1).max())
             if t + 1 == passes[0][0]:
                 settled_error = error
             if obstacles:
                 deformed_error = max(deformed_error, error)
-            contacts += any(bar.distance(now[:2, i]) < GRITSBOT.radius for bar in obstacles for i in range(n))
+            contacts += bool(obstacles) and bool(_touching(obstacles, now[:2].T).any())
             if trace:
                 poses.append(now)
             if progress is not None:
                 progress(t + 1, cap)
             if record is not None:
+                goals = np.zeros((n, 2))
+                goals[leader] = [r.goal for r in robots if isinstance(r, Leader)]
+                goals[~leader] = targets
                 record(Frame(
                     t + 1, sim.arena, now,
-                    goals=np.vstack(([r.goal for r in robots[:LEADERS]], follower_targets(now[:2, :LEADERS].T))),
+                    goals=goals,
                     velocities=np.array([r.dxi for r in robots]),
-                    links=np.argwhere(np.triu(WEIGHTS) != 0),
+                    links=np.argwhere(np.triu(weights) != 0),
                     obstacles=[bar.polygon for bar in obstacles],
                     title=f"{NAME}: follower error {error:.3f} m, bar contacts {contacts}",
                 ))
