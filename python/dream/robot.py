@@ -61,6 +61,10 @@ class Robot:
         self.r_wheel = spec.wheel_radius
         self.r_length = spec.base_length
 
+    def update_odom(self, pose: Any) -> None:
+        """Odometry callback: take ``pose`` ``[x, y, theta]`` as the robot's belief of its pose."""
+        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in pose)
+
     @property
     def has_pose(self) -> bool:
         """Whether a sensor has told the robot where it is."""
@@ -158,6 +162,10 @@ class RobotHRVO(Robot):
         self.detections: FloatArray = np.zeros((0, 4))
         self.sidestep = 0  # decisions left stepping aside (see `steer`)
         self.side = 1.0  # 1: to the right, -1: to the left
+
+    def update_sensor(self, detections: Any) -> None:
+        """Movement-sensor callback: keep the latest ``detections`` for :meth:`HRVO`."""
+        self.detections = detections
 
     def HRVO(self, detections: Any, desired_velocity: Any) -> FloatArray:  # noqa: N802 (original name)
         """Choose a collision-free velocity close to ``desired_velocity`` and store it in ``dxi``.

@@ -145,9 +145,6 @@ class Leader(RobotHRVO):
         super().__init__(robot_id, tag, **kwargs)
         self.goal = formation("nominal")[robot_id % 7]
 
-    def update_odom(self, pose: np.ndarray) -> None:
-        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in pose)
-
     def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
         return (self.robot_id, self.pos_x, self.pos_y) if self.has_pose else None
 
@@ -171,12 +168,6 @@ class Follower(RobotHRVO):
         super().__init__(robot_id, tag, **kwargs)
         self.weights = weights[robot_id]
         self.heard: dict[int, np.ndarray] = {}
-
-    def update_odom(self, pose: np.ndarray) -> None:
-        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in pose)
-
-    def update_sensor(self, detections: np.ndarray) -> None:
-        self.detections = detections
 
     def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
         for j, x, y in messages:

@@ -81,12 +81,6 @@ class CircleRobot(RobotHRVO):
         self.change_state = True  # the current goal has not been reached yet
         self.desired_velocity = np.zeros(2)
 
-    def update_odom(self, pose: np.ndarray) -> None:
-        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in pose)
-
-    def update_sensor(self, detections: np.ndarray) -> None:
-        self.detections = detections
-
     def update_radio(self, messages: list[list[int]]) -> list[int]:
         for states in messages:
             self.robot_states = [max(mine, theirs) for mine, theirs in zip(self.robot_states, states)]

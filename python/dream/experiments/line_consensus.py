@@ -87,12 +87,6 @@ class LineRobot(RobotHRVO):
         self.spacing = spacing
         self.target: np.ndarray | None = None
 
-    def update_odom(self, pose: np.ndarray) -> None:
-        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in pose)
-
-    def update_sensor(self, detections: np.ndarray) -> None:
-        self.detections = detections
-
     def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
         if messages:
             xs = [x + (j - self.robot_id) * self.spacing for j, x, _ in messages]

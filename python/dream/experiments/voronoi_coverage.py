@@ -108,9 +108,6 @@ class CoverageRobot(Robot):
         self.centroid: np.ndarray | None = None
         self.cell = np.zeros((0, 2))  # the last cell computed, for drawing
 
-    def update_odom(self, pose: np.ndarray) -> None:
-        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in pose)
-
     def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
         self.others = np.array([(x, y) for _, x, y in messages]).reshape(-1, 2)
         return (self.robot_id, self.pos_x, self.pos_y) if self.has_pose else None
