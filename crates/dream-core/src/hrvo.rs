@@ -15,9 +15,9 @@
 //!
 //! The chosen velocity is the candidate closest to `v_pref` (first in candidate order on ties)
 //! that no neighbour forbids and, with bounds, keeps `position + v` strictly inside; zero if
-//! none does. A free preferred velocity is taken after one test per neighbour; otherwise every
-//! candidate is tested against every half-plane in branch-free loops. The arithmetic matches
-//! the NumPy reference operation by operation.
+//! none does. A free preferred velocity is taken after one test per neighbour; otherwise the
+//! candidates are bucketed by distance and tested band by band, nearest band first. The
+//! arithmetic matches the NumPy reference operation by operation.
 
 use std::f64::consts::TAU;
 
@@ -32,6 +32,8 @@ pub type Vec2 = [f64; 2];
 
 /// Rows below this count run on one thread.
 const PARALLEL_ROBOTS: usize = 256;
+/// Distance bands the candidates are sorted into (see `choose`).
+const BANDS: usize = 24;
 /// Relative tolerance under which `v_A` is equally close to both RVO edges.
 pub const TIE: f64 = 1e-9;
 
@@ -153,11 +155,12 @@ impl Cone {
 struct Scratch {
     cones: Vec<Cone>,
     /// Candidates as columns (x, y), their squared distances to the preferred velocity, and
-    /// whether a neighbour or the arena rules them out.
+    /// their indices grouped by distance band.
     xs: Vec<f64>,
     ys: Vec<f64>,
     distances: Vec<f64>,
-    blocked: Vec<u64>,
+    bands: Vec<u8>,
+    order: Vec<usize>,
 }
 
 /// One robot's HRVO velocity.
@@ -173,7 +176,7 @@ fn choose(
     grid: &[Vec2],
     params: &HrvoParams,
 ) -> Vec2 {
-    let Scratch { cones, xs, ys, distances, blocked } = scratch;
+    let Scratch { cones, xs, ys, distances, bands, order } = scratch;
     cones.clear();
     cones.extend(neighbours.map(|b| Cone::new(velocity, &b, params.safety)));
     let inside = |vx: f64, vy: f64| {
@@ -199,24 +202,52 @@ fn choose(
     }
     xs.extend(grid.iter().map(|v| v[0]));
     ys.extend(grid.iter().map(|v| v[1]));
-    // Every candidate against every half-plane, without branches (the loops vectorise), then
-    // the nearest candidate left (first in order on ties).
+    // Candidates in rings of distance to the preferred velocity (a counting sort into BANDS
+    // bands); the nearest valid candidate of the first band that has one is the answer, since
+    // every later band is farther. Most robots stop in the first band or two.
     distances.clear();
     distances.extend(xs.iter().zip(ys.iter()).map(|(&x, &y)| {
         let (dx, dy) = (x - px, y - py);
         dx * dx + dy * dy
     }));
-    blocked.clear();
-    blocked.extend(xs.iter().zip(ys.iter()).map(|(&x, &y)| u64::from(!inside(x, y))));
-    for cone in cones.iter() {
-        for ((b, &x), &y) in blocked.iter_mut().zip(xs.iter()).zip(ys.iter()) {
-            *b |= u64::from(cone.forbids(x, y));
-        }
+    let farthest = distances.iter().copied().fold(0.0, f64::max);
+    // d * scale < BANDS for every d <= farthest; the float-to-int cast saturates anyway.
+    let scale = if farthest > 0.0 { (BANDS as f64 - 0.5) / farthest } else { 0.0 };
+    bands.clear();
+    bands.extend(distances.iter().map(|&d| (d * scale) as u8));
+    let mut starts = [0_usize; BANDS + 1];
+    for &b in bands.iter() {
+        starts[usize::from(b) + 1] += 1;
     }
+    for b in 0..BANDS {
+        starts[b + 1] += starts[b];
+    }
+    let mut fill = starts;
+    order.clear();
+    order.resize(distances.len(), 0);
+    for (k, &b) in bands.iter().enumerate() {
+        order[fill[usize::from(b)]] = k;
+        fill[usize::from(b)] += 1;
+    }
+    let mut blocker = 0;
     let mut best: Option<(f64, usize)> = None;
-    for (k, (&d, &b)) in distances.iter().zip(blocked.iter()).enumerate() {
-        if b == 0 && best.is_none_or(|(bd, _)| d < bd) {
-            best = Some((d, k));
+    for band in 0..BANDS {
+        for &k in &order[starts[band]..starts[band + 1]] {
+            let (x, y, d) = (xs[k], ys[k], distances[k]);
+            if best.is_some_and(|(bd, _)| d >= bd) || !inside(x, y) {
+                continue;
+            }
+            // The cone that ruled out the last candidate usually rules out the next one too.
+            if cones.get(blocker).is_some_and(|c| c.forbids(x, y)) {
+                continue;
+            }
+            match cones.iter().position(|c| c.forbids(x, y)) {
+                Some(c) => blocker = c,
+                None => best = Some((d, k)),
+            }
+        }
+        if best.is_some() {
+            break;
         }
     }
     best.map_or([0.0, 0.0], |(_, k)| [xs[k], ys[k]])
