@@ -85,6 +85,13 @@ class Robot:
         self.dxu[0] = v
         self.dxu[1] = self.ang_gain * math.atan2(-s * dx + c * dy, v) / (math.pi / 2)
 
+    def command(self, dxu: Any) -> None:
+        """Turn ``dxi`` into this robot's limited unicycle command and write it into column
+        ``robot_id`` of the swarm's command array ``dxu`` ``(2, n)``."""
+        self.dxi_to_dxu()
+        self.actuator_limit()
+        dxu[:, self.robot_id] = self.dxu
+
     def actuator_limit(self) -> None:
         """Keep ``dxu`` within the robot's limits, slowing down rather than turning less.
 

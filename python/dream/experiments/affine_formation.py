@@ -156,9 +156,7 @@ class Leader(RobotHRVO):
             if speed > self.v_max:
                 desired *= self.v_max / speed
         self.HRVO(np.zeros((0, 4)), desired)
-        self.dxi_to_dxu()
-        self.actuator_limit()
-        dxu[:, self.robot_id] = self.dxu
+        self.command(dxu)
 
 
 class Follower(RobotHRVO):
@@ -189,9 +187,7 @@ class Follower(RobotHRVO):
             self.dxi = desired
         else:
             self.steer(self.detections, desired)
-        self.dxi_to_dxu()
-        self.actuator_limit()
-        dxu[:, self.robot_id] = self.dxu
+        self.command(dxu)
 
 
 def schedule() -> list[tuple[int, int, int, str, float]]:

@@ -102,9 +102,7 @@ class CircleRobot(RobotHRVO):
             else:
                 self.desired_velocity = self.v_max * offset / distance
         self.steer(self.detections, self.desired_velocity)
-        self.dxi_to_dxu()
-        self.actuator_limit()
-        dxu[:, self.robot_id] = self.dxu
+        self.command(dxu)
 
 
 def circle_frame(step: int, sim: Any, robots: list[CircleRobot], radio_range: float = 1.0) -> Frame:

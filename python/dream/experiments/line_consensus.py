@@ -101,9 +101,7 @@ class LineRobot(RobotHRVO):
             if speed > self.v_max:
                 desired *= self.v_max / speed
         self.HRVO(self.detections, desired)
-        self.dxi_to_dxu()
-        self.actuator_limit()
-        dxu[:, self.robot_id] = self.dxu
+        self.command(dxu)
 
 
 def run(

@@ -127,9 +127,7 @@ class CoverageRobot(Robot):
             distance = math.hypot(offset[0], offset[1])
             if distance >= ARRIVAL:
                 self.dxi = GAIN * offset * min(1.0, self.v_max / (GAIN * distance))
-        self.dxi_to_dxu()
-        self.actuator_limit()
-        dxu[:, self.robot_id] = self.dxu
+        self.command(dxu)
 
 
 def run(
