@@ -1,6 +1,6 @@
 """End-to-end experiment speed: steps per second, per backend and swarm size.
 
-    python benches/bench_experiments.py
+python benches/bench_experiments.py
 """
 
 from __future__ import annotations
@@ -16,7 +16,10 @@ from dream.specs import RPS
 CASES = [
     ("hrvo-circle n=10, rps, to completion", lambda seed: hrvo_circle.run(n=10, seed=seed, backend="robotarium")),
     ("hrvo-circle n=10, fast, to completion", lambda seed: hrvo_circle.run(n=10, seed=seed, backend="fast")),
-    ("hrvo-circle n=1000, fast, per-robot API, 300 steps", lambda seed: hrvo_circle.run(n=1000, seed=seed, backend="fast", steps=300)),
+    (
+        "hrvo-circle n=1000, fast, per-robot API, 300 steps",
+        lambda seed: hrvo_circle.run(n=1000, seed=seed, backend="fast", steps=300),
+    ),
     ("hrvo-circle n=10000, batch mode, 100 steps", lambda seed: hrvo_circle.run_batch(n=10_000, seed=seed, steps=100)),
 ]
 

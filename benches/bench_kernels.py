@@ -22,7 +22,9 @@ from original_hrvo import original_style_hrvo
 from dream import _core, _reference, backends, kernels
 from dream.specs import RPS, ArenaSpec
 
-WHEELS = dict(diameter=RPS.diameter, wheel_radius=RPS.wheel_radius, base_length=RPS.base_length, max_wheel=RPS.max_wheel)
+WHEELS = dict(
+    diameter=RPS.diameter, wheel_radius=RPS.wheel_radius, base_length=RPS.base_length, max_wheel=RPS.max_wheel
+)
 RANGE = 1.0  #: sensing range (m)
 SPACING = RANGE * math.sqrt(math.pi / 10)  #: lattice spacing for ~10 robots within RANGE
 
@@ -66,7 +68,14 @@ def neighbour_rows(sizes) -> list[list[object]]:
     rows = []
     for n in sizes:
         p = swarm(n)
-        rows.append(row(f"neighbours/n={n}", lambda: _core.neighbours(p, RANGE), lambda: _reference.neighbours(p, RANGE), n <= 10_000))
+        rows.append(
+            row(
+                f"neighbours/n={n}",
+                lambda: _core.neighbours(p, RANGE),
+                lambda: _reference.neighbours(p, RANGE),
+                n <= 10_000,
+            )
+        )
     return rows
 
 
@@ -82,7 +91,19 @@ def hrvo_rows(sizes) -> list[list[object]]:
         pref = 0.2 * np.column_stack((np.cos(angle), np.sin(angle)))
 
         def rust() -> None:
-            _core.hrvo(p, v, pref, None, None, radius=RANGE, safety=0.24, v_max=0.2, bounds=None, candidates=grid, include_preferred=True)
+            _core.hrvo(
+                p,
+                v,
+                pref,
+                None,
+                None,
+                radius=RANGE,
+                safety=0.24,
+                v_max=0.2,
+                bounds=None,
+                candidates=grid,
+                include_preferred=True,
+            )
 
         rows.append(row(f"hrvo/n={n}", rust, lambda: _reference.hrvo(p, v, pref, radius=RANGE), n <= 10_000))
     return rows
@@ -93,20 +114,29 @@ def voronoi_rows(sizes) -> list[list[object]]:
     rows = []
     for n in sizes:
         p = swarm(n)
-        box = (float(p[:, 0].min()) - 0.2, float(p[:, 0].max()) + 0.2, float(p[:, 1].min()) - 0.2, float(p[:, 1].max()) + 0.2)
-        rows.append(row(
-            f"voronoi/n={n}",
-            lambda: _core.voronoi_cells(p, radius=0.5, bounds=box),
-            lambda: _reference.voronoi_cells(p, radius=0.5, bounds=box),
-            n <= 1_000,
-        ))
+        box = (
+            float(p[:, 0].min()) - 0.2,
+            float(p[:, 0].max()) + 0.2,
+            float(p[:, 1].min()) - 0.2,
+            float(p[:, 1].max()) + 0.2,
+        )
+        rows.append(
+            row(
+                f"voronoi/n={n}",
+                lambda: _core.voronoi_cells(p, radius=0.5, bounds=box),
+                lambda: _reference.voronoi_cells(p, radius=0.5, bounds=box),
+                n <= 1_000,
+            )
+        )
     return rows
 
 
 def per_robot_rows() -> list[list[object]]:
     """One robot's HRVO call with 9 neighbours: DREAM's per-robot API against the prototype's loops."""
     rng = np.random.default_rng(3)
-    detections = np.column_stack((rng.uniform(0.2, 1.0, 9), rng.uniform(-np.pi, np.pi, 9), rng.uniform(-0.2, 0.2, (9, 2))))
+    detections = np.column_stack(
+        (rng.uniform(0.2, 1.0, 9), rng.uniform(-np.pi, np.pi, 9), rng.uniform(-0.2, 0.2, (9, 2)))
+    )
     velocity, desired, position = np.array([0.1, 0.05]), np.array([0.2, 0.0]), np.array([0.3, -0.2])
     bounds = (-1.545, 1.545, -0.945, 0.945)
     planner = kernels.HrvoPlanner(bounds=bounds)

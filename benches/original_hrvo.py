@@ -21,7 +21,9 @@ def original_style_hrvo(detections, velocity, desired, position, bounds, safety=
         edges = []
         for apex in ((vx, vy), ((vx + velocity[0]) / 2, (vy + velocity[1]) / 2)):
             line_l = np.array([-math.sin(left), math.cos(left), math.sin(left) * apex[0] - math.cos(left) * apex[1]])
-            line_r = np.array([-math.sin(right), math.cos(right), math.sin(right) * apex[0] - math.cos(right) * apex[1]])
+            line_r = np.array(
+                [-math.sin(right), math.cos(right), math.sin(right) * apex[0] - math.cos(right) * apex[1]]
+            )
             edges.append((line_l, line_r))
         (vo_l, vo_r), (rvo_l, rvo_r) = edges
         to_l = abs(rvo_l[0] * velocity[0] + rvo_l[1] * velocity[1] + rvo_l[2])
@@ -30,7 +32,9 @@ def original_style_hrvo(detections, velocity, desired, position, bounds, safety=
         line_r = rvo_r if to_l > to_r else vo_r
         rows.append((np.array([-line_l[:2], line_r[:2]]), np.array([line_l[2], -line_r[2]])))
     speeds, angles = np.meshgrid(np.linspace(0.0, v_max, 10), np.linspace(0, 2 * np.pi, 20))
-    samples = np.vstack((np.append((speeds * np.cos(angles)).ravel(), 0), np.append((speeds * np.sin(angles)).ravel(), 0)))
+    samples = np.vstack(
+        (np.append((speeds * np.cos(angles)).ravel(), 0), np.append((speeds * np.sin(angles)).ravel(), 0))
+    )
     for matrix, vector in rows:
         kept = []
         for k in range(samples.shape[1]):

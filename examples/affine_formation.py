@@ -14,7 +14,16 @@ import numpy as np
 from dream import *  # the original names: Odometry_sensor, Movement_sensor, create_timer, ...
 from dream import GraphRadio, make_robotarium, reset_default_world
 from dream.experiments.affine_formation import (
-    LEADERS, RECOVER, SAFETY, WEIGHTS, Follower, Leader, bars, corner_starts, formation, schedule,
+    LEADERS,
+    RECOVER,
+    SAFETY,
+    WEIGHTS,
+    Follower,
+    Leader,
+    bars,
+    corner_starts,
+    formation,
+    schedule,
 )
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])

@@ -36,12 +36,16 @@ for i in range(N):
     mov = Movement_sensor(i, f"movement_{i}", rob.update_sensor)
     rad = Radio_range(i, f"radio_{i}", rob.update_radio)
     # Sense first, then talk, then act: a robot never commands from an unknown pose.
-    create_timer(i, 20 + i % 10, [
-        {"delay": 2 + i % 2, "tag": "odom", "call": odo.update},
-        {"delay": 3 + i % 2, "tag": "movement", "call": mov.update},
-        {"delay": 30, "tag": "radio", "call": rad.update},
-        {"delay": 4 + i % 2, "tag": "robot", "call": rob.update},
-    ])
+    create_timer(
+        i,
+        20 + i % 10,
+        [
+            {"delay": 2 + i % 2, "tag": "odom", "call": odo.update},
+            {"delay": 3 + i % 2, "tag": "movement", "call": mov.update},
+            {"delay": 30, "tag": "radio", "call": rad.update},
+            {"delay": 4 + i % 2, "tag": "robot", "call": rob.update},
+        ],
+    )
     robots.append(rob)
 
 dxu = np.zeros((2, N))

@@ -31,12 +31,16 @@ for i in range(N):
     odo = Odometry_sensor(i, f"odom_{i}", rob.update_odom)
     mov = Movement_sensor(i, f"movement_{i}", rob.update_sensor)
     rad = GraphRadio(i, f"radio_{i}", rob.update_radio, adjacency)
-    create_timer(i, 10 + i % 3, [
-        {"delay": 2, "tag": "odom", "call": odo.update},
-        {"delay": 3, "tag": "movement", "call": mov.update},
-        {"delay": 10, "tag": "radio", "call": rad.update},
-        {"delay": 4, "tag": "robot", "call": rob.update},
-    ])
+    create_timer(
+        i,
+        10 + i % 3,
+        [
+            {"delay": 2, "tag": "odom", "call": odo.update},
+            {"delay": 3, "tag": "movement", "call": mov.update},
+            {"delay": 10, "tag": "radio", "call": rad.update},
+            {"delay": 4, "tag": "robot", "call": rob.update},
+        ],
+    )
 
 dxu = np.zeros((2, N))
 for t in range(args.steps):

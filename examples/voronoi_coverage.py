@@ -34,12 +34,16 @@ for i in range(N):
     odo = Odometry_sensor(i, f"odom_{i}", rob.update_odom)
     obs = ObstacleSensor(i, f"obstacles_{i}", rob.update_obstacles, obstacles, range=CELL_RADIUS)
     rad = Radio_range(i, f"radio_{i}", rob.update_radio, range=2 * CELL_RADIUS)
-    create_timer(i, 10 + i % 5, [
-        {"delay": 2, "tag": "odom", "call": odo.update},
-        {"delay": 3, "tag": "obstacles", "call": obs.update},
-        {"delay": 5, "tag": "radio", "call": rad.update},
-        {"delay": 5, "tag": "robot", "call": rob.update},
-    ])
+    create_timer(
+        i,
+        10 + i % 5,
+        [
+            {"delay": 2, "tag": "odom", "call": odo.update},
+            {"delay": 3, "tag": "obstacles", "call": obs.update},
+            {"delay": 5, "tag": "radio", "call": rad.update},
+            {"delay": 5, "tag": "robot", "call": rob.update},
+        ],
+    )
 
 dxu = np.zeros((2, N))
 for t in range(args.steps):

@@ -88,7 +88,9 @@ def hrvo(
 class HrvoPlanner:
     """One robot's HRVO parameters and candidate grid (m, 2)."""
 
-    def __new__(cls, candidates: _Floats, *, safety: float, v_max: float, bounds: _Bounds | None, include_preferred: bool) -> HrvoPlanner: ...
+    def __new__(
+        cls, candidates: _Floats, *, safety: float, v_max: float, bounds: _Bounds | None, include_preferred: bool
+    ) -> HrvoPlanner: ...
     def velocity(self, detections: _Floats, velocity: _Floats, preferred: _Floats, position: _Floats) -> _Floats:
         """Velocity (2,) for seed-format detections (k, 4) [distance, angle, vx, vy]."""
 
@@ -103,7 +105,9 @@ def voronoi_cells(
 ) -> tuple[_Floats, _Floats, _Floats, _Ints]:
     """(centroids (n, 2), areas (n,), vertices (m, 2), offsets (n+1,)) of disc-bounded Voronoi cells."""
 
-def virtual_agents(positions: _Floats, vertices: _Floats, offsets: _Ints, *, range: float, offset: float) -> tuple[_Ints, _Floats]:
+def virtual_agents(
+    positions: _Floats, vertices: _Floats, offsets: _Ints, *, range: float, offset: float
+) -> tuple[_Ints, _Floats]:
     """CSR (indptr (n+1,), points (m, 2)) of every robot's virtual agents for convex obstacles."""
 
 def voronoi_cell(

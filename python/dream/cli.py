@@ -1,9 +1,9 @@
 """The ``dream`` command: list and run the reference experiments, record them, benchmark.
 
-    dream list
-    dream run hrvo-circle -n 10 --seed 0 --backend auto --json metrics.json
-    dream run voronoi-coverage --video coverage.mp4 --every 2     # or .gif; --show for a window
-    dream bench                                                   # the repository's benches/
+dream list
+dream run hrvo-circle -n 10 --seed 0 --backend auto --json metrics.json
+dream run voronoi-coverage --video coverage.mp4 --every 2     # or .gif; --show for a window
+dream bench                                                   # the repository's benches/
 """
 
 from __future__ import annotations
@@ -46,9 +46,16 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     run.add_argument("--video", metavar="PATH", help="record the run to a video: .gif (Pillow) or .mp4 (H.264)")
     run.add_argument("--show", action="store_true", help="show the run in a live window")
-    run.add_argument("--every", metavar="K", type=_positive_int, default=1,
-                     help="draw one step in K into the video/window (default: 1, every step)")
-    bench = commands.add_parser("bench", help="run the benchmarks of the repository's benches/ (needs a source checkout)")
+    run.add_argument(
+        "--every",
+        metavar="K",
+        type=_positive_int,
+        default=1,
+        help="draw one step in K into the video/window (default: 1, every step)",
+    )
+    bench = commands.add_parser(
+        "bench", help="run the benchmarks of the repository's benches/ (needs a source checkout)"
+    )
     bench.add_argument("--full", action="store_true", help="all kernel sizes (minutes) instead of --quick")
     return parser
 
@@ -77,8 +84,11 @@ def _bench(full: bool) -> int:
     scripts = [(benches / "bench_kernels.py", [] if full else ["--quick"]), (benches / "bench_experiments.py", [])]
     missing = [str(script) for script, _ in scripts if not script.is_file()]
     if missing:
-        print(f"dream: error: no benchmarks at {benches} (missing {', '.join(missing)}); `dream bench` runs the "
-              "benchmarks of a source checkout: run it from the repository's top folder", file=sys.stderr)
+        print(
+            f"dream: error: no benchmarks at {benches} (missing {', '.join(missing)}); `dream bench` runs the "
+            "benchmarks of a source checkout: run it from the repository's top folder",
+            file=sys.stderr,
+        )
         return 2
     for script, flags in scripts:
         print(f"$ python {script.name} {' '.join(flags)}".rstrip(), flush=True)

@@ -83,7 +83,9 @@ def validate(poses: Any, velocities: Any, arena: ArenaSpec = ROBOTARIUM, sim: Si
     """
     p = as_poses(poses)
     u = _commands(velocities, "velocities", p.shape[1])
-    wheels = dict(diameter=sim.diameter, wheel_radius=sim.wheel_radius, base_length=sim.base_length, max_wheel=sim.max_wheel)
+    wheels = dict(
+        diameter=sim.diameter, wheel_radius=sim.wheel_radius, base_length=sim.base_length, max_wheel=sim.max_wheel
+    )
     if _core is None:
         return Violations(*_reference.validate(p, u, arena.bounds, **wheels))
     return Violations(*_core.validate(p, u, arena.bounds, **wheels))
@@ -185,7 +187,9 @@ def _checked_bounds(bounds: Any) -> Bounds | None:
         return None
     values = tuple(float(b) for b in bounds)
     if len(values) != 4 or not all(np.isfinite(values)) or values[0] >= values[1] or values[2] >= values[3]:
-        raise ValueError(f"`bounds` must be finite (xmin, xmax, ymin, ymax) with xmin < xmax and ymin < ymax, got {bounds}")
+        raise ValueError(
+            f"`bounds` must be finite (xmin, xmax, ymin, ymax) with xmin < xmax and ymin < ymax, got {bounds}"
+        )
     return values  # type: ignore[return-value]
 
 
@@ -223,7 +227,9 @@ class HrvoPlanner:
                 self.candidates, safety=safety, v_max=v_max, bounds=self.bounds, include_preferred=include_preferred
             )
 
-    def velocity(self, detections: FloatArray, velocity: FloatArray, preferred: FloatArray, position: FloatArray) -> FloatArray:
+    def velocity(
+        self, detections: FloatArray, velocity: FloatArray, preferred: FloatArray, position: FloatArray
+    ) -> FloatArray:
         """The chosen velocity ``(2,)``.
 
         ``detections`` ``(k, 4)`` are movement-sensor rows ``[distance, angle, vx, vy]`` (angle
@@ -234,9 +240,17 @@ class HrvoPlanner:
         if self._rust is not None:
             return self._rust.velocity(detections, velocity, preferred, position)
         return _reference.hrvo_velocity(
-            velocity, preferred, _reference.detection_directions(detections), detections[:, 0], detections[:, 2:4],
-            safety=self.safety, v_max=self.v_max, position=position, bounds=self.bounds,
-            candidates=self.candidates, include_preferred=self.include_preferred,
+            velocity,
+            preferred,
+            _reference.detection_directions(detections),
+            detections[:, 0],
+            detections[:, 2:4],
+            safety=self.safety,
+            v_max=self.v_max,
+            position=position,
+            bounds=self.bounds,
+            candidates=self.candidates,
+            include_preferred=self.include_preferred,
         )
 
 
@@ -290,13 +304,31 @@ def hrvo(
     csr = None if neighbours is None else _checked_csr(neighbours, n)
     if _core is None:
         return _reference.hrvo(
-            p, v, pref, csr, radius=radius, safety=safety, v_max=v_max, bounds=box,
-            n_angles=n_angles, n_speeds=n_speeds, include_preferred=include_preferred,
+            p,
+            v,
+            pref,
+            csr,
+            radius=radius,
+            safety=safety,
+            v_max=v_max,
+            bounds=box,
+            n_angles=n_angles,
+            n_speeds=n_speeds,
+            include_preferred=include_preferred,
         )
     indptr, indices = (None, None) if csr is None else csr
     return _core.hrvo(
-        p, v, pref, indptr, indices, radius=radius, safety=safety, v_max=v_max, bounds=box,
-        candidates=grid, include_preferred=include_preferred,
+        p,
+        v,
+        pref,
+        indptr,
+        indices,
+        radius=radius,
+        safety=safety,
+        v_max=v_max,
+        bounds=box,
+        candidates=grid,
+        include_preferred=include_preferred,
     )
 
 
@@ -359,7 +391,9 @@ def voronoi_cells(
             raise ValueError(f"`virtual` indptr must be non-decreasing of shape ({n + 1},) from 0 to len(points)")
         agents = (indptr, points)
     if _core is None:
-        centroids, areas, vertices, offsets = _reference.voronoi_cells(p, radius=radius, bounds=box, virtual=agents, resolution=resolution)
+        centroids, areas, vertices, offsets = _reference.voronoi_cells(
+            p, radius=radius, bounds=box, virtual=agents, resolution=resolution
+        )
     else:
         vi, vp = (None, None) if agents is None else agents
         centroids, areas, vertices, offsets = _core.voronoi_cells(
@@ -418,7 +452,11 @@ def obstacle_agents(
     senses (an :class:`~dream.sensors.ObstacleSensor` reading); see :func:`virtual_agents`."""
     p = as_array(position, "position", (2,))
     c = as_array(closest_points, "closest_points", (None, 2))
-    offset = 0.0 if mirror_at_surface else check_nonnegative(robot_radius, "robot_radius") + check_nonnegative(margin, "margin")
+    offset = (
+        0.0
+        if mirror_at_surface
+        else check_nonnegative(robot_radius, "robot_radius") + check_nonnegative(margin, "margin")
+    )
     return _reference.agents_from_closest(p, c, offset)
 
 
@@ -461,10 +499,20 @@ def virtual_agents(
     p = as_array(positions, "positions", (None, 2))
     vertices = as_array(obstacles[0], "obstacle vertices", (None, 2))
     offsets = np.ascontiguousarray(obstacles[1], dtype=np.int64)
-    if offsets.ndim != 1 or len(offsets) < 1 or offsets[0] != 0 or np.any(np.diff(offsets) < 0) or offsets[-1] != len(vertices):
+    if (
+        offsets.ndim != 1
+        or len(offsets) < 1
+        or offsets[0] != 0
+        or np.any(np.diff(offsets) < 0)
+        or offsets[-1] != len(vertices)
+    ):
         raise ValueError("obstacle `offsets` must be non-decreasing from 0 to the number of vertices")
     check_nonnegative(range, "range")
-    offset = 0.0 if mirror_at_surface else check_nonnegative(robot_radius, "robot_radius") + check_nonnegative(margin, "margin")
+    offset = (
+        0.0
+        if mirror_at_surface
+        else check_nonnegative(robot_radius, "robot_radius") + check_nonnegative(margin, "margin")
+    )
     if _core is None:
         return _reference.virtual_agents(p, vertices, offsets, range=range, offset=offset)
     return _core.virtual_agents(p, vertices, offsets, range=range, offset=offset)

@@ -41,7 +41,13 @@ class Robot:
     """
 
     def __init__(
-        self, robot_id: int, tag: str = "robot", vel_gain: float = 0.8, ang_gain: float = 3.0, *, spec: RobotSpec = GRITSBOT
+        self,
+        robot_id: int,
+        tag: str = "robot",
+        vel_gain: float = 0.8,
+        ang_gain: float = 3.0,
+        *,
+        spec: RobotSpec = GRITSBOT,
     ) -> None:
         if isinstance(robot_id, bool) or not isinstance(robot_id, (int, np.integer)) or robot_id < 0:
             raise ValueError(f"robot_id must be an integer >= 0, got {robot_id!r}")
@@ -199,7 +205,9 @@ class RobotHRVO(Robot):
         d = np.zeros((0, 4)) if empty else as_array(detections, "detections", (None, 4))
         preferred = as_array(desired_velocity, "desired_velocity", (2,))
         planner = self.planner if self.check_boundaries else self._free_planner
-        self.dxi = planner.velocity(d, np.asarray(self.dxi, dtype=np.float64), preferred, np.array([self.pos_x, self.pos_y]))
+        self.dxi = planner.velocity(
+            d, np.asarray(self.dxi, dtype=np.float64), preferred, np.array([self.pos_x, self.pos_y])
+        )
         return self.dxi
 
     def steer(self, detections: Any, desired_velocity: Any, sidestep_updates: int = 10) -> FloatArray:

@@ -168,6 +168,10 @@ class ObstacleSensor(Sensor):
         """Measure from the attached robot's pose in ``x`` ``(3, n)`` and call the callback."""
         super().update(x)
         here = np.array([self.pos_x, self.pos_y])
-        found = [c for c in (o.closest_point(here) for o in self.obstacles) if c is not None and np.hypot(*(c - here)) <= self.range]
+        found = [
+            c
+            for c in (o.closest_point(here) for o in self.obstacles)
+            if c is not None and np.hypot(*(c - here)) <= self.range
+        ]
         self.ret = self.add_noise(np.array(found).reshape(-1, 2), self.noise)
         self.callback(self.ret)

@@ -52,7 +52,9 @@ class Timer:
         if missing:
             raise KeyError(f"{where}: missing key(s) {', '.join(map(repr, missing))}")
         if not callable(spec["call"]):
-            raise TypeError(f"{where} (tag {spec['tag']!r}): 'call' must be callable, got {type(spec['call']).__name__}")
+            raise TypeError(
+                f"{where} (tag {spec['tag']!r}): 'call' must be callable, got {type(spec['call']).__name__}"
+            )
         return _Entry(_steps(spec["delay"], f"{where} (tag {spec['tag']!r}): 'delay'"), spec["tag"], spec["call"])
 
     def update(self, current_time: float, param: Mapping[str, Sequence[Any]]) -> None:
@@ -68,7 +70,9 @@ class Timer:
     def _arguments(self, tag: str, param: Mapping[str, Sequence[Any]]) -> Sequence[Any]:
         if tag not in param:
             given = ", ".join(map(repr, param)) or "none"
-            raise KeyError(f"timer of robot {self.robot_id}: tag {tag!r} is not in the params dict (tags given: {given})")
+            raise KeyError(
+                f"timer of robot {self.robot_id}: tag {tag!r} is not in the params dict (tags given: {given})"
+            )
         args = param[tag]
         if not isinstance(args, (tuple, list)):
             raise TypeError(

@@ -86,8 +86,9 @@ class Renderer:
         Add your own artists here; :meth:`draw` only updates its own.
     """
 
-    def __init__(self, arena: ArenaSpec, *, figsize: tuple[float, float] = (6.4, 4.0), dpi: int = 100,
-                 live: bool = False) -> None:
+    def __init__(
+        self, arena: ArenaSpec, *, figsize: tuple[float, float] = (6.4, 4.0), dpi: int = 100, live: bool = False
+    ) -> None:
         # matplotlib is imported here, not with the module: `import dream.viz` stays cheap.
         from matplotlib.collections import EllipseCollection, LineCollection, PolyCollection
         from matplotlib.patches import Rectangle
@@ -109,18 +110,36 @@ class Renderer:
         ax.set_xlabel("x (m)", fontsize=8)
         ax.set_ylabel("y (m)", fontsize=8)
         ax.tick_params(labelsize=7)
-        self._arena_patch = Rectangle((arena.xmin, arena.ymin), arena.width, arena.height,
-                                      fill=False, edgecolor="black", linewidth=1.0, zorder=0.5)
+        self._arena_patch = Rectangle(
+            (arena.xmin, arena.ymin),
+            arena.width,
+            arena.height,
+            fill=False,
+            edgecolor="black",
+            linewidth=1.0,
+            zorder=0.5,
+        )
         ax.add_patch(self._arena_patch)
         self._set_limits(arena)
 
         # zorder: cells < obstacles < links < goals < robots < headings < velocities
         self._cells = PolyCollection([], facecolors="none", edgecolors="0.5", linewidths=0.6, zorder=1)
-        self._obstacles = PolyCollection([], facecolors=OBSTACLE_COLOUR, edgecolors=OBSTACLE_COLOUR, linewidths=0.5, zorder=2)
+        self._obstacles = PolyCollection(
+            [], facecolors=OBSTACLE_COLOUR, edgecolors=OBSTACLE_COLOUR, linewidths=0.5, zorder=2
+        )
         self._links = LineCollection([], colors=LINK_COLOUR, linewidths=0.5, zorder=3)
         self._goals = ax.scatter([], [], marker="x", s=25, linewidths=1.2, zorder=4)
-        self._robots = EllipseCollection(ROBOT_DIAMETER, ROBOT_DIAMETER, 0.0, units="xy", offsets=np.empty((0, 2)),
-                                         offset_transform=ax.transData, edgecolors="black", linewidths=0.6, zorder=5)
+        self._robots = EllipseCollection(
+            ROBOT_DIAMETER,
+            ROBOT_DIAMETER,
+            0.0,
+            units="xy",
+            offsets=np.empty((0, 2)),
+            offset_transform=ax.transData,
+            edgecolors="black",
+            linewidths=0.6,
+            zorder=5,
+        )
         self._headings = LineCollection([], colors="black", linewidths=1.0, zorder=6)
         self._velocities = LineCollection([], linewidths=1.5, zorder=7, capstyle="round")
         for artist in (self._cells, self._obstacles, self._links, self._robots, self._headings, self._velocities):
@@ -130,8 +149,16 @@ class Renderer:
         self.figure.tight_layout()
         # Headless, the frame's artists are "animated": drawn over a cached image of the rest
         # (axes, ticks, arena), which is redrawn only when something else changed.
-        self._dynamic = [self._cells, self._obstacles, self._links, self._goals, self._robots, self._headings,
-                         self._velocities, ax.title]
+        self._dynamic = [
+            self._cells,
+            self._obstacles,
+            self._links,
+            self._goals,
+            self._robots,
+            self._headings,
+            self._velocities,
+            ax.title,
+        ]
         self._blit = not live
         if self._blit:
             for artist in self._dynamic:
@@ -286,7 +313,9 @@ class VideoWriter:
         if self._size is None:
             self._size = (width, height)
         elif self._size != (width, height):
-            raise ValueError(f"image is {width}x{height} pixels, but this video's frames are {self._size[0]}x{self._size[1]}")
+            raise ValueError(
+                f"image is {width}x{height} pixels, but this video's frames are {self._size[0]}x{self._size[1]}"
+            )
         if self.format == ".gif":
             self._add_gif(image)
         else:
@@ -309,14 +338,18 @@ class VideoWriter:
             changed = (image != self._previous).reshape(height, width * 3)
             rows = np.flatnonzero(changed.any(axis=1))
             if rows.size:
-                columns = np.flatnonzero(changed[rows[0]:rows[-1] + 1].any(axis=0)) // 3  # byte -> pixel
+                columns = np.flatnonzero(changed[rows[0] : rows[-1] + 1].any(axis=0)) // 3  # byte -> pixel
                 top, bottom, left, right = rows[0], rows[-1] + 1, columns[0], columns[-1] + 1
             else:  # identical: one unchanged pixel keeps the frame (and its delay) in the file
                 top, bottom, left, right = 0, 1, 0, 1
-            frame = Image.fromarray(np.ascontiguousarray(image[top:bottom, left:right])).quantize(256, method=_FAST_OCTREE)
+            frame = Image.fromarray(np.ascontiguousarray(image[top:bottom, left:right])).quantize(
+                256, method=_FAST_OCTREE
+            )
             offset = (int(left), int(top))
         # disposal 1: leave the frame in place, the next one draws over it
-        self._file.writelines(GifImagePlugin.getdata(frame, offset, duration=delay, disposal=1, include_color_table=True))
+        self._file.writelines(
+            GifImagePlugin.getdata(frame, offset, duration=delay, disposal=1, include_color_table=True)
+        )
         self._previous = image.copy()
 
     def _add_mp4(self, image: np.ndarray) -> None:
@@ -327,8 +360,12 @@ class VideoWriter:
             import imageio_ffmpeg
 
             self._ffmpeg = imageio_ffmpeg.write_frames(
-                str(self.path), (image.shape[1], image.shape[0]), fps=self.fps, codec="libx264",
-                macro_block_size=2, ffmpeg_log_level="error",
+                str(self.path),
+                (image.shape[1], image.shape[0]),
+                fps=self.fps,
+                codec="libx264",
+                macro_block_size=2,
+                ffmpeg_log_level="error",
             )
             self._ffmpeg.send(None)  # start ffmpeg
         self._ffmpeg.send(np.ascontiguousarray(image).tobytes())
@@ -411,8 +448,16 @@ class Recorder:
     writer : VideoWriter or None
     """
 
-    def __init__(self, *, video: str | os.PathLike[str] | None = None, show: bool = False, every: int = 1,
-                 fps: float = 30, figsize: tuple[float, float] = (6.4, 4.0), dpi: int = 100) -> None:
+    def __init__(
+        self,
+        *,
+        video: str | os.PathLike[str] | None = None,
+        show: bool = False,
+        every: int = 1,
+        fps: float = 30,
+        figsize: tuple[float, float] = (6.4, 4.0),
+        dpi: int = 100,
+    ) -> None:
         if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
             raise ValueError(f"every must be an integer >= 1, got {every!r}")
         self.every = int(every)
@@ -458,8 +503,11 @@ class Recorder:
             if not self._interactive:
                 import matplotlib
 
-                warnings.warn(f"no live window: matplotlib backend {matplotlib.get_backend()!r} is not interactive "
-                              "(no display?)", RuntimeWarning, stacklevel=3)
+                warnings.warn(
+                    f"no live window: matplotlib backend {matplotlib.get_backend()!r} is not interactive (no display?)",
+                    RuntimeWarning,
+                    stacklevel=3,
+                )
         else:
             self.renderer = Renderer(arena, figsize=self.figsize, dpi=self.dpi)
 

@@ -86,7 +86,13 @@ def test_robot_actuator_limit_uses_the_robot_spec():
 
 def test_robot_has_the_gritsbot_limits():
     robot = Robot(0)
-    assert (robot.v_max, robot.w_max, robot.ac_max, robot.r_wheel, robot.r_length) == (0.2, 3.636363, 12.5, 0.016, 0.105)
+    assert (robot.v_max, robot.w_max, robot.ac_max, robot.r_wheel, robot.r_length) == (
+        0.2,
+        3.636363,
+        12.5,
+        0.016,
+        0.105,
+    )
     assert robot.dxi.shape == robot.dxu.shape == (2,)
 
 

@@ -88,7 +88,9 @@ def test_make_robotarium_uses_given_initial_conditions(backend):
 
 
 # -- seeded initial poses -------------------------------------------------------------------------
-@pytest.mark.parametrize(("n", "arena"), [(1, None), (10, None), (50, None), (84, None), (300, ArenaSpec.centred(12.0, 8.0))])
+@pytest.mark.parametrize(
+    ("n", "arena"), [(1, None), (10, None), (50, None), (84, None), (300, ArenaSpec.centred(12.0, 8.0))]
+)
 def test_make_robotarium_seeded_poses_are_reproducible_inside_and_spaced(n, arena):
     first = make_robotarium(n, arena=arena, seed=42).get_poses()
     again = make_robotarium(n, arena=arena, seed=42).get_poses()
@@ -187,7 +189,9 @@ def test_set_velocities_on_a_subset_keeps_the_others(backend):
 def test_set_velocities_clips_commands_beyond_the_limits(backend):
     commands = np.array([[1.0, -0.25, 0.1], [10.0, 0.5, -4.0]])
     backend.set_velocities(np.arange(3), commands)
-    assert_allclose(backend.velocities, [[0.2, -0.2, 0.1], [RPS_MAX_ANGULAR, 0.5, -RPS_MAX_ANGULAR]], rtol=0, atol=1e-15)
+    assert_allclose(
+        backend.velocities, [[0.2, -0.2, 0.1], [RPS_MAX_ANGULAR, 0.5, -RPS_MAX_ANGULAR]], rtol=0, atol=1e-15
+    )
     assert_array_equal(commands, [[1.0, -0.25, 0.1], [10.0, 0.5, -4.0]])  # the caller's array is untouched
     start = backend.get_poses()
     backend.step()

@@ -13,7 +13,9 @@ KEYS = ("boundary", "collision", "actuator")
 
 
 def new_rps(poses):
-    return Rps(number_of_robots=poses.shape[1], show_figure=False, sim_in_real_time=False, initial_conditions=poses.copy())
+    return Rps(
+        number_of_robots=poses.shape[1], show_figure=False, sim_in_real_time=False, initial_conditions=poses.copy()
+    )
 
 
 def wrapped(angles):

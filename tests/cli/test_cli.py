@@ -36,11 +36,16 @@ def test_cli_run_reports_bad_input_without_traceback(capsys):
     assert "at most 50" in err and "Traceback" not in err
 
 
-@pytest.mark.parametrize("script", ["hrvo_circle.py", "line_consensus.py", "voronoi_coverage.py", "affine_formation.py"])
+@pytest.mark.parametrize(
+    "script", ["hrvo_circle.py", "line_consensus.py", "voronoi_coverage.py", "affine_formation.py"]
+)
 def test_example_script_runs(script):
     done = subprocess.run(
         [sys.executable, str(ROOT / "examples" / script), "--steps", "120", "--backend", "fast"],
-        capture_output=True, text=True, timeout=120, check=False,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
     )
     assert done.returncode == 0, done.stderr
     assert "120 iterations" in done.stdout

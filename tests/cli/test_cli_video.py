@@ -72,7 +72,20 @@ def test_cli_rejects_video_in_missing_directory(tmp_path, capsys, fake):
 
 def test_cli_run_records_every_kth_step_to_gif(tmp_path, capsys, fake):
     path, metrics = tmp_path / "out.gif", tmp_path / "metrics.json"
-    argv = ["run", "hrvo-circle", "-n", "3", "--steps", "10", "--video", str(path), "--every", "4", "--json", str(metrics)]
+    argv = [
+        "run",
+        "hrvo-circle",
+        "-n",
+        "3",
+        "--steps",
+        "10",
+        "--video",
+        str(path),
+        "--every",
+        "4",
+        "--json",
+        str(metrics),
+    ]
     assert main(argv) == 0
     out = capsys.readouterr().out
     assert f"video: {path} (3 frames, one step in 4)" in out  # steps 1, 5, 9

@@ -11,14 +11,30 @@ from PIL import Image
 from dream.cli import main
 
 
-@pytest.mark.parametrize(("name", "suffix", "every", "frames"), [
-    ("line-consensus", ".gif", 1, 30),
-    ("voronoi-coverage", ".mp4", 3, 10),
-    ("affine-formation", ".gif", 5, 6),
-])
+@pytest.mark.parametrize(
+    ("name", "suffix", "every", "frames"),
+    [
+        ("line-consensus", ".gif", 1, 30),
+        ("voronoi-coverage", ".mp4", 3, 10),
+        ("affine-formation", ".gif", 5, 6),
+    ],
+)
 def test_cli_video_has_one_frame_per_rendered_step(tmp_path, capsys, name, suffix, every, frames):
     video, metrics = tmp_path / f"run{suffix}", tmp_path / "metrics.json"
-    args = ["run", name, "--steps", "30", "--backend", "fast", "--video", str(video), "--every", str(every), "--json", str(metrics)]
+    args = [
+        "run",
+        name,
+        "--steps",
+        "30",
+        "--backend",
+        "fast",
+        "--video",
+        str(video),
+        "--every",
+        str(every),
+        "--json",
+        str(metrics),
+    ]
     assert main(args) == 0
     assert json.loads(metrics.read_text())["steps"] == 30
     if suffix == ".gif":

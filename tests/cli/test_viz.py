@@ -27,8 +27,17 @@ def make_frame(n: int = 4, step: int = 0, shift: float = 0.0, **overrides) -> Fr
     velocities = np.tile([0.0, -0.2], (n, 1))
     links = np.array([(i, i + 1) for i in range(n - 1)], dtype=np.int64).reshape(-1, 2)
     cells = [np.array([[xi - 0.1, 0.4], [xi + 0.1, 0.4], [xi + 0.1, 0.8], [xi - 0.1, 0.8]]) for xi in poses[0]]
-    fields = dict(step=step, arena=ROBOTARIUM, poses=poses, goals=goals, velocities=velocities, links=links,
-                  obstacles=[OBSTACLE], cells=cells, title="collisions 0")
+    fields = dict(
+        step=step,
+        arena=ROBOTARIUM,
+        poses=poses,
+        goals=goals,
+        velocities=velocities,
+        links=links,
+        obstacles=[OBSTACLE],
+        cells=cells,
+        title="collisions 0",
+    )
     fields.update(overrides)
     return Frame(**fields)
 
@@ -43,7 +52,7 @@ def drawn_near(renderer: Renderer, image: np.ndarray, x: float, y: float) -> boo
     """Whether anything non-white is within a pixel of world point ``(x, y)`` (thin lines)."""
     px, py = renderer.axes.transData.transform((x, y))
     row, col = image.shape[0] - 1 - int(py), int(px)
-    return bool((image[row - 1:row + 2, col - 1:col + 2] < 250).any())
+    return bool((image[row - 1 : row + 2, col - 1 : col + 2] < 250).any())
 
 
 def rgb(colour: np.ndarray) -> np.ndarray:
@@ -152,7 +161,7 @@ def images(count: int, size: tuple[int, int] = (64, 48)) -> list[np.ndarray]:
     out = []
     for k in range(count):
         image = np.full((height, width, 3), 255, dtype=np.uint8)
-        image[10:20, 2 * k:2 * k + 10] = (31, 119, 180)
+        image[10:20, 2 * k : 2 * k + 10] = (31, 119, 180)
         image[30:40, 5:15] = (k * 20 % 256, 0, 0)
         out.append(image)
     return out

@@ -32,7 +32,11 @@ def step_by_hand(poses, velocities, dt):
         x, y, th = poses[:, i]
         v, w = velocities[:, i]
         turned = th + dt * w
-        out[:, i] = (x + dt * math.cos(th) * v, y + dt * math.sin(th) * v, math.atan2(math.sin(turned), math.cos(turned)))
+        out[:, i] = (
+            x + dt * math.cos(th) * v,
+            y + dt * math.sin(th) * v,
+            math.atan2(math.sin(turned), math.cos(turned)),
+        )
     return out
 
 
@@ -55,7 +59,9 @@ def validate_by_hand(poses, velocities, bounds=BOUNDS, diameter=0.11, r=0.016, l
         for j in range(i + 1, n)
         if math.hypot(poses[0, i] - poses[0, j], poses[1, i] - poses[1, j]) <= diameter
     )
-    wheels = [(2 * v - length * w) / (2 * r) for v, w in velocities.T] + [(2 * v + length * w) / (2 * r) for v, w in velocities.T]
+    wheels = [(2 * v - length * w) / (2 * r) for v, w in velocities.T] + [
+        (2 * v + length * w) / (2 * r) for v, w in velocities.T
+    ]
     actuator = int(any(abs(s) > max_wheel for s in wheels))
     return boundary, collision, actuator
 
@@ -117,11 +123,17 @@ def test_unicycle_step_does_not_modify_its_input(rng):
 def test_unicycle_step_wraps_heading_into_minus_pi_pi():
     # Heading 3.1 turned by 0.33 rad passes pi and comes back as 3.43 - 2 pi.
     got = kernels.unicycle_step(np.array([[0.0], [0.0], [3.1]]), np.array([[0.1], [10.0]]), 0.033)
-    assert_allclose(got[:, 0], [0.1 * 0.033 * math.cos(3.1), 0.1 * 0.033 * math.sin(3.1), 3.1 + 0.33 - 2 * math.pi], **TOL)
+    assert_allclose(
+        got[:, 0], [0.1 * 0.033 * math.cos(3.1), 0.1 * 0.033 * math.sin(3.1), 3.1 + 0.33 - 2 * math.pi], **TOL
+    )
 
 
 @given(
-    x=st.floats(-5, 5), y=st.floats(-5, 5), th=st.floats(-20, 20), v=st.floats(-1, 1), w=st.floats(-10, 10),
+    x=st.floats(-5, 5),
+    y=st.floats(-5, 5),
+    th=st.floats(-20, 20),
+    v=st.floats(-1, 1),
+    w=st.floats(-10, 10),
     dt=st.floats(1e-4, 1.0),
 )
 @FAST
@@ -218,7 +230,10 @@ def test_validate_finds_pairs_among_far_flung_robots():
 
 
 @given(
-    x=st.floats(-1.4, 1.4), y=st.floats(-0.8, 0.8), along_x=st.booleans(), sign=st.sampled_from([-1.0, 1.0]),
+    x=st.floats(-1.4, 1.4),
+    y=st.floats(-0.8, 0.8),
+    along_x=st.booleans(),
+    sign=st.sampled_from([-1.0, 1.0]),
 )
 @example(x=0.0, y=-1e-18, along_x=False, sign=1.0)  # straddles two cell boundaries of the grid
 @FAST
@@ -324,8 +339,11 @@ def test_dxi_to_dxu_hand_worked_cases(dxi, theta, expected):
 
 
 @given(
-    dx=st.floats(-1, 1), dy=st.floats(-1, 1), th=st.floats(-7, 7),
-    kv=st.floats(0.01, 5), kw=st.floats(0.01, 10),
+    dx=st.floats(-1, 1),
+    dy=st.floats(-1, 1),
+    th=st.floats(-7, 7),
+    kv=st.floats(0.01, 5),
+    kw=st.floats(0.01, 10),
 )
 @FAST
 def test_dxi_to_dxu_property_matches_formula(dx, dy, th, kv, kw):
@@ -489,12 +507,16 @@ def test_dxi_to_dxu_rejects_mismatched_counts(calls):
         calls(np.zeros((3, 2)), None, dxi=np.zeros((2, 4)))["dxi_to_dxu"]()
 
 
-@pytest.mark.parametrize("call", [
-    lambda u: _core.threshold_velocities(u, 0.2, 3.0),
-    lambda u: _core.actuator_limit(u, **LIMITS),
-    lambda u: kernels.threshold_velocities(u),
-    lambda u: kernels.actuator_limit(u),
-], ids=["core-threshold", "core-limit", "kernels-threshold", "kernels-limit"])
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda u: _core.threshold_velocities(u, 0.2, 3.0),
+        lambda u: _core.actuator_limit(u, **LIMITS),
+        lambda u: kernels.threshold_velocities(u),
+        lambda u: kernels.actuator_limit(u),
+    ],
+    ids=["core-threshold", "core-limit", "kernels-threshold", "kernels-limit"],
+)
 def test_command_kernels_reject_wrong_shape(call):
     with pytest.raises(ValueError, match=r"must have shape \(2, n\), " + SHAPE_GOT.format("3, 1")):
         call(np.zeros((3, 1)))
@@ -513,12 +535,16 @@ def test_kernels_reject_non_finite_values(calls, kernel, where, bad):
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf])
-@pytest.mark.parametrize(("call", "name"), [
-    (lambda u: _core.threshold_velocities(u, 0.2, 3.0), "velocities"),
-    (lambda u: kernels.threshold_velocities(u), "velocities"),
-    (lambda u: kernels.actuator_limit(u), "dxu"),
-    (lambda u: _core.actuator_limit(u, **LIMITS), "dxu"),  # the binding's own argument name
-], ids=["core-threshold", "kernels-threshold", "kernels-limit", "core-limit"])
+@pytest.mark.parametrize(
+    ("call", "name"),
+    [
+        (lambda u: _core.threshold_velocities(u, 0.2, 3.0), "velocities"),
+        (lambda u: kernels.threshold_velocities(u), "velocities"),
+        (lambda u: kernels.actuator_limit(u), "dxu"),
+        (lambda u: _core.actuator_limit(u, **LIMITS), "dxu"),  # the binding's own argument name
+    ],
+    ids=["core-threshold", "kernels-threshold", "kernels-limit", "core-limit"],
+)
 def test_command_kernels_reject_non_finite_values(call, name, bad):
     with pytest.raises(ValueError, match=rf"`{name}`.*non-finite"):
         call(np.array([[0.0, bad], [0.0, 0.0]]))
@@ -533,7 +559,9 @@ def test_unicycle_step_rejects_non_positive_dt(dt):
         _core.unicycle_step(poses, commands, dt)
 
 
-@pytest.mark.parametrize("bounds", [(1.0, 1.0, -1.0, 1.0), (1.0, -1.0, -1.0, 1.0), (-1.0, 1.0, 2.0, 1.0), (-1.0, np.nan, -1.0, 1.0)])
+@pytest.mark.parametrize(
+    "bounds", [(1.0, 1.0, -1.0, 1.0), (1.0, -1.0, -1.0, 1.0), (-1.0, 1.0, 2.0, 1.0), (-1.0, np.nan, -1.0, 1.0)]
+)
 def test_validate_rejects_invalid_bounds(bounds):
     poses, commands = np.zeros((3, 2)), np.zeros((2, 2))
     with pytest.raises(ValueError, match="bounds"):
@@ -556,8 +584,11 @@ def test_actuator_limit_rejects_non_positive_parameters(name):
 
 
 @given(
-    rows=st.integers(0, 4), n=st.integers(0, 4), m=st.integers(0, 4),
-    poison=st.sampled_from([None, np.nan, np.inf]), dt=st.sampled_from([0.033, 0.0, -1.0, np.nan]),
+    rows=st.integers(0, 4),
+    n=st.integers(0, 4),
+    m=st.integers(0, 4),
+    poison=st.sampled_from([None, np.nan, np.inf]),
+    dt=st.sampled_from([0.033, 0.0, -1.0, np.nan]),
 )
 @settings(max_examples=60, deadline=None)
 def test_core_never_panics_on_bad_input(rows, n, m, poison, dt):
@@ -600,7 +631,9 @@ def test_core_rejects_wrong_dimensions_or_dtype_without_panic(bad):
 
 
 def test_validate_returns_named_counts():
-    got = kernels.validate(np.array([[0.0, 0.05, 5.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]), np.array([[0.2, 0, 0], [1.0, 0, 0]]))
+    got = kernels.validate(
+        np.array([[0.0, 0.05, 5.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]), np.array([[0.2, 0, 0], [1.0, 0, 0]])
+    )
     assert (got.boundary, got.collision, got.actuator) == (1, 1, 1)
     assert got == (1, 1, 1)
     assert RPS.diameter == 0.11

@@ -79,7 +79,9 @@ def possibly_allowed(v, own, directions, distances, others, safety=SAFETY):
 
 
 def max_depth(v, own, directions, distances, others, safety=SAFETY):
-    return max((min(hrvo_depths(v, own, a, d, o, safety)) for a, d, o in zip(directions, distances, others)), default=-np.inf)
+    return max(
+        (min(hrvo_depths(v, own, a, d, o, safety)) for a, d, o in zip(directions, distances, others)), default=-np.inf
+    )
 
 
 def original_sampling(v_max, n_angles=20, n_speeds=10):
@@ -111,9 +113,12 @@ def clamp(v, v_max=V_MAX):
     return v * (v_max / norm) if norm > v_max else v
 
 
-def check_choice(chosen, own, preferred, directions, distances, others, *, position=None, bounds=None, include_preferred=True):
+def check_choice(
+    chosen, own, preferred, directions, distances, others, *, position=None, bounds=None, include_preferred=True
+):
     """Assert SPEC 5.1's result rules for one robot, re-evaluating every candidate independently."""
     assert np.hypot(*chosen) <= V_MAX + 1e-12
+
     def inside(c):
         if bounds is None:
             return True
@@ -215,7 +220,9 @@ def test_hrvo_velocity_ties_go_to_the_first_candidate():
     candidates = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0]])
     kwargs = dict(v_max=2.0, include_preferred=False)
     assert_array_equal(hrvo_velocity(np.zeros(2), np.zeros(2), *NONE, candidates=candidates, **kwargs), [1.0, 0.0])
-    assert_array_equal(hrvo_velocity(np.zeros(2), np.zeros(2), *NONE, candidates=candidates[::-1], **kwargs), [0.0, 1.0])
+    assert_array_equal(
+        hrvo_velocity(np.zeros(2), np.zeros(2), *NONE, candidates=candidates[::-1], **kwargs), [0.0, 1.0]
+    )
 
 
 # -- one neighbour --------------------------------------------------------------------------------
@@ -322,7 +329,9 @@ def test_hrvo_velocity_surrounded_robot_stops():
     assert all(max_depth(c, np.zeros(2), directions, distances, others) > 1e-12 for c in candidate_grid(V_MAX))
     # with candidates that exclude zero, the fallback is still the zero velocity
     ring = candidate_grid(V_MAX)[1:]
-    got = hrvo_velocity(np.zeros(2), np.array([0.2, 0.0]), directions, distances, others, candidates=ring, include_preferred=False)
+    got = hrvo_velocity(
+        np.zeros(2), np.array([0.2, 0.0]), directions, distances, others, candidates=ring, include_preferred=False
+    )
     assert_array_equal(got, [0.0, 0.0])
 
 
@@ -338,8 +347,13 @@ def test_hrvo_velocity_boundary_is_strict():
     # 1.5 + 0.125 lands exactly on xmax = 1.625: not strictly inside, so the next candidate wins.
     candidates = np.array([[0.125, 0.0], [0.0625, 0.0]])
     got = hrvo_velocity(
-        np.zeros(2), np.array([0.125, 0.0]), *NONE, position=np.array([1.5, 0.0]), bounds=(-1.625, 1.625, -1.0, 1.0),
-        candidates=candidates, include_preferred=False,
+        np.zeros(2),
+        np.array([0.125, 0.0]),
+        *NONE,
+        position=np.array([1.5, 0.0]),
+        bounds=(-1.625, 1.625, -1.0, 1.0),
+        candidates=candidates,
+        include_preferred=False,
     )
     assert_array_equal(got, [0.0625, 0.0])
 
@@ -358,7 +372,9 @@ def test_hrvo_near_walls_stays_strictly_inside(rng):
     preferred[:10] = [0.2, 0.0]
     got = kernels.hrvo(positions, np.zeros((n, 2)), preferred, radius=0.0, bounds=bounds)
     ahead = positions + got
-    assert np.all((bounds[0] < ahead[:, 0]) & (ahead[:, 0] < bounds[1]) & (bounds[2] < ahead[:, 1]) & (ahead[:, 1] < bounds[3]))
+    assert np.all(
+        (bounds[0] < ahead[:, 0]) & (ahead[:, 0] < bounds[1]) & (bounds[2] < ahead[:, 1]) & (ahead[:, 1] < bounds[3])
+    )
     assert np.all(got[:10, 0] < 1.6 - positions[:10, 0])
 
 
@@ -372,15 +388,24 @@ def test_hrvo_choice_is_allowed_and_optimal_on_random_swarms(seed, include_prefe
     velocities = rng.uniform(-0.15, 0.15, (n, 2))
     preferred = rng.uniform(-0.35, 0.35, (n, 2))
     bounds = (-1.0, 1.0, -1.0, 1.0) if seed % 2 else None
-    chosen = kernels.hrvo(positions, velocities, preferred, radius=0.9, bounds=bounds, include_preferred=include_preferred)
+    chosen = kernels.hrvo(
+        positions, velocities, preferred, radius=0.9, bounds=bounds, include_preferred=include_preferred
+    )
     assert chosen.shape == (n, 2)
     indptr, indices = brute_neighbours(positions, 0.9)
     for i in range(n):
         js = indices[indptr[i] : indptr[i + 1]]
         directions, distances = geometry_of(positions, i, js)
         check_choice(
-            chosen[i], velocities[i], preferred[i], directions, distances, velocities[js],
-            position=positions[i], bounds=bounds, include_preferred=include_preferred,
+            chosen[i],
+            velocities[i],
+            preferred[i],
+            directions,
+            distances,
+            velocities[js],
+            position=positions[i],
+            bounds=bounds,
+            include_preferred=include_preferred,
         )
 
 
@@ -400,8 +425,14 @@ def test_hrvo_batch_equals_per_robot_calls(rng, n):
             js = indices[indptr[i] : indptr[i + 1]]
             directions, distances = geometry_of(positions, i, js)
             one = hrvo_velocity(
-                velocities[i], preferred[i], directions, distances, velocities[js], safety=0.2,
-                position=positions[i], bounds=bounds,
+                velocities[i],
+                preferred[i],
+                directions,
+                distances,
+                velocities[js],
+                safety=0.2,
+                position=positions[i],
+                bounds=bounds,
             )
             assert_allclose(batch[i], one, rtol=0, atol=1e-12)
 
@@ -439,7 +470,15 @@ def test_hrvo_custom_grid_counts_are_used():
     # With 5 angles, 3 speeds and v_max = 1 the candidates are 0 and the axes at 0.5 and 1. For a
     # preferred (0.7, 0.6) the squared distances are (0.5, 0): 0.40, (1, 0): 0.45, (0, 0.5): 0.50,
     # (0, 1): 0.65, 0: 0.85, the negative axes more: the answer is (0.5, 0).
-    got = kernels.hrvo(np.zeros((1, 2)), np.zeros((1, 2)), np.array([[0.7, 0.6]]), v_max=1.0, n_angles=5, n_speeds=3, include_preferred=False)
+    got = kernels.hrvo(
+        np.zeros((1, 2)),
+        np.zeros((1, 2)),
+        np.array([[0.7, 0.6]]),
+        v_max=1.0,
+        n_angles=5,
+        n_speeds=3,
+        include_preferred=False,
+    )
     assert_allclose(got, [[0.5, 0.0]], atol=1e-12)
 
 

@@ -65,7 +65,9 @@ def test_neighbours_matches_brute_force(rng, n, radius):
 
 
 @pytest.mark.parametrize("n", [1, 2, 17, 300])
-@pytest.mark.parametrize(("direction", "fov"), [(0.0, math.pi / 2), (math.pi / 3, math.pi), (-2.0, 0.3), (1.0, 2 * math.pi)])
+@pytest.mark.parametrize(
+    ("direction", "fov"), [(0.0, math.pi / 2), (math.pi / 3, math.pi), (-2.0, 0.3), (1.0, 2 * math.pi)]
+)
 def test_neighbours_field_of_view_matches_brute_force(rng, n, direction, fov):
     positions = rng.uniform(-2.0, 2.0, size=(n, 2))
     headings = rng.uniform(-math.pi, math.pi, n)
@@ -240,7 +242,10 @@ def test_neighbours_property_on_a_coarse_lattice(points, radius):
         (lambda: kernels.neighbours(np.zeros((2, 2)), np.nan), r"`radius`"),
         (lambda: kernels.neighbours(np.zeros((3, 2)), 1.0, headings=np.zeros(2)), r"`headings` must have shape \(3,\)"),
         (lambda: kernels.neighbours(np.zeros((3, 2)), 1.0, headings=np.zeros((3, 1))), r"`headings`"),
-        (lambda: kernels.neighbours(np.zeros((3, 2)), 1.0, headings=np.array([0.0, np.nan, 0.0])), r"`headings`.*non-finite"),
+        (
+            lambda: kernels.neighbours(np.zeros((3, 2)), 1.0, headings=np.array([0.0, np.nan, 0.0])),
+            r"`headings`.*non-finite",
+        ),
         (lambda: kernels.neighbours(np.zeros((3, 2)), 1.0, max_neighbours=-1), r"`max_neighbours`"),
         (lambda: kernels.neighbours_of(np.zeros((3, 3)), 0, 1.0), r"`positions` must have shape \(n, 2\)"),
         (lambda: kernels.neighbours_of(np.zeros((3, 2)), 0, -1.0), r"`radius`"),

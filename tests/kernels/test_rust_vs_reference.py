@@ -49,10 +49,14 @@ def core_neighbours(p, radius, headings=None, direction=0.0, fov=TAU, max_neighb
 
 
 def ref_neighbours(p, radius, headings=None, direction=0.0, fov=TAU, max_neighbours=None):
-    return _reference.neighbours(p, radius, headings=headings, direction=direction, fov=fov, max_neighbours=max_neighbours)
+    return _reference.neighbours(
+        p, radius, headings=headings, direction=direction, fov=fov, max_neighbours=max_neighbours
+    )
 
 
-HRVO_DEFAULTS = dict(radius=1.0, safety=SAFETY, v_max=V_MAX, bounds=None, n_angles=20, n_speeds=10, include_preferred=True)
+HRVO_DEFAULTS = dict(
+    radius=1.0, safety=SAFETY, v_max=V_MAX, bounds=None, n_angles=20, n_speeds=10, include_preferred=True
+)
 
 
 def core_hrvo(p, v, pref, csr=None, **kw):
@@ -81,7 +85,9 @@ def swarm(rng, n, spread=1.5):
 
 def core_cells(p, radius, bounds=ARENA, virtual=None, resolution=64):
     vi, vp = (None, None) if virtual is None else virtual
-    return _core.voronoi_cells(p, radius=radius, bounds=bounds, virtual_indptr=vi, virtual_points=vp, resolution=resolution)
+    return _core.voronoi_cells(
+        p, radius=radius, bounds=bounds, virtual_indptr=vi, virtual_points=vp, resolution=resolution
+    )
 
 
 def ref_cells(p, radius, bounds=ARENA, virtual=None, resolution=64):
@@ -128,7 +134,9 @@ VIEWS = [None, (0.0, math.pi / 3), (1.2, math.pi), (0.0, TAU), (1.2, TAU)]
 
 @pytest.mark.parametrize("n", [0, 1, 2, 50, 2000, 3000])  # >= 2048 rows run on rayon
 @pytest.mark.parametrize("radius", [0.0, 0.3, 2.0])
-@pytest.mark.parametrize("view", VIEWS, ids=["all-round", "fov60-dir0", "fov180-dir1.2", "fov360-dir0", "fov360-dir1.2"])
+@pytest.mark.parametrize(
+    "view", VIEWS, ids=["all-round", "fov60-dir0", "fov180-dir1.2", "fov360-dir0", "fov360-dir1.2"]
+)
 def test_neighbours_matches_reference_on_random_swarms(rng, n, radius, view):
     spread = 1.0 if n < 100 else 6.0  # a few neighbours at radius 0.3, hundreds at 2.0
     p = rng.uniform(-spread, spread, (n, 2))
@@ -310,9 +318,17 @@ def test_hrvo_planner_velocity_matches_reference(rng, k, bounds, include_preferr
         position = rng.uniform([-1.6, -1.0], [1.6, 1.0])
         got = planner.velocity(detections, velocity, preferred, position)
         want = _reference.hrvo_velocity(
-            velocity, preferred, _reference.detection_directions(detections), detections[:, 0], detections[:, 2:4],
-            safety=SAFETY, v_max=V_MAX, position=position, bounds=bounds,
-            candidates=_reference.candidate_grid(V_MAX, 16, 7), include_preferred=include_preferred,
+            velocity,
+            preferred,
+            _reference.detection_directions(detections),
+            detections[:, 0],
+            detections[:, 2:4],
+            safety=SAFETY,
+            v_max=V_MAX,
+            position=position,
+            bounds=bounds,
+            candidates=_reference.candidate_grid(V_MAX, 16, 7),
+            include_preferred=include_preferred,
         )
         assert got.shape == (2,) and got.dtype == np.float64
         assert_array_equal(got, want)
@@ -331,7 +347,9 @@ def test_hrvo_planner_core_class_matches_batch_kernel(rng):
     for i in range(n):
         js = indices[indptr[i] : indptr[i + 1]]
         offset = p[i] - p[js]  # from the neighbour towards robot i
-        detections = np.column_stack((distances[indptr[i] : indptr[i + 1]], np.arctan2(offset[:, 1], offset[:, 0]), v[js]))
+        detections = np.column_stack(
+            (distances[indptr[i] : indptr[i + 1]], np.arctan2(offset[:, 1], offset[:, 0]), v[js])
+        )
         got = planner.velocity(detections, v[i], pref[i], p[i])
         # the detection angle round trip (atan2 then + pi) may move an edge by an ulp
         assert_allclose(got, batch[i], atol=1e-12)
@@ -468,7 +486,9 @@ def closest_points(p):
 @pytest.mark.parametrize(("margin", "mirror"), [(0.0, False), (0.03, False), (0.03, True)])
 def test_virtual_agents_match_reference(rng, n, sensing, margin, mirror):
     p = rng.uniform([-1.6, -1.0], [1.6, 1.0], (n, 2))
-    got = kernels.virtual_agents(p, OBSTACLES, range=sensing, robot_radius=0.05, margin=margin, mirror_at_surface=mirror)
+    got = kernels.virtual_agents(
+        p, OBSTACLES, range=sensing, robot_radius=0.05, margin=margin, mirror_at_surface=mirror
+    )
     offset = 0.0 if mirror else 0.05 + margin
     want = _reference.virtual_agents(p, *OBSTACLES, range=sensing, offset=offset)
     assert got[0].dtype == np.int64 and got[1].shape == (got[0][-1], 2)
@@ -543,7 +563,10 @@ def test_virtual_agents_keep_voronoi_cells_the_offset_clear_of_obstacles(rng, wh
     p = p[keep][:60]
     assert len(p) == 60
     virtual = kernels.virtual_agents(p, OBSTACLES, range=0.5, robot_radius=0.05, margin=offset - 0.05)
-    for cells in (kernels.voronoi_cells(p, radius=0.3, virtual=virtual, polygons=True), ref_cells(p, 0.3, virtual=virtual)):
+    for cells in (
+        kernels.voronoi_cells(p, radius=0.3, virtual=virtual, polygons=True),
+        ref_cells(p, 0.3, virtual=virtual),
+    ):
         vertices, offsets = cells[2], cells[3]
         for i in range(len(p)):
             c = closest_points(p[i])
@@ -560,7 +583,9 @@ def test_virtual_agents_keep_voronoi_cells_the_offset_clear_of_obstacles(rng, wh
 
 def test_virtual_agents_mirror_at_surface_puts_the_bisector_on_the_obstacle(rng):
     p = rng.uniform([-1.6, -1.0], [1.6, 1.0], (200, 2))
-    indptr, agents = kernels.virtual_agents(p, OBSTACLES, range=1.0, robot_radius=0.05, margin=0.1, mirror_at_surface=True)
+    indptr, agents = kernels.virtual_agents(
+        p, OBSTACLES, range=1.0, robot_radius=0.05, margin=0.1, mirror_at_surface=True
+    )
     checked = 0
     for i in range(len(p)):
         c = closest_points(p[i])
@@ -768,7 +793,10 @@ def test_core_rejects_bad_auxiliary_arrays_naming_the_argument(call, name):
         (lambda bad: call_hrvo(preferred=with_value(P, bad)), "preferred"),
         (lambda bad: call_hrvo(candidates=with_value(GRID, bad, (5, 1))), "candidates"),
         (lambda bad: call_cells(positions=with_value(P, bad)), "positions"),
-        (lambda bad: call_cells(virtual_indptr=np.array([0, 1, 1, 1]), virtual_points=np.array([[bad, 0.0]])), "virtual"),
+        (
+            lambda bad: call_cells(virtual_indptr=np.array([0, 1, 1, 1]), virtual_points=np.array([[bad, 0.0]])),
+            "virtual",
+        ),
         (lambda bad: call_agents(positions=with_value(P, bad)), "positions"),
         (lambda bad: call_agents(vertices=with_value(OBSTACLES[0], bad, (4, 1))), "obstacle vertices"),
         (lambda bad: call_planner(detections=with_value(np.full((3, 4), 0.5), bad, (2, 3))), "detections"),

@@ -15,8 +15,12 @@ fn swarm(n: usize) -> (Vec<f64>, Vec<f64>, f64) {
     let spacing = (PI / 10.0).sqrt();
     let columns = (n as f64).sqrt().ceil() as usize;
     let jitter = |i: usize, k: f64| ((i as f64 * k).fract() - 0.5) * spacing / 2.0;
-    let xs = (0..n).map(|i| (i / columns) as f64 * spacing + jitter(i, 0.754_877_666)).collect();
-    let ys = (0..n).map(|i| (i % columns) as f64 * spacing + jitter(i, 0.569_840_290)).collect();
+    let xs = (0..n)
+        .map(|i| (i / columns) as f64 * spacing + jitter(i, 0.754_877_666))
+        .collect();
+    let ys = (0..n)
+        .map(|i| (i % columns) as f64 * spacing + jitter(i, 0.569_840_290))
+        .collect();
     (xs, ys, columns as f64 * spacing)
 }
 
@@ -38,12 +42,21 @@ fn bench_neighbours(c: &mut Criterion) {
 fn bench_hrvo(c: &mut Criterion) {
     let mut group = c.benchmark_group("hrvo");
     let grid = hrvo::candidate_grid(0.2, 20, 10);
-    let params = HrvoParams { safety: 0.24, v_max: 0.2, bounds: None, include_preferred: true };
+    let params = HrvoParams {
+        safety: 0.24,
+        v_max: 0.2,
+        bounds: None,
+        include_preferred: true,
+    };
     for n in [100, 1_000, 10_000] {
         let (xs, ys, _) = swarm(n);
         let p = points(&xs, &ys);
-        let v: Vec<Vec2> = (0..n).map(|i| [0.1 * (i as f64).sin(), 0.1 * (i as f64).cos()]).collect();
-        let pref: Vec<Vec2> = (0..n).map(|i| [0.2 * (3.0 * i as f64).cos(), 0.2 * (3.0 * i as f64).sin()]).collect();
+        let v: Vec<Vec2> = (0..n)
+            .map(|i| [0.1 * (i as f64).sin(), 0.1 * (i as f64).cos()])
+            .collect();
+        let pref: Vec<Vec2> = (0..n)
+            .map(|i| [0.2 * (3.0 * i as f64).cos(), 0.2 * (3.0 * i as f64).sin()])
+            .collect();
         group.bench_with_input(BenchmarkId::new("n", n), &n, |b, _| {
             b.iter(|| hrvo::hrvo_batch(black_box(&p), &v, &pref, None, 1.0, &grid, &params).unwrap())
         });
@@ -69,7 +82,12 @@ fn bench_dynamics(c: &mut Criterion) {
     let wheels = Wheels::new(0.016, 0.105, 12.5).unwrap();
     for n in [100, 1_000, 10_000] {
         let (xs, ys, side) = swarm(n);
-        let poses: Vec<f64> = xs.iter().chain(&ys).copied().chain((0..n).map(|i| i as f64 % 6.0 - 3.0)).collect();
+        let poses: Vec<f64> = xs
+            .iter()
+            .chain(&ys)
+            .copied()
+            .chain((0..n).map(|i| i as f64 % 6.0 - 3.0))
+            .collect();
         let commands: Vec<f64> = (0..2 * n).map(|i| 0.3 * ((i as f64) * 0.37).sin()).collect();
         let arena = Arena::new(-1.0, side, -1.0, side).unwrap();
         group.bench_with_input(BenchmarkId::new("n", n), &n, |b, _| {

@@ -25,7 +25,11 @@ impl Wheels {
         check_positive("wheel_radius", radius)?;
         check_positive("base_length", base_length)?;
         check_positive("max_wheel", max_speed)?;
-        Ok(Self { radius, base_length, max_speed })
+        Ok(Self {
+            radius,
+            base_length,
+            max_speed,
+        })
     }
 
     /// Whether the command `(v, w)` needs a wheel faster than `max_speed` (rps's criterion).
@@ -78,7 +82,11 @@ pub struct Violations {
 fn rows<'a>(arg: &'static str, data: &'a [f64], count: usize, n: usize) -> Result<Vec<&'a [f64]>> {
     check_len(arg, count * n, data.len())?;
     check_finite(arg, data)?;
-    Ok(if n == 0 { vec![&data[0..0]; count] } else { data.chunks(n).collect() })
+    Ok(if n == 0 {
+        vec![&data[0..0]; count]
+    } else {
+        data.chunks(n).collect()
+    })
 }
 
 /// Clips commands to the linear and angular limits, keeping their signs (rps `set_velocities`).
@@ -138,7 +146,11 @@ pub fn validate(
 
     let actuator = u64::from((0..n).any(|i| wheels.exceeded_by(u[0][i], u[1][i])));
 
-    Ok(Violations { boundary, collision, actuator })
+    Ok(Violations {
+        boundary,
+        collision,
+        actuator,
+    })
 }
 
 /// Advances every pose by one forward-Euler step of the unicycle model and wraps the heading
@@ -229,7 +241,14 @@ mod tests {
         let poses = [0.0, 0.11, 1.7, -1.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0];
         let velocities = [0.0, 0.0, 0.0, 0.2, 0.0, 0.0, 0.0, 1.0];
         let counts = validate(&poses, &velocities, 4, &robotarium(), 0.11, &gritsbot()).unwrap();
-        assert_eq!(counts, Violations { boundary: 1, collision: 1, actuator: 1 });
+        assert_eq!(
+            counts,
+            Violations {
+                boundary: 1,
+                collision: 1,
+                actuator: 1
+            }
+        );
     }
 
     #[test]
@@ -244,7 +263,11 @@ mod tests {
     fn bad_lengths_and_values_are_errors() {
         assert!(matches!(
             validate(&[0.0; 5], &[0.0; 4], 2, &robotarium(), 0.11, &gritsbot()),
-            Err(GeomError::LengthMismatch { arg: "poses", expected: 6, got: 5 })
+            Err(GeomError::LengthMismatch {
+                arg: "poses",
+                expected: 6,
+                got: 5
+            })
         ));
         assert!(matches!(
             unicycle_step(&mut [f64::NAN, 0.0, 0.0], &[0.0, 0.0], 1, 0.033),

@@ -23,18 +23,17 @@ pub enum GeomError {
     },
     /// Ragged rows (CSR) that do not fit: wrong length, decreasing offsets, ids out of range.
     #[error("`{arg}` is not a valid CSR of {rows} rows: {reason}")]
-    InvalidCsr { arg: &'static str, rows: usize, reason: String },
+    InvalidCsr {
+        arg: &'static str,
+        rows: usize,
+        reason: String,
+    },
     /// An obstacle whose vertices enclose no area.
     #[error("obstacle {0} is degenerate: its vertices enclose no area")]
     DegenerateObstacle(usize),
     /// An arena whose minimum is not below its maximum.
     #[error("arena bounds must satisfy xmin < xmax and ymin < ymax, got ({xmin}, {xmax}, {ymin}, {ymax})")]
-    InvalidBounds {
-        xmin: f64,
-        xmax: f64,
-        ymin: f64,
-        ymax: f64,
-    },
+    InvalidBounds { xmin: f64, xmax: f64, ymin: f64, ymax: f64 },
 }
 
 /// Result of a core kernel.

@@ -22,7 +22,12 @@ pub struct Grid {
 #[derive(Debug, Clone)]
 enum CellTable {
     /// Slot of cell `(cx, cy)` is `(cx - x0) * rows + (cy - y0)`.
-    Dense { x0: i64, y0: i64, columns: i64, rows: i64 },
+    Dense {
+        x0: i64,
+        y0: i64,
+        columns: i64,
+        rows: i64,
+    },
     Sparse(HashMap<(i64, i64), usize>),
 }
 
@@ -43,21 +48,29 @@ impl Grid {
         let columns = x1.checked_sub(x0).and_then(|w| w.checked_add(1)).unwrap_or(i64::MAX);
         let rows = y1.checked_sub(y0).and_then(|h| h.checked_add(1)).unwrap_or(i64::MAX);
         let budget = 4 * keys.len() as i64 + 1024;
-        let (table, slots, cells) = if !keys.is_empty() && columns <= budget && rows <= budget && columns * rows <= budget {
-            let slots: Vec<usize> = keys.iter().map(|&(cx, cy)| ((cx - x0) * rows + (cy - y0)) as usize).collect();
-            (CellTable::Dense { x0, y0, columns, rows }, slots, (columns * rows) as usize)
-        } else {
-            let mut index: HashMap<(i64, i64), usize> = HashMap::with_capacity(keys.len());
-            let slots: Vec<usize> = keys
-                .iter()
-                .map(|key| {
-                    let next = index.len();
-                    *index.entry(*key).or_insert(next)
-                })
-                .collect();
-            let cells = index.len();
-            (CellTable::Sparse(index), slots, cells)
-        };
+        let (table, slots, cells) =
+            if !keys.is_empty() && columns <= budget && rows <= budget && columns * rows <= budget {
+                let slots: Vec<usize> = keys
+                    .iter()
+                    .map(|&(cx, cy)| ((cx - x0) * rows + (cy - y0)) as usize)
+                    .collect();
+                (
+                    CellTable::Dense { x0, y0, columns, rows },
+                    slots,
+                    (columns * rows) as usize,
+                )
+            } else {
+                let mut index: HashMap<(i64, i64), usize> = HashMap::with_capacity(keys.len());
+                let slots: Vec<usize> = keys
+                    .iter()
+                    .map(|key| {
+                        let next = index.len();
+                        *index.entry(*key).or_insert(next)
+                    })
+                    .collect();
+                let cells = index.len();
+                (CellTable::Sparse(index), slots, cells)
+            };
         // Counting sort of point indices by slot: stable, so each cell lists increasing indices.
         let mut starts = vec![0_usize; cells + 1];
         for &slot in &slots {
@@ -72,7 +85,12 @@ impl Grid {
             members[fill[slot]] = point;
             fill[slot] += 1;
         }
-        Self { cell, table, starts, members }
+        Self {
+            cell,
+            table,
+            starts,
+            members,
+        }
     }
 
     /// Calls `visit(j)` for every point in the 3x3 block of cells around `(x, y)`: a superset
@@ -96,7 +114,10 @@ impl Grid {
 
     /// The points of each occupied cell (a cell's points are contiguous, in increasing index).
     pub fn occupied(&self) -> impl Iterator<Item = &[usize]> + '_ {
-        self.starts.windows(2).filter(|w| w[1] > w[0]).map(|w| &self.members[w[0]..w[1]])
+        self.starts
+            .windows(2)
+            .filter(|w| w[1] > w[0])
+            .map(|w| &self.members[w[0]..w[1]])
     }
 
     fn slot(&self, cx: i64, cy: i64) -> Option<usize> {

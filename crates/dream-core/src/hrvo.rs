@@ -56,7 +56,11 @@ impl HrvoParams {
     pub fn validated(self) -> Result<Self> {
         for (arg, value) in [("safety", self.safety), ("v_max", self.v_max)] {
             if !(value.is_finite() && value >= 0.0) {
-                return Err(GeomError::InvalidParameter { arg, rule: ">= 0", got: value });
+                return Err(GeomError::InvalidParameter {
+                    arg,
+                    rule: ">= 0",
+                    got: value,
+                });
             }
         }
         Ok(self)
@@ -80,14 +84,26 @@ impl Neighbour {
     pub fn from_detection(detection: [f64; 4]) -> Self {
         let [distance, angle, vx, vy] = detection;
         let towards = angle + std::f64::consts::PI;
-        Self { direction: [towards.cos(), towards.sin()], distance, velocity: [vx, vy] }
+        Self {
+            direction: [towards.cos(), towards.sin()],
+            distance,
+            velocity: [vx, vy],
+        }
     }
 
     /// The neighbour at `offset` (its position minus the robot's) moving with `velocity`.
     pub fn from_offset(offset: Vec2, velocity: Vec2) -> Self {
         let distance = (offset[0] * offset[0] + offset[1] * offset[1]).sqrt();
-        let direction = if distance > 0.0 { [offset[0] / distance, offset[1] / distance] } else { [1.0, 0.0] };
-        Self { direction, distance, velocity }
+        let direction = if distance > 0.0 {
+            [offset[0] / distance, offset[1] / distance]
+        } else {
+            [1.0, 0.0]
+        };
+        Self {
+            direction,
+            distance,
+            velocity,
+        }
     }
 }
 
@@ -96,14 +112,22 @@ impl Neighbour {
 /// `n_speeds` in [0, v_max].
 pub fn candidate_grid(v_max: f64, n_angles: usize, n_speeds: usize) -> Vec<Vec2> {
     let angle_step = if n_angles > 1 { TAU / (n_angles - 1) as f64 } else { 0.0 };
-    let speed_step = if n_speeds > 1 { v_max / (n_speeds - 1) as f64 } else { 0.0 };
+    let speed_step = if n_speeds > 1 {
+        v_max / (n_speeds - 1) as f64
+    } else {
+        0.0
+    };
     let distinct_angles = if n_angles > 1 { n_angles - 1 } else { n_angles };
     let mut grid = vec![[0.0, 0.0]];
     for a in 0..distinct_angles {
         let angle = a as f64 * angle_step;
         for s in 1..n_speeds {
             // linspace pins its last sample to the end point exactly.
-            let speed = if s == n_speeds - 1 { v_max } else { s as f64 * speed_step };
+            let speed = if s == n_speeds - 1 {
+                v_max
+            } else {
+                s as f64 * speed_step
+            };
             grid.push([speed * angle.cos(), speed * angle.sin()]);
         }
     }
@@ -125,7 +149,11 @@ struct Cone {
 
 impl Cone {
     fn new(velocity: Vec2, b: &Neighbour, safety: f64) -> Self {
-        let sin = if safety > 0.0 { safety / b.distance.max(safety) } else { 0.0 };
+        let sin = if safety > 0.0 {
+            safety / b.distance.max(safety)
+        } else {
+            0.0
+        };
         let cos = (1.0 - sin * sin).sqrt();
         let [ux, uy] = b.direction;
         let left = [ux * cos - uy * sin, ux * sin + uy * cos];
@@ -137,7 +165,12 @@ impl Cone {
         let tie = (to_left - to_right).abs() <= TIE * from_rvo[0].hypot(from_rvo[1]);
         let left_apex = if !tie && to_left < to_right { rvo } else { vo };
         let right_apex = if !tie && to_left > to_right { rvo } else { vo };
-        Cone { left, left_apex, right, right_apex }
+        Cone {
+            left,
+            left_apex,
+            right,
+            right_apex,
+        }
     }
 
     /// Strictly right of the left edge and strictly left of the right edge. The differences to
@@ -176,7 +209,14 @@ fn choose(
     grid: &[Vec2],
     params: &HrvoParams,
 ) -> Vec2 {
-    let Scratch { cones, xs, ys, distances, bands, order } = scratch;
+    let Scratch {
+        cones,
+        xs,
+        ys,
+        distances,
+        bands,
+        order,
+    } = scratch;
     cones.clear();
     cones.extend(neighbours.map(|b| Cone::new(velocity, &b, params.safety)));
     let inside = |vx: f64, vy: f64| {
@@ -196,7 +236,11 @@ fn choose(
     ys.clear();
     if params.include_preferred {
         let scale = if norm > params.v_max { params.v_max / norm } else { 1.0 };
-        let first = if scale < 1.0 { [px * scale, py * scale] } else { preferred };
+        let first = if scale < 1.0 {
+            [px * scale, py * scale]
+        } else {
+            preferred
+        };
         xs.push(first[0]);
         ys.push(first[1]);
     }
@@ -212,7 +256,11 @@ fn choose(
     }));
     let farthest = distances.iter().copied().fold(0.0, f64::max);
     // d * scale < BANDS for every d <= farthest; the float-to-int cast saturates anyway.
-    let scale = if farthest > 0.0 { (BANDS as f64 - 0.5) / farthest } else { 0.0 };
+    let scale = if farthest > 0.0 {
+        (BANDS as f64 - 0.5) / farthest
+    } else {
+        0.0
+    };
     bands.clear();
     bands.extend(distances.iter().map(|&d| (d * scale) as u8));
     let mut starts = [0_usize; BANDS + 1];
@@ -277,13 +325,28 @@ pub fn hrvo_one(
     for (index, b) in neighbours.iter().enumerate() {
         let values = [b.direction[0], b.direction[1], b.distance, b.velocity[0], b.velocity[1]];
         if !values.iter().all(|v| v.is_finite()) {
-            return Err(GeomError::NonFinite { arg: "detections", index });
+            return Err(GeomError::NonFinite {
+                arg: "detections",
+                index,
+            });
         }
         if b.distance < 0.0 {
-            return Err(GeomError::InvalidParameter { arg: "detection distance", rule: ">= 0", got: b.distance });
+            return Err(GeomError::InvalidParameter {
+                arg: "detection distance",
+                rule: ">= 0",
+                got: b.distance,
+            });
         }
     }
-    Ok(choose(&mut Scratch::default(), velocity, preferred, position, neighbours.iter().copied(), grid, &params))
+    Ok(choose(
+        &mut Scratch::default(),
+        velocity,
+        preferred,
+        position,
+        neighbours.iter().copied(),
+        grid,
+        &params,
+    ))
 }
 
 /// HRVO velocities of the whole swarm.
@@ -311,7 +374,11 @@ pub fn hrvo_batch(
     check_vec2s("preferred", preferred)?;
     check_vec2s("candidates", grid)?;
     if !(radius.is_finite() && radius >= 0.0) {
-        return Err(GeomError::InvalidParameter { arg: "radius", rule: ">= 0", got: radius });
+        return Err(GeomError::InvalidParameter {
+            arg: "radius",
+            rule: ">= 0",
+            got: radius,
+        });
     }
     let found;
     let (indptr, indices) = match neighbours {
@@ -349,7 +416,13 @@ pub fn hrvo_batch(
 /// # Errors
 /// [`GeomError::InvalidCsr`] saying what is wrong.
 pub fn check_csr(indptr: &[i64], indices: &[i64], n: usize) -> Result<()> {
-    let fail = |reason: String| Err(GeomError::InvalidCsr { arg: "neighbours", rows: n, reason });
+    let fail = |reason: String| {
+        Err(GeomError::InvalidCsr {
+            arg: "neighbours",
+            rows: n,
+            reason,
+        })
+    };
     if indptr.len() != n + 1 {
         return fail(format!("indptr has {} entries, expected {}", indptr.len(), n + 1));
     }
@@ -369,7 +442,12 @@ pub fn check_csr(indptr: &[i64], indices: &[i64], n: usize) -> Result<()> {
 mod tests {
     use super::*;
 
-    const PARAMS: HrvoParams = HrvoParams { safety: 0.24, v_max: 0.2, bounds: None, include_preferred: true };
+    const PARAMS: HrvoParams = HrvoParams {
+        safety: 0.24,
+        v_max: 0.2,
+        bounds: None,
+        include_preferred: true,
+    };
 
     fn grid() -> Vec<Vec2> {
         candidate_grid(0.2, 20, 10)
@@ -392,7 +470,11 @@ mod tests {
 
     #[test]
     fn head_on_robot_does_not_drive_into_its_neighbour() {
-        let ahead = Neighbour { direction: [1.0, 0.0], distance: 0.5, velocity: [-0.2, 0.0] };
+        let ahead = Neighbour {
+            direction: [1.0, 0.0],
+            distance: 0.5,
+            velocity: [-0.2, 0.0],
+        };
         let v = hrvo_one([0.2, 0.0], [0.2, 0.0], [0.0, 0.0], &[ahead], &grid(), &PARAMS).unwrap();
         assert_ne!(v, [0.2, 0.0]);
         // Relative to the neighbour's velocity the choice leaves the collision cone.
@@ -405,7 +487,11 @@ mod tests {
         let ring: Vec<Neighbour> = (0..8)
             .map(|k| {
                 let angle = k as f64 * TAU / 8.0;
-                Neighbour { direction: [angle.cos(), angle.sin()], distance: 0.1, velocity: [0.0, 0.0] }
+                Neighbour {
+                    direction: [angle.cos(), angle.sin()],
+                    distance: 0.1,
+                    velocity: [0.0, 0.0],
+                }
             })
             .collect();
         let v = hrvo_one([0.0, 0.0], [0.2, 0.0], [0.0, 0.0], &ring, &grid(), &PARAMS).unwrap();
@@ -414,7 +500,10 @@ mod tests {
 
     #[test]
     fn bounds_keep_the_robot_inside() {
-        let walled = HrvoParams { bounds: Some(Arena::new(-1.0, 1.0, -1.0, 1.0).unwrap()), ..PARAMS };
+        let walled = HrvoParams {
+            bounds: Some(Arena::new(-1.0, 1.0, -1.0, 1.0).unwrap()),
+            ..PARAMS
+        };
         let v = hrvo_one([0.0, 0.0], [0.2, 0.0], [0.9, 0.0], &[], &grid(), &walled).unwrap();
         assert!(0.9 + v[0] < 1.0);
         assert!(v[0] > 0.0);
@@ -423,17 +512,35 @@ mod tests {
     #[test]
     fn batch_equals_one_by_one_and_is_deterministic() {
         let n = 600;
-        let positions: Vec<Vec2> =
-            (0..n).map(|i| [((i as f64) * 0.754_877_666).fract() * 6.0, ((i as f64) * 0.569_840_29).fract() * 4.0]).collect();
-        let velocities: Vec<Vec2> = (0..n).map(|i| [0.1 * (i as f64).sin(), 0.1 * (i as f64).cos()]).collect();
-        let preferred: Vec<Vec2> = (0..n).map(|i| [0.2 * (2.0 * i as f64).cos(), 0.2 * (2.0 * i as f64).sin()]).collect();
+        let positions: Vec<Vec2> = (0..n)
+            .map(|i| {
+                [
+                    ((i as f64) * 0.754_877_666).fract() * 6.0,
+                    ((i as f64) * 0.569_840_29).fract() * 4.0,
+                ]
+            })
+            .collect();
+        let velocities: Vec<Vec2> = (0..n)
+            .map(|i| [0.1 * (i as f64).sin(), 0.1 * (i as f64).cos()])
+            .collect();
+        let preferred: Vec<Vec2> = (0..n)
+            .map(|i| [0.2 * (2.0 * i as f64).cos(), 0.2 * (2.0 * i as f64).sin()])
+            .collect();
         let g = grid();
         let batch = hrvo_batch(&positions, &velocities, &preferred, None, 0.5, &g, &PARAMS).unwrap();
-        assert_eq!(batch, hrvo_batch(&positions, &velocities, &preferred, None, 0.5, &g, &PARAMS).unwrap());
+        assert_eq!(
+            batch,
+            hrvo_batch(&positions, &velocities, &preferred, None, 0.5, &g, &PARAMS).unwrap()
+        );
         for i in (0..n).step_by(37) {
             let around: Vec<Neighbour> = (0..n)
                 .filter(|&j| j != i)
-                .map(|j| Neighbour::from_offset([positions[j][0] - positions[i][0], positions[j][1] - positions[i][1]], velocities[j]))
+                .map(|j| {
+                    Neighbour::from_offset(
+                        [positions[j][0] - positions[i][0], positions[j][1] - positions[i][1]],
+                        velocities[j],
+                    )
+                })
                 .filter(|b| b.distance <= 0.5)
                 .collect();
             let one = hrvo_one(velocities[i], preferred[i], positions[i], &around, &g, &PARAMS).unwrap();
@@ -445,7 +552,9 @@ mod tests {
     fn invalid_neighbour_lists_are_errors() {
         let p = [[0.0, 0.0]; 2];
         let g = grid();
-        let bad = |indptr: &[i64], indices: &[i64]| hrvo_batch(&p, &p, &p, Some((indptr, indices)), 1.0, &g, &PARAMS).is_err();
+        let bad = |indptr: &[i64], indices: &[i64]| {
+            hrvo_batch(&p, &p, &p, Some((indptr, indices)), 1.0, &g, &PARAMS).is_err()
+        };
         assert!(bad(&[0, 1], &[1]));
         assert!(bad(&[0, 1, 1], &[2]));
         assert!(bad(&[0, 1, 0], &[1]));

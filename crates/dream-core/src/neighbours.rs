@@ -57,7 +57,11 @@ impl Csr {
                 from += length;
             }
         }
-        Csr { indptr, indices, distances }
+        Csr {
+            indptr,
+            indices,
+            distances,
+        }
     }
 }
 
@@ -83,16 +87,28 @@ pub fn within(
     check_finite("positions", xs)?;
     check_finite("positions", ys)?;
     if !(radius.is_finite() && radius >= 0.0) {
-        return Err(GeomError::InvalidParameter { arg: "radius", rule: ">= 0", got: radius });
+        return Err(GeomError::InvalidParameter {
+            arg: "radius",
+            rule: ">= 0",
+            got: radius,
+        });
     }
     if let Some(v) = view {
         check_len("headings", n, v.headings.len())?;
         check_finite("headings", v.headings)?;
         if !v.direction.is_finite() {
-            return Err(GeomError::InvalidParameter { arg: "direction", rule: "finite", got: v.direction });
+            return Err(GeomError::InvalidParameter {
+                arg: "direction",
+                rule: "finite",
+                got: v.direction,
+            });
         }
         if v.fov.is_nan() || v.fov < 0.0 {
-            return Err(GeomError::InvalidParameter { arg: "fov", rule: ">= 0", got: v.fov });
+            return Err(GeomError::InvalidParameter {
+                arg: "fov",
+                rule: ">= 0",
+                got: v.fov,
+            });
         }
     }
     // Any cell >= radius finds every neighbour; radius 0 only needs identical points together.
@@ -168,7 +184,8 @@ impl Query<'_> {
         for members in cells {
             let first = members[0];
             near.indices.clear();
-            self.grid.for_each_cell_near(self.xs[first], self.ys[first], |m| near.indices.extend_from_slice(m));
+            self.grid
+                .for_each_cell_near(self.xs[first], self.ys[first], |m| near.indices.extend_from_slice(m));
             near.indices.sort_unstable();
             near.xs.clear();
             near.ys.clear();
@@ -212,8 +229,11 @@ impl Query<'_> {
             out.distances.push(distance);
         }
         if let Some(limit) = self.max_neighbours.filter(|&limit| out.indices.len() - start > limit) {
-            let mut row: Vec<(i64, f64)> =
-                out.indices[start..].iter().copied().zip(out.distances[start..].iter().copied()).collect();
+            let mut row: Vec<(i64, f64)> = out.indices[start..]
+                .iter()
+                .copied()
+                .zip(out.distances[start..].iter().copied())
+                .collect();
             row.sort_unstable_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
             row.truncate(limit);
             row.sort_unstable_by_key(|&(j, _)| j);
@@ -245,15 +265,22 @@ mod tests {
     }
 
     fn rows(csr: &Csr) -> Vec<Vec<i64>> {
-        csr.indptr.windows(2).map(|w| csr.indices[w[0] as usize..w[1] as usize].to_vec()).collect()
+        csr.indptr
+            .windows(2)
+            .map(|w| csr.indices[w[0] as usize..w[1] as usize].to_vec())
+            .collect()
     }
 
     #[test]
     fn matches_brute_force_on_a_scatter() {
         // A deterministic scatter (no RNG dependency): a quasi-random sequence.
         let n = 3000;
-        let xs: Vec<f64> = (0..n).map(|i| ((i as f64) * 0.754_877_666).fract() * 20.0 - 10.0).collect();
-        let ys: Vec<f64> = (0..n).map(|i| ((i as f64) * 0.569_840_290).fract() * 12.0 - 6.0).collect();
+        let xs: Vec<f64> = (0..n)
+            .map(|i| ((i as f64) * 0.754_877_666).fract() * 20.0 - 10.0)
+            .collect();
+        let ys: Vec<f64> = (0..n)
+            .map(|i| ((i as f64) * 0.569_840_290).fract() * 12.0 - 6.0)
+            .collect();
         for radius in [0.0, 0.3, 1.7] {
             let csr = within(&xs, &ys, radius, None, None).unwrap();
             assert_eq!(rows(&csr), brute(&xs, &ys, radius));
@@ -272,7 +299,11 @@ mod tests {
         // Robot 0 looks along +x with a 90 degree aperture.
         let xs = [0.0, 1.0, 0.0, -1.0, 0.5];
         let ys = [0.0, 0.2, 1.0, 0.0, -0.1];
-        let view = FieldOfView { headings: &[0.0; 5], direction: 0.0, fov: PI / 2.0 };
+        let view = FieldOfView {
+            headings: &[0.0; 5],
+            direction: 0.0,
+            fov: PI / 2.0,
+        };
         let csr = within(&xs, &ys, 2.0, Some(view), None).unwrap();
         assert_eq!(rows(&csr)[0], vec![1, 4]);
         let capped = within(&xs, &ys, 2.0, None, Some(1)).unwrap();

@@ -116,11 +116,20 @@ impl Obstacles {
 ///
 /// # Errors
 /// Non-finite positions, a negative range or a negative offset.
-pub fn virtual_agents(positions: &[Vec2], obstacles: &Obstacles, range: f64, offset: f64) -> Result<(Vec<i64>, Vec<Vec2>)> {
+pub fn virtual_agents(
+    positions: &[Vec2],
+    obstacles: &Obstacles,
+    range: f64,
+    offset: f64,
+) -> Result<(Vec<i64>, Vec<Vec2>)> {
     check_finite("positions", positions.as_flattened())?;
     for (arg, value) in [("range", range), ("offset", offset)] {
         if !(value.is_finite() && value >= 0.0) {
-            return Err(GeomError::InvalidParameter { arg, rule: ">= 0", got: value });
+            return Err(GeomError::InvalidParameter {
+                arg,
+                rule: ">= 0",
+                got: value,
+            });
         }
     }
     let mut indptr = Vec::with_capacity(positions.len() + 1);
@@ -128,7 +137,9 @@ pub fn virtual_agents(positions: &[Vec2], obstacles: &Obstacles, range: f64, off
     indptr.push(0);
     for &p in positions {
         for k in 0..obstacles.len() {
-            let Some(c) = obstacles.closest_point(k, p) else { continue };
+            let Some(c) = obstacles.closest_point(k, p) else {
+                continue;
+            };
             let (dx, dy) = (c[0] - p[0], c[1] - p[1]);
             let distance = (dx * dx + dy * dy).sqrt();
             if distance > range || distance == 0.0 {
@@ -161,7 +172,7 @@ mod tests {
     fn virtual_agent_keeps_the_bisector_before_the_surface() {
         let (indptr, points) = virtual_agents(&[[0.0, 0.0], [-5.0, 0.0], [0.95, 0.0]], &square(), 1.5, 0.1).unwrap();
         assert_eq!(indptr, vec![0, 1, 1, 2]); // the far robot does not sense the obstacle
-        // Bisector at x = 0.9: the agent of (0, 0) is at (1.8, 0).
+                                              // Bisector at x = 0.9: the agent of (0, 0) is at (1.8, 0).
         assert!((points[0][0] - 1.8).abs() < 1e-12 && points[0][1].abs() < 1e-12);
         // A robot closer than the offset: the bisector is just ahead of it.
         assert!((points[1][0] - (0.95 + 2.0 * GAP)).abs() < 1e-12);
@@ -169,7 +180,15 @@ mod tests {
 
     #[test]
     fn hull_ignores_interior_and_collinear_points() {
-        let hull = convex_hull(&[[0.0, 0.0], [1.0, 0.0], [0.5, 0.0], [1.0, 1.0], [0.5, 0.5], [0.0, 1.0], [0.0, 1.0]]);
+        let hull = convex_hull(&[
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [0.5, 0.0],
+            [1.0, 1.0],
+            [0.5, 0.5],
+            [0.0, 1.0],
+            [0.0, 1.0],
+        ]);
         assert_eq!(hull, vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]);
         assert!((polygon_area(&hull) - 1.0).abs() < 1e-15);
     }
@@ -177,7 +196,10 @@ mod tests {
     #[test]
     fn degenerate_obstacles_are_errors() {
         let degenerate = |vertices: &[Vec2]| {
-            matches!(Obstacles::new(vertices, &[0, vertices.len() as i64]), Err(GeomError::DegenerateObstacle(0)))
+            matches!(
+                Obstacles::new(vertices, &[0, vertices.len() as i64]),
+                Err(GeomError::DegenerateObstacle(0))
+            )
         };
         assert!(degenerate(&[]));
         assert!(degenerate(&[[0.0, 0.0]]));

@@ -100,7 +100,14 @@ fn cell(p: Vec2, radius: f64, arena: &Arena, agents: impl Iterator<Item = Vec2>,
 ///
 /// # Errors
 /// Non-finite input, a non-positive radius or a resolution outside 3..=2^20.
-pub fn voronoi_cell(p: Vec2, others: &[Vec2], agents: &[Vec2], radius: f64, arena: &Arena, resolution: usize) -> Result<Vec<Vec2>> {
+pub fn voronoi_cell(
+    p: Vec2,
+    others: &[Vec2],
+    agents: &[Vec2],
+    radius: f64,
+    arena: &Arena,
+    resolution: usize,
+) -> Result<Vec<Vec2>> {
     check_finite("position", &p)?;
     check_finite("others", others.as_flattened())?;
     check_finite("virtual", agents.as_flattened())?;
@@ -110,10 +117,18 @@ pub fn voronoi_cell(p: Vec2, others: &[Vec2], agents: &[Vec2], radius: f64, aren
 
 fn check_cell_parameters(radius: f64, resolution: usize) -> Result<()> {
     if !(radius.is_finite() && radius > 0.0) {
-        return Err(GeomError::InvalidParameter { arg: "radius", rule: "> 0", got: radius });
+        return Err(GeomError::InvalidParameter {
+            arg: "radius",
+            rule: "> 0",
+            got: radius,
+        });
     }
     if !(3..=MAX_RESOLUTION).contains(&resolution) {
-        return Err(GeomError::InvalidParameter { arg: "resolution", rule: "between 3 and 2^20", got: resolution as f64 });
+        return Err(GeomError::InvalidParameter {
+            arg: "resolution",
+            rule: "between 3 and 2^20",
+            got: resolution as f64,
+        });
     }
     Ok(())
 }
@@ -140,24 +155,42 @@ pub fn voronoi_cells(
         let ok = indptr[0] == 0 && indptr[n] == points.len() as i64 && indptr.windows(2).all(|w| w[0] <= w[1]);
         if !ok {
             let reason = "its offsets must rise from 0 to the number of points".into();
-            return Err(GeomError::InvalidCsr { arg: "virtual", rows: n, reason });
+            return Err(GeomError::InvalidCsr {
+                arg: "virtual",
+                rows: n,
+                reason,
+            });
         }
     }
     let (xs, ys): (Vec<f64>, Vec<f64>) = positions.iter().map(|p| (p[0], p[1])).unzip();
     let near = neighbours::within(&xs, &ys, 2.0 * radius, None, None)?;
     let robot = |i: usize| {
-        let others = near.indices[near.indptr[i] as usize..near.indptr[i + 1] as usize].iter().map(|&j| positions[j as usize]);
+        let others = near.indices[near.indptr[i] as usize..near.indptr[i + 1] as usize]
+            .iter()
+            .map(|&j| positions[j as usize]);
         let own: &[Vec2] = match virtual_agents {
             Some((indptr, points)) => &points[indptr[i] as usize..indptr[i + 1] as usize],
             None => &[],
         };
-        let polygon = cell(positions[i], radius, arena, others.chain(own.iter().copied()), resolution);
+        let polygon = cell(
+            positions[i],
+            radius,
+            arena,
+            others.chain(own.iter().copied()),
+            resolution,
+        );
         let (area, centroid) = area_centroid(&polygon, positions[i]);
         (polygon, area, centroid)
     };
-    let per_robot: Vec<(Vec<Vec2>, f64, Vec2)> =
-        if n >= PARALLEL_ROBOTS { (0..n).into_par_iter().map(robot).collect() } else { (0..n).map(robot).collect() };
-    let mut cells = Cells { offsets: Vec::with_capacity(n + 1), ..Cells::default() };
+    let per_robot: Vec<(Vec<Vec2>, f64, Vec2)> = if n >= PARALLEL_ROBOTS {
+        (0..n).into_par_iter().map(robot).collect()
+    } else {
+        (0..n).map(robot).collect()
+    };
+    let mut cells = Cells {
+        offsets: Vec::with_capacity(n + 1),
+        ..Cells::default()
+    };
     cells.offsets.push(0);
     for (polygon, area, centroid) in per_robot {
         cells.vertices.extend(polygon);

@@ -9,7 +9,11 @@ use pyo3::prelude::*;
 use crate::errors::{shape_error, value_error, PyDreamResult};
 
 /// The float64 (or int64, via `T`) values of `object` in row-major order, with its shape.
-fn values_of<T: numpy::Element + Copy>(arg: &str, object: &Bound<'_, PyAny>, kind: &str) -> PyDreamResult<(Vec<T>, Vec<usize>)> {
+fn values_of<T: numpy::Element + Copy>(
+    arg: &str,
+    object: &Bound<'_, PyAny>,
+    kind: &str,
+) -> PyDreamResult<(Vec<T>, Vec<usize>)> {
     let array = object
         .cast::<PyArrayDyn<T>>()
         .map_err(|_| value_error(format!("`{arg}` must be a NumPy array of {kind}")))?;
@@ -74,7 +78,10 @@ pub fn both<T>(first: (&str, Option<T>), second: (&str, Option<T>)) -> PyDreamRe
     match (first.1, second.1) {
         (Some(a), Some(b)) => Ok(Some((a, b))),
         (None, None) => Ok(None),
-        _ => Err(value_error(format!("give both `{}` and `{}`, or neither", first.0, second.0))),
+        _ => Err(value_error(format!(
+            "give both `{}` and `{}`, or neither",
+            first.0, second.0
+        ))),
     }
 }
 

@@ -15,7 +15,13 @@ fn params(
     include_preferred: bool,
 ) -> PyDreamResult<HrvoParams> {
     let bounds = bounds.map(|b| Arena::new(b.0, b.1, b.2, b.3)).transpose()?;
-    Ok(HrvoParams { safety, v_max, bounds, include_preferred }.validated()?)
+    Ok(HrvoParams {
+        safety,
+        v_max,
+        bounds,
+        include_preferred,
+    }
+    .validated()?)
 }
 
 fn vec2(arg: &str, array: &Bound<'_, PyAny>) -> PyDreamResult<Vec2> {
@@ -78,7 +84,10 @@ impl PyHrvoPlanner {
     ) -> PyDreamResult<Self> {
         let grid = points_of::<2>("candidates", &candidates)?;
         dream_core::error::check_finite("candidates", grid.as_flattened())?;
-        Ok(Self { params: params(safety, v_max, bounds, include_preferred)?, grid })
+        Ok(Self {
+            params: params(safety, v_max, bounds, include_preferred)?,
+            grid,
+        })
     }
 
     /// The velocity `(2,)` for seed-format `detections` `(k, 4)` `[distance, angle, vx, vy]`.
@@ -90,7 +99,10 @@ impl PyHrvoPlanner {
         preferred: Bound<'py, PyAny>,
         position: Bound<'py, PyAny>,
     ) -> PyDreamResult<Bound<'py, PyArray1<f64>>> {
-        let around: Vec<Neighbour> = points_of::<4>("detections", &detections)?.into_iter().map(Neighbour::from_detection).collect();
+        let around: Vec<Neighbour> = points_of::<4>("detections", &detections)?
+            .into_iter()
+            .map(Neighbour::from_detection)
+            .collect();
         let chosen = core::hrvo_one(
             vec2("velocity", &velocity)?,
             vec2("preferred", &preferred)?,

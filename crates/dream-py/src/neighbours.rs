@@ -7,7 +7,11 @@ use pyo3::prelude::*;
 use crate::arrays::{count_of, points_of, vector_of};
 use crate::errors::PyDreamResult;
 
-type CsrArrays<'py> = (Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<f64>>);
+type CsrArrays<'py> = (
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<f64>>,
+);
 
 /// Neighbours of every robot within `radius` (and field of view) as `(indptr, indices, distances)`.
 #[pyfunction]
@@ -23,11 +27,21 @@ pub fn neighbours<'py>(
 ) -> PyDreamResult<CsrArrays<'py>> {
     let points = points_of::<2>("positions", &positions)?;
     let max_neighbours = max_neighbours.map(|k| count_of("max_neighbours", k)).transpose()?;
-    let headings = headings.map(|h| vector_of("headings", &h, Some(points.len()))).transpose()?;
+    let headings = headings
+        .map(|h| vector_of("headings", &h, Some(points.len())))
+        .transpose()?;
     let csr = py.detach(|| {
         let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|p| (p[0], p[1])).unzip();
-        let view = headings.as_deref().map(|headings| FieldOfView { headings, direction, fov });
+        let view = headings.as_deref().map(|headings| FieldOfView {
+            headings,
+            direction,
+            fov,
+        });
         core::within(&xs, &ys, radius, view, max_neighbours)
     })?;
-    Ok((csr.indptr.into_pyarray(py), csr.indices.into_pyarray(py), csr.distances.into_pyarray(py)))
+    Ok((
+        csr.indptr.into_pyarray(py),
+        csr.indices.into_pyarray(py),
+        csr.distances.into_pyarray(py),
+    ))
 }

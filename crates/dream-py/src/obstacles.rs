@@ -27,5 +27,8 @@ pub fn virtual_agents<'py>(
         core::virtual_agents(&points, &obstacles, range, offset)
     })?;
     let m = agents.len();
-    Ok((indptr.into_pyarray(py), agents.into_flattened().into_pyarray(py).reshape([m, 2])?))
+    Ok((
+        indptr.into_pyarray(py),
+        agents.into_flattened().into_pyarray(py).reshape([m, 2])?,
+    ))
 }

@@ -31,11 +31,16 @@ pub fn voronoi_cells<'py>(
     let points = points_of::<2>("positions", &positions)?;
     let arena = Arena::new(bounds.0, bounds.1, bounds.2, bounds.3)?;
     let agents = match both(("virtual_indptr", virtual_indptr), ("virtual_points", virtual_points))? {
-        Some((indptr, found)) => Some((indices_of("virtual_indptr", &indptr)?, points_of::<2>("virtual_points", &found)?)),
+        Some((indptr, found)) => Some((
+            indices_of("virtual_indptr", &indptr)?,
+            points_of::<2>("virtual_points", &found)?,
+        )),
         None => None,
     };
     let cells = py.detach(|| {
-        let agents = agents.as_ref().map(|(indptr, found)| (indptr.as_slice(), found.as_slice()));
+        let agents = agents
+            .as_ref()
+            .map(|(indptr, found)| (indptr.as_slice(), found.as_slice()));
         core::voronoi_cells(&points, radius, &arena, agents, resolution)
     })?;
     let (n, m) = (cells.centroids.len(), cells.vertices.len());
@@ -68,5 +73,9 @@ pub fn voronoi_cell<'py>(
     let polygon = core::voronoi_cell(p, &others, &agents, radius, &arena, resolution)?;
     let (area, centroid) = core::area_centroid(&polygon, p);
     let m = polygon.len();
-    Ok((centroid.to_vec().into_pyarray(py), area, polygon.into_flattened().into_pyarray(py).reshape([m, 2])?))
+    Ok((
+        centroid.to_vec().into_pyarray(py),
+        area,
+        polygon.into_flattened().into_pyarray(py).reshape([m, 2])?,
+    ))
 }

@@ -57,7 +57,12 @@ def closest_point(hull: FloatArray, p: FloatArray) -> FloatArray | None:
 
 
 def virtual_agents(
-    positions: FloatArray, vertices: FloatArray, offsets: np.ndarray, *, range: float, offset: float  # noqa: A002
+    positions: FloatArray,
+    vertices: FloatArray,
+    offsets: np.ndarray,
+    *,
+    range: float,
+    offset: float,  # noqa: A002
 ) -> tuple[np.ndarray, FloatArray]:
     """Virtual agents of every robot as CSR ``(indptr (n + 1,), points (m, 2))``, obstacles in order.
 

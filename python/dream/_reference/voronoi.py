@@ -15,7 +15,9 @@ from dream._checks import FloatArray
 from dream._reference.neighbours import neighbours_of
 
 
-def clip(polygon: list[tuple[float, float]], point: tuple[float, float], normal: tuple[float, float]) -> list[tuple[float, float]]:
+def clip(
+    polygon: list[tuple[float, float]], point: tuple[float, float], normal: tuple[float, float]
+) -> list[tuple[float, float]]:
     """The part of a convex ``polygon`` where ``(q - point) . normal <= 0`` (Sutherland-Hodgman)."""
     out: list[tuple[float, float]] = []
     count = len(polygon)
@@ -31,7 +33,9 @@ def clip(polygon: list[tuple[float, float]], point: tuple[float, float], normal:
     return out
 
 
-def area_centroid(polygon: list[tuple[float, float]], fallback: tuple[float, float]) -> tuple[float, tuple[float, float]]:
+def area_centroid(
+    polygon: list[tuple[float, float]], fallback: tuple[float, float]
+) -> tuple[float, tuple[float, float]]:
     """Area and centroid of a simple polygon (shoelace); ``fallback`` as centroid when empty."""
     twice, cx, cy = 0.0, 0.0, 0.0
     count = len(polygon)
@@ -59,7 +63,12 @@ def cell(
     angles = 2 * np.pi * np.arange(resolution) / resolution
     polygon = [(px + radius * float(np.cos(a)), py + radius * float(np.sin(a))) for a in angles]
     xmin, xmax, ymin, ymax = bounds
-    for point, normal in (((xmin, 0.0), (-1.0, 0.0)), ((xmax, 0.0), (1.0, 0.0)), ((0.0, ymin), (0.0, -1.0)), ((0.0, ymax), (0.0, 1.0))):
+    for point, normal in (
+        ((xmin, 0.0), (-1.0, 0.0)),
+        ((xmax, 0.0), (1.0, 0.0)),
+        ((0.0, ymin), (0.0, -1.0)),
+        ((0.0, ymax), (0.0, 1.0)),
+    ):
         polygon = clip(polygon, point, normal)
     for qx, qy in agents:
         polygon = clip(polygon, ((px + qx) / 2, (py + qy) / 2), (qx - px, qy - py))
@@ -105,7 +114,9 @@ def voronoi_cells(
     for i in range(n):
         mine = np.zeros((0, 2)) if virtual is None else virtual[1][virtual[0][i] : virtual[0][i + 1]]
         others, _ = neighbours_of(positions, i, 2 * radius)
-        agents = [(float(positions[j, 0]), float(positions[j, 1])) for j in others] + [(float(x), float(y)) for x, y in mine]
+        agents = [(float(positions[j, 0]), float(positions[j, 1])) for j in others] + [
+            (float(x), float(y)) for x, y in mine
+        ]
         polygon = cell((float(positions[i, 0]), float(positions[i, 1])), agents, radius, bounds, resolution)
         areas[i], centroids[i] = area_centroid(polygon, (float(positions[i, 0]), float(positions[i, 1])))
         vertices.extend(polygon)

@@ -45,7 +45,9 @@ class Robotarium(Backend):
     def __init__(self, initial_conditions: Any, *, sim_in_real_time: bool = False) -> None:
         super().__init__(initial_conditions, ROBOTARIUM, RPS)
         if self.number_of_robots > MAX_ROBOTS:
-            raise ValueError(f"the Robotarium runs at most {MAX_ROBOTS} robots, got {self.number_of_robots}: use backend='fast'")
+            raise ValueError(
+                f"the Robotarium runs at most {MAX_ROBOTS} robots, got {self.number_of_robots}: use backend='fast'"
+            )
         from rps import robotarium
 
         self.rps = robotarium.Robotarium(

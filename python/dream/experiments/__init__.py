@@ -8,6 +8,8 @@ from dream.experiments import affine_formation, hrvo_circle, line_consensus, vor
 from dream.experiments.result import ExperimentResult
 
 #: CLI name -> module with a ``run(n, seed, backend, steps, ...)`` function.
-EXPERIMENTS: dict[str, ModuleType] = {module.NAME: module for module in (hrvo_circle, line_consensus, voronoi_coverage, affine_formation)}
+EXPERIMENTS: dict[str, ModuleType] = {
+    module.NAME: module for module in (hrvo_circle, line_consensus, voronoi_coverage, affine_formation)
+}
 
 __all__ = ["EXPERIMENTS", "ExperimentResult", "affine_formation", "hrvo_circle", "line_consensus", "voronoi_coverage"]

@@ -94,7 +94,9 @@ def tile_centres(groups: int) -> np.ndarray:
     columns = math.ceil(math.sqrt(groups))
     rows = math.ceil(groups / columns)
     k = np.arange(groups)
-    return np.column_stack(((k % columns - (columns - 1) / 2) * ROBOTARIUM.width, (k // columns - (rows - 1) / 2) * ROBOTARIUM.height))
+    return np.column_stack(
+        ((k % columns - (columns - 1) / 2) * ROBOTARIUM.width, (k // columns - (rows - 1) / 2) * ROBOTARIUM.height)
+    )
 
 
 def tiled_arena(groups: int) -> ArenaSpec:
@@ -222,7 +224,9 @@ def run(
     touched a bar, and the largest error while bars are on the arena.
     """
     if n < 7 or n % 7:
-        raise ValueError(f"the affine formation has 7 robots (3 leaders, 4 followers) per group: n must be a multiple of 7, got n={n}")
+        raise ValueError(
+            f"the affine formation has 7 robots (3 leaders, 4 followers) per group: n must be a multiple of 7, got n={n}"
+        )
     groups = n // 7
     centres = tile_centres(groups)
     weights = np.kron(np.eye(groups), WEIGHTS)
@@ -291,14 +295,18 @@ def run(
                 goals = np.zeros((n, 2))
                 goals[leader] = [r.goal for r in robots if isinstance(r, Leader)]
                 goals[~leader] = targets
-                record(Frame(
-                    t + 1, sim.arena, now,
-                    goals=goals,
-                    velocities=np.array([r.dxi for r in robots]),
-                    links=np.argwhere(np.triu(weights) != 0),
-                    obstacles=[bar.polygon for bar in obstacles],
-                    title=f"{NAME}: follower error {error:.3f} m, bar contacts {contacts}",
-                ))
+                record(
+                    Frame(
+                        t + 1,
+                        sim.arena,
+                        now,
+                        goals=goals,
+                        velocities=np.array([r.dxi for r in robots]),
+                        links=np.argwhere(np.triu(weights) != 0),
+                        obstacles=[bar.polygon for bar in obstacles],
+                        title=f"{NAME}: follower error {error:.3f} m, bar contacts {contacts}",
+                    )
+                )
         wall = time.perf_counter() - start
     measures = {
         "error_before_bars": settled_error,

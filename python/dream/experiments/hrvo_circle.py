@@ -112,7 +112,9 @@ def circle_frame(step: int, sim: Any, robots: list[CircleRobot], radio_range: fl
     links = np.column_stack((np.repeat(np.arange(len(robots)), np.diff(indptr)), indices))
     circles = min((r.state for r in robots), default=0)
     return Frame(
-        step, sim.arena, poses,
+        step,
+        sim.arena,
+        poses,
         goals=np.array([r.current_goal for r in robots]).reshape(-1, 2),
         velocities=np.array([r.dxi for r in robots]).reshape(-1, 2),
         links=links[links[:, 0] < links[:, 1]],
@@ -171,12 +173,16 @@ def run(
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             movement = MovementSensor(i, f"movement_{i}", robot.update_sensor)
             radio = RangeRadio(i, f"radio_{i}", robot.update_radio)
-            create_timer(i, 20 + i % 10, [
-                {"delay": 2 + i % 2, "tag": "odom", "call": odometry.update},
-                {"delay": 3 + i % 2, "tag": "movement", "call": movement.update},
-                {"delay": 30, "tag": "radio", "call": radio.update},
-                {"delay": 4 + i % 2, "tag": "robot", "call": robot.update},
-            ])
+            create_timer(
+                i,
+                20 + i % 10,
+                [
+                    {"delay": 2 + i % 2, "tag": "odom", "call": odometry.update},
+                    {"delay": 3 + i % 2, "tag": "movement", "call": movement.update},
+                    {"delay": 30, "tag": "radio", "call": radio.update},
+                    {"delay": 4 + i % 2, "tag": "robot", "call": robot.update},
+                ],
+            )
             robots.append(robot)
 
         dxu = np.zeros((2, n))
@@ -198,7 +204,10 @@ def run(
                 done_at = t + 1
                 break
         wall = time.perf_counter() - start
-    measures = {"circles_completed": min((r.state for r in robots), default=CIRCLES), "circle_radius": circle_radius(n, grow)}
+    measures = {
+        "circles_completed": min((r.state for r in robots), default=CIRCLES),
+        "circle_radius": circle_radius(n, grow),
+    }
     return ExperimentResult.from_backend(NAME, seed, sim, done_at, wall, measures, np.array(poses) if trace else None)
 
 

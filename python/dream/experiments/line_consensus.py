@@ -130,12 +130,16 @@ def run(
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             movement = MovementSensor(i, f"movement_{i}", robot.update_sensor)
             radio = GraphRadio(i, f"radio_{i}", robot.update_radio, adjacency)
-            create_timer(i, 10 + i % 3, [
-                {"delay": 2, "tag": "odom", "call": odometry.update},
-                {"delay": 3, "tag": "movement", "call": movement.update},
-                {"delay": radio_gap, "tag": "radio", "call": radio.update},
-                {"delay": 4, "tag": "robot", "call": robot.update},
-            ])
+            create_timer(
+                i,
+                10 + i % 3,
+                [
+                    {"delay": 2, "tag": "odom", "call": odometry.update},
+                    {"delay": 3, "tag": "movement", "call": movement.update},
+                    {"delay": radio_gap, "tag": "radio", "call": radio.update},
+                    {"delay": 4, "tag": "robot", "call": robot.update},
+                ],
+            )
             robots.append(robot)
 
         dxu = np.zeros((2, n))
@@ -153,13 +157,17 @@ def run(
                 progress(t + 1, cap)
             if record is not None:
                 spread, error = line_errors(sim.poses, spacing)
-                record(Frame(
-                    t + 1, sim.arena, sim.poses,
-                    goals=np.array([np.full(2, np.nan) if r.target is None else r.target for r in robots]),
-                    velocities=np.array([r.dxi for r in robots]).reshape(-1, 2),
-                    links=np.argwhere(np.triu(adjacency) > 0),
-                    title=f"{NAME}: y spread {spread:.3f} m, spacing error {error:.3f} m",
-                ))
+                record(
+                    Frame(
+                        t + 1,
+                        sim.arena,
+                        sim.poses,
+                        goals=np.array([np.full(2, np.nan) if r.target is None else r.target for r in robots]),
+                        velocities=np.array([r.dxi for r in robots]).reshape(-1, 2),
+                        links=np.argwhere(np.triu(adjacency) > 0),
+                        title=f"{NAME}: y spread {spread:.3f} m, spacing error {error:.3f} m",
+                    )
+                )
             if max(line_errors(sim.poses, spacing)) < TOLERANCE:
                 done_at = t + 1
                 break

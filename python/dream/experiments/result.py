@@ -43,11 +43,31 @@ class ExperimentResult:
         return self.steps / self.wall_time if self.wall_time > 0 else float("inf")
 
     @classmethod
-    def from_backend(cls, experiment: str, seed: int, backend: Backend, completed_step: int | None, wall_time: float,
-                     measures: dict[str, Any], trace: np.ndarray | None = None) -> ExperimentResult:
+    def from_backend(
+        cls,
+        experiment: str,
+        seed: int,
+        backend: Backend,
+        completed_step: int | None,
+        wall_time: float,
+        measures: dict[str, Any],
+        trace: np.ndarray | None = None,
+    ) -> ExperimentResult:
         b, c, a = backend.violations
-        return cls(experiment, backend.number_of_robots, seed, backend.name, backend.iterations, completed_step,
-                   c, b, a, wall_time, measures, trace)
+        return cls(
+            experiment,
+            backend.number_of_robots,
+            seed,
+            backend.name,
+            backend.iterations,
+            completed_step,
+            c,
+            b,
+            a,
+            wall_time,
+            measures,
+            trace,
+        )
 
     def to_dict(self) -> dict[str, Any]:
         """The metrics as plain JSON-ready values (without the trace)."""
@@ -74,4 +94,7 @@ class ExperimentResult:
             ("steps/s", f"{self.steps_per_second:.0f}"),
         ]
         width = max(len(name) for name, _ in rows)
-        return "\n".join(f"{name:<{width}}  {value:.4g}" if isinstance(value, float) else f"{name:<{width}}  {value}" for name, value in rows)
+        return "\n".join(
+            f"{name:<{width}}  {value:.4g}" if isinstance(value, float) else f"{name:<{width}}  {value}"
+            for name, value in rows
+        )

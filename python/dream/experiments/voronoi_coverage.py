@@ -54,13 +54,20 @@ def coverage_arena(n: int) -> ArenaSpec:
 def thesis_obstacles(rng: np.random.Generator, moving: bool = True, scale: float = 1.0) -> list[Obstacle]:
     """Two large static rectangles and (optionally) two small ones moving in random directions,
     placed and sized for an arena ``scale`` times the Robotarium's."""
-    obstacles = [Obstacle((-0.75 * scale, 0.45 * scale), (0.6 * scale, 0.3 * scale)),
-                 Obstacle((0.25 * scale, -0.3 * scale), (0.3 * scale, 0.55 * scale))]
+    obstacles = [
+        Obstacle((-0.75 * scale, 0.45 * scale), (0.6 * scale, 0.3 * scale)),
+        Obstacle((0.25 * scale, -0.3 * scale), (0.3 * scale, 0.55 * scale)),
+    ]
     if moving:
         for centre in ((-0.9, -0.55), (0.9, 0.6)):
             angle = rng.uniform(-math.pi, math.pi)
-            obstacles.append(Obstacle(np.array(centre) * scale, (0.15 * scale, 0.15 * scale),
-                                      velocity=0.05 * np.array([math.cos(angle), math.sin(angle)])))
+            obstacles.append(
+                Obstacle(
+                    np.array(centre) * scale,
+                    (0.15 * scale, 0.15 * scale),
+                    velocity=0.05 * np.array([math.cos(angle), math.sin(angle)]),
+                )
+            )
     return obstacles
 
 
@@ -158,12 +165,16 @@ def run(
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             sensor = ObstacleSensor(i, f"obstacles_{i}", robot.update_obstacles, obstacles, range=CELL_RADIUS)
             radio = RangeRadio(i, f"radio_{i}", robot.update_radio, range=2 * CELL_RADIUS)
-            create_timer(i, 10 + i % 5, [
-                {"delay": 2, "tag": "odom", "call": odometry.update},
-                {"delay": 3, "tag": "obstacles", "call": sensor.update},
-                {"delay": 5, "tag": "radio", "call": radio.update},
-                {"delay": 5, "tag": "robot", "call": robot.update},
-            ])
+            create_timer(
+                i,
+                10 + i % 5,
+                [
+                    {"delay": 2, "tag": "odom", "call": odometry.update},
+                    {"delay": 3, "tag": "obstacles", "call": sensor.update},
+                    {"delay": 5, "tag": "radio", "call": radio.update},
+                    {"delay": 5, "tag": "robot", "call": robot.update},
+                ],
+            )
 
         dxu = np.zeros((2, n))
         sampling = 0.02 * scale_for(n)
@@ -187,13 +198,17 @@ def run(
             if progress is not None:
                 progress(t + 1, cap)
             if record is not None:
-                record(Frame(
-                    t + 1, arena, now,
-                    goals=np.array([np.full(2, np.nan) if r.centroid is None else r.centroid for r in robots]),
-                    obstacles=[o.polygon for o in obstacles],
-                    cells=[r.cell for r in robots],
-                    title=f"{NAME}: static contacts {contacts}, collisions {sim.violations.collision}",
-                ))
+                record(
+                    Frame(
+                        t + 1,
+                        arena,
+                        now,
+                        goals=np.array([np.full(2, np.nan) if r.centroid is None else r.centroid for r in robots]),
+                        obstacles=[o.polygon for o in obstacles],
+                        cells=[r.cell for r in robots],
+                        title=f"{NAME}: static contacts {contacts}, collisions {sim.violations.collision}",
+                    )
+                )
             if still >= REST_STEPS:
                 done_at = t + 1
                 break
