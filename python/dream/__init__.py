@@ -12,6 +12,7 @@ convention); positions given to geometry kernels are ``(n, 2)``.
 
 from dream import kernels, specs
 from dream.backends import Backend, Fast, Robotarium, initial_poses, make_robotarium
+from dream.experiments import Experiment, ExperimentResult, Param, param, run
 from dream.radios import GraphRadio, Radio, RangeRadio
 from dream.robot import Robot, RobotHRVO
 from dream.obstacles import Obstacle
@@ -42,11 +43,21 @@ Movement_sensor = MovementSensor
 Odometry_sensor = OdometrySensor
 Radio_range = RangeRadio
 
-# `from dream import *` gives what an original script expects.
+# `from dream import *` gives every public name: the original ones, for scripts written for the
+# prototype, and the PEP 8 ones.
 __all__ = [
+    "Backend",
+    "Experiment",
+    "ExperimentResult",
+    "Fast",
     "GraphRadio",
     "Movement_sensor",
+    "MovementSensor",
+    "Obstacle",
+    "ObstacleSensor",
     "Odometry_sensor",
+    "OdometrySensor",
+    "Param",
     "R_AC_MAX",
     "R_R_LENGTH",
     "R_R_WHEEL",
@@ -54,8 +65,11 @@ __all__ = [
     "R_W_MAX",
     "Radio",
     "Radio_range",
+    "RangeRadio",
     "Robot",
     "Robot_hrvo",
+    "RobotHRVO",
+    "Robotarium",
     "Sensor",
     "T_HEIGHT",
     "T_MAX_HEIGHT",
@@ -68,5 +82,13 @@ __all__ = [
     "Timer",
     "World",
     "create_timer",
+    "current_world",
+    "initial_poses",
+    "kernels",
+    "make_robotarium",
+    "param",
+    "reset_default_world",
+    "run",
+    "specs",
     "update_timers",
 ]

@@ -1,73 +1,86 @@
-"""The ``dream`` command: list and run the reference experiments, record them, benchmark.
+"""The ``dream`` command: list, run, record and start experiments, built-in or your own.
 
-dream list
-dream run hrvo-circle -n 10 --seed 0 --backend auto --json metrics.json
-dream run voronoi-coverage --video coverage.mp4 --every 2     # or .gif; --show for a window
-dream bench                                                   # the repository's benches/
+    dream list                                           # the built-in experiments
+    dream list line-consensus                            # its success test and parameters
+    dream run hrvo-circle -n 10 --seed 0 --json metrics.json
+    dream run my_experiment.py --param gain=2 --video run.mp4 --every 2
+    dream new my_experiment                              # a starter file that runs as is
+    dream bench                                          # the repository's benches/
+
+Exit codes: 0 done, 1 the run failed its success test (with ``--check``), 2 bad input, 130
+interrupted.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
+import tempfile
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
-from dream.experiments import EXPERIMENTS
+from dream.backends import BACKENDS
+from dream.backends.robotarium import MAX_ROBOTS
+from dream.experiments import EXPERIMENTS, Experiment, find, run
+
+STARTER = Path(__file__).parent / "templates" / "starter.py"
 
 
-def _progress_bar(enabled: bool) -> Callable[[int, int], None] | None:
-    if not enabled:
-        return None
+class UsageError(Exception):
+    """Input the command cannot act on: printed as one line, exit code 2."""
 
-    def show(step: int, cap: int) -> None:
-        if step % 50 == 0 or step == cap:
-            filled = int(30 * step / cap) if cap else 30
-            sys.stderr.write(f"\r[{'#' * filled}{'.' * (30 - filled)}] step {step}/{cap}")
-            sys.stderr.flush()
 
-    return show
+def _whole(least: int) -> Callable[[str], int]:
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {least}, got {text!r}") from None
+        if value < least:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {least}, got {value}")
+        return value
+
+    parse.__name__ = f"integer >= {least}"
+    return parse
 
 
 def _parser() -> argparse.ArgumentParser:
+    from dream import __version__
+
     parser = argparse.ArgumentParser(prog="dream", description="Distributed multi-robot experiments on the Robotarium.")
+    parser.add_argument("--version", action="version", version=f"dream {__version__}")
     commands = parser.add_subparsers(dest="command", required=True)
-    commands.add_parser("list", help="list the experiments")
-    run = commands.add_parser("run", help="run an experiment and print its metrics (headless unless --show)")
-    run.add_argument("experiment", choices=sorted(EXPERIMENTS))
-    run.add_argument("-n", type=int, default=None, help="number of robots (default: the thesis's)")
-    run.add_argument("--seed", type=int, default=0)
-    run.add_argument("--backend", choices=("auto", "robotarium", "fast"), default="auto")
-    run.add_argument("--steps", type=int, default=None, help="iteration cap (default: what the experiment needs)")
-    run.add_argument("--json", metavar="PATH", help="also write the metrics as JSON")
-    run.add_argument("--no-progress", action="store_true", help="no progress bar")
-    run.add_argument("--video", metavar="PATH", help="record the run to a video: .gif (Pillow) or .mp4 (H.264)")
-    run.add_argument("--show", action="store_true", help="show the run in a live window")
-    run.add_argument(
-        "--every",
-        metavar="K",
-        type=_positive_int,
-        default=1,
-        help="draw one step in K into the video/window (default: 1, every step)",
+    listing = commands.add_parser("list", help="list the experiments, or one experiment's parameters")
+    listing.add_argument("experiment", nargs="?", help="a built-in experiment's name or a .py file")
+    runner = commands.add_parser("run", help="run an experiment and print its metrics (headless unless --show)")
+    runner.add_argument("experiment", help=f"one of {', '.join(sorted(EXPERIMENTS))}, or a .py file")
+    runner.add_argument("-n", type=_whole(1), default=None, help="number of robots (default: the experiment's)")
+    runner.add_argument("--seed", type=_whole(0), default=0, help="random seed (default: 0)")
+    runner.add_argument("--backend", choices=BACKENDS, default="auto")
+    runner.add_argument("--steps", type=_whole(1), default=None, help="step cap (default: what the run needs)")
+    runner.add_argument(
+        "--param", action="append", default=[], metavar="NAME=VALUE", help="set a parameter (repeatable)"
     )
+    runner.add_argument("--json", metavar="PATH", help="also write the metrics as JSON")
+    runner.add_argument("--no-progress", action="store_true", help="no progress bar")
+    runner.add_argument("--video", metavar="PATH", help="record the run to a video: .gif (Pillow) or .mp4 (H.264)")
+    runner.add_argument("--show", action="store_true", help="show the run in a live window")
+    runner.add_argument(
+        "--every", metavar="K", type=_whole(1), default=1, help="draw one step in K into the video/window"
+    )
+    runner.add_argument("--check", action="store_true", help="exit with 1 when the run fails its success test")
+    new = commands.add_parser("new", help="write a starter experiment file that runs as is")
+    new.add_argument("name", help="the experiment's name; the file is NAME.py")
+    new.add_argument("-o", "--output", metavar="PATH", help="where to write it (default: ./NAME.py)")
     bench = commands.add_parser(
         "bench", help="run the benchmarks of the repository's benches/ (needs a source checkout)"
     )
     bench.add_argument("--full", action="store_true", help="all kernel sizes (minutes) instead of --quick")
     return parser
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {value}")
-    return value
 
 
 def benches_dir() -> Path:
@@ -84,12 +97,10 @@ def _bench(full: bool) -> int:
     scripts = [(benches / "bench_kernels.py", [] if full else ["--quick"]), (benches / "bench_experiments.py", [])]
     missing = [str(script) for script, _ in scripts if not script.is_file()]
     if missing:
-        print(
-            f"dream: error: no benchmarks at {benches} (missing {', '.join(missing)}); `dream bench` runs the "
-            "benchmarks of a source checkout: run it from the repository's top folder",
-            file=sys.stderr,
+        raise UsageError(
+            f"no benchmarks at {benches} (missing {', '.join(missing)}); `dream bench` runs the "
+            "benchmarks of a source checkout: run it from the repository's top folder"
         )
-        return 2
     for script, flags in scripts:
         print(f"$ python {script.name} {' '.join(flags)}".rstrip(), flush=True)
         done = subprocess.run([sys.executable, script.name, *flags], cwd=benches, check=False)
@@ -99,18 +110,99 @@ def _bench(full: bool) -> int:
     return 0
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
-    if args.command == "list":
-        for name, module in sorted(EXPERIMENTS.items()):
-            print(f"{name:<20} {(module.__doc__ or '').strip().splitlines()[0]}")
+def _experiment(source: str) -> type[Experiment]:
+    try:
+        return find(source)
+    except ValueError as err:  # unknown name, or a file that does not define one experiment
+        raise UsageError(str(err)) from None
+
+
+def _summary(cls: type[Experiment]) -> str:
+    """The first line of the experiment's module docstring (else of its class docstring)."""
+    text = sys.modules[cls.__module__].__doc__ or cls.__doc__ or ""
+    return (text.strip().splitlines() or [""])[0]
+
+
+def _list(source: str | None) -> int:
+    if source is None:
+        for name, cls in sorted(EXPERIMENTS.items()):
+            print(f"{name:<18} {_summary(cls)}")
+        print("\n`dream list NAME` shows an experiment's parameters; `dream run FILE.py` runs your own.")
         return 0
-    if args.command == "bench":
-        return _bench(args.full)
-    experiment = EXPERIMENTS[args.experiment]
-    options = {"seed": args.seed, "backend": args.backend, "steps": args.steps}
-    if args.n is not None:
-        options["n"] = args.n
+    cls = _experiment(source)
+    print(f"{cls.label()}: {_summary(cls)}")
+    print(f"robots by default: {cls.default_n}")
+    print(f"success: {cls.success}")
+    declared = cls.parameters()
+    print("parameters:" if declared else "parameters: none")
+    for name, spec in declared.items():
+        setting = f"{name}={spec.default}"
+        print(f"  --param {setting:<22} ({spec.kind.__name__}) {spec.help}")
+    return 0
+
+
+def _params(cls: type[Experiment], pairs: Sequence[str]) -> dict[str, Any]:
+    params: dict[str, Any] = {}
+    for pair in pairs:
+        name, equals, value = pair.partition("=")
+        if not equals or not name:
+            raise UsageError(f"--param takes NAME=VALUE, got {pair!r}")
+        params[name.strip()] = value
+    try:
+        return cls(**params).params  # converted and checked against the declarations
+    except ValueError as err:
+        raise UsageError(f"--param: {err}") from None
+
+
+def _writable(path: str, option: str) -> None:
+    """Refuse, before the run, an output path that cannot be written."""
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    if target.is_dir():
+        raise UsageError(f"{option} {path}: is a folder; give a file name")
+    if not folder.is_dir():
+        raise UsageError(f"{option} {path}: the folder {folder} does not exist")
+    if not os.access(folder, os.W_OK):
+        raise UsageError(f"{option} {path}: the folder {folder} is not writable")
+
+
+def _write_json(path: str, data: dict[str, Any]) -> None:
+    """Write whole or not at all: a temporary file beside the target, renamed over it."""
+    target = Path(path)
+    with tempfile.NamedTemporaryFile("w", dir=target.parent or ".", suffix=".tmp", delete=False) as out:
+        json.dump(data, out, indent=2)
+    os.replace(out.name, target)
+
+
+def _progress(enabled: bool) -> Any:
+    """A tqdm bar on stderr (off when stderr is not a terminal), created at the first step."""
+    if not enabled:
+        return None
+    from tqdm import tqdm
+
+    class Bar:
+        bar: Any = None
+
+        def __call__(self, step: int, cap: int) -> None:
+            if self.bar is None:
+                self.bar = tqdm(total=cap, unit="step", file=sys.stderr, disable=None, dynamic_ncols=True)
+            self.bar.update(step - self.bar.n)
+
+        def close(self) -> None:
+            if self.bar is not None:
+                self.bar.close()
+
+    return Bar()
+
+
+def _run(args: argparse.Namespace) -> int:
+    cls = _experiment(args.experiment)
+    params = _params(cls, args.param)
+    n = cls.default_n if args.n is None else args.n
+    if args.backend == "robotarium" and n > MAX_ROBOTS:
+        raise UsageError(f"-n {n}: the Robotarium backend runs at most {MAX_ROBOTS} robots; use --backend fast")
+    if args.json:
+        _writable(args.json, "--json")
     recorder = None
     if args.video is not None or args.show:
         from dream.viz import Recorder  # matplotlib only when drawing
@@ -118,20 +210,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         try:  # a bad video path fails here, before the run
             recorder = Recorder(video=args.video, show=args.show, every=args.every)
         except (ValueError, OSError) as err:
-            print(f"dream: error: {err}", file=sys.stderr)
-            return 2
-        options["record"] = recorder
-    progress = _progress_bar(not args.no_progress and sys.stderr.isatty())
+            raise UsageError(str(err)) from None
+    progress = _progress(not args.no_progress)
     try:
-        result = experiment.run(progress=progress, **options)
-    except (ValueError, IndexError) as err:
-        print(f"dream: error: {err}", file=sys.stderr)
-        return 2
+        result = run(cls, n=n, seed=args.seed, backend=args.backend, steps=args.steps, progress=progress,
+                     **({"record": recorder} if recorder is not None else {}), **params)  # fmt: skip
+    except ValueError as err:  # an experiment's refusal (a size it cannot do), said before any step
+        raise UsageError(str(err)) from None
     finally:
+        if progress is not None:
+            progress.close()
         if recorder is not None:
             recorder.close()  # a run that failed half-way still leaves a playable video
-    if progress is not None:
-        sys.stderr.write("\n")
     if recorder is not None and recorder.writer is not None:
         if recorder.writer.frames_written:
             print(f"video: {recorder.video} ({recorder.writer.frames_written} frames, one step in {args.every})")
@@ -139,12 +229,38 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"video: none written (no steps recorded) to {recorder.video}")
     print(result.summary())
     if args.json:
-        with open(args.json, "w", encoding="utf-8") as out:
-            json.dump(result.to_dict(), out, indent=2)
+        _write_json(args.json, result.to_dict())
     if recorder is not None and recorder.live:
         print("close the window to exit", file=sys.stderr)
         recorder.hold()  # keep the live window on the last frame until the user closes it
+    return 1 if args.check and not result.success else 0
+
+
+def _new(name: str, output: str | None) -> int:
+    path = Path(output or f"{name}.py")
+    if path.exists():
+        raise UsageError(f"{path} exists already: choose another name or -o PATH")
+    _writable(str(path), "-o")
+    text = STARTER.read_text(encoding="utf-8")
+    text = text.replace("FILE_STEM", path.stem).replace("FILE", str(path)).replace("NAME", name)
+    path.write_text(text, encoding="utf-8")
+    print(f"wrote {path}: run it with `dream run {path}`")
     return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        if args.command == "list":
+            return _list(args.experiment)
+        if args.command == "bench":
+            return _bench(args.full)
+        if args.command == "new":
+            return _new(args.name, args.output)
+        return _run(args)
+    except UsageError as err:
+        print(f"dream: error: {err}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

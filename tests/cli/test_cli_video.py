@@ -3,43 +3,41 @@
 from __future__ import annotations
 
 import json
+from typing import ClassVar
 
-import numpy as np
 import pytest
 from PIL import Image
 
 from dream import cli
 from dream.cli import _parser, main
-from dream.experiments import EXPERIMENTS, ExperimentResult
-from dream.frames import Frame
-from dream.specs import ROBOTARIUM
+from dream.experiments import EXPERIMENTS, Experiment
 
 
-class FakeExperiment:
-    """Stands in for an experiment module: ``run`` sends ``steps`` frames to ``record``."""
+class FakeExperiment(Experiment):
+    """A stand-in experiment: robots that never move, ``steps`` default 10; runs are logged."""
 
-    NAME = "hrvo-circle"
-    __doc__ = "A stand-in experiment."
+    name = "hrvo-circle"
+    default_n = 3
+    calls: ClassVar[list[dict]] = []
 
-    def __init__(self) -> None:
-        self.calls: list[dict] = []
+    def build(self, n):
+        self.calls.append({"n": n, "backend": self.sim_backend})
 
-    def run(self, n=3, seed=0, backend="auto", steps=None, *, progress=None, **extra):
-        self.calls.append(dict(n=n, seed=seed, backend=backend, steps=steps, **extra))
-        steps = 10 if steps is None else steps
-        record = extra.get("record")
-        for step in range(1, steps + 1):
-            if record is not None:
-                x = np.linspace(-1.0, 1.0, n) + 0.01 * step
-                record(Frame(step, ROBOTARIUM, np.vstack((x, np.zeros(n), np.zeros(n))), title=f"fake {step}"))
-        return ExperimentResult("hrvo-circle", n, seed, "fast", steps, steps, 0, 0, 0, 0.1, {"fake": 1.0})
+    def check(self, n, backend):
+        self.sim_backend = backend
+
+    def steps(self, n):
+        return 10
+
+    def measures(self):
+        return {"fake": 1.0}
 
 
 @pytest.fixture
 def fake(monkeypatch):
-    experiment = FakeExperiment()
-    monkeypatch.setitem(EXPERIMENTS, "hrvo-circle", experiment)
-    return experiment
+    monkeypatch.setattr(FakeExperiment, "calls", [])
+    monkeypatch.setitem(EXPERIMENTS, "hrvo-circle", FakeExperiment)
+    return FakeExperiment
 
 
 def test_cli_parses_video_show_every():
@@ -92,12 +90,11 @@ def test_cli_run_records_every_kth_step_to_gif(tmp_path, capsys, fake):
     assert "collisions" in out and "fake" in out  # the metrics table as before
     assert Image.open(path).n_frames == 3
     assert json.loads(metrics.read_text())["steps"] == 10
-    assert fake.calls[0]["record"].frames_rendered == 3
 
 
-def test_cli_run_passes_record_only_when_drawing(fake, capsys):
+def test_cli_run_without_drawing_writes_no_video(fake, capsys):
     assert main(["run", "hrvo-circle", "--steps", "5"]) == 0
-    assert "record" not in fake.calls[0]
+    assert len(fake.calls) == 1
     assert "video:" not in capsys.readouterr().out
 
 

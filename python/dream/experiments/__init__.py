@@ -1,15 +1,45 @@
-"""The reference experiments of the thesis, as library modules with ``run(...)``."""
+"""Experiments: the :class:`Experiment` spec, the runner, and the thesis's four experiments."""
 
 from __future__ import annotations
 
-from types import ModuleType
-
-from dream.experiments import affine_formation, hrvo_circle, line_consensus, voronoi_coverage
+from dream.experiments.affine_formation import AffineFormation
+from dream.experiments.files import ExperimentFileError, load_file
+from dream.experiments.hrvo_circle import HrvoCircle
+from dream.experiments.line_consensus import LineConsensus
 from dream.experiments.result import ExperimentResult
+from dream.experiments.runner import run
+from dream.experiments.spec import Experiment, Param, param
+from dream.experiments.voronoi_coverage import VoronoiCoverage
 
-#: CLI name -> module with a ``run(n, seed, backend, steps, ...)`` function.
-EXPERIMENTS: dict[str, ModuleType] = {
-    module.NAME: module for module in (hrvo_circle, line_consensus, voronoi_coverage, affine_formation)
+#: Built-in experiments by name.
+EXPERIMENTS: dict[str, type[Experiment]] = {
+    cls.name: cls for cls in (HrvoCircle, LineConsensus, VoronoiCoverage, AffineFormation)
 }
 
-__all__ = ["EXPERIMENTS", "ExperimentResult", "affine_formation", "hrvo_circle", "line_consensus", "voronoi_coverage"]
+
+def find(source: str) -> type[Experiment]:
+    """A built-in experiment by name, or the experiment a ``.py`` file defines."""
+    if source in EXPERIMENTS:
+        return EXPERIMENTS[source]
+    if source.endswith(".py"):
+        return load_file(source)
+    raise ValueError(
+        f"unknown experiment {source!r}: choose one of {', '.join(sorted(EXPERIMENTS))}, or give a .py file"
+    )
+
+
+__all__ = [
+    "EXPERIMENTS",
+    "AffineFormation",
+    "Experiment",
+    "ExperimentFileError",
+    "ExperimentResult",
+    "HrvoCircle",
+    "LineConsensus",
+    "Param",
+    "VoronoiCoverage",
+    "find",
+    "load_file",
+    "param",
+    "run",
+]

@@ -20,21 +20,18 @@ zero collisions.
 from __future__ import annotations
 
 import math
-import time
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
-from dream.backends import make_robotarium
-from dream.experiments.result import ExperimentResult
+from dream.experiments.spec import Experiment
 from dream.frames import Frame
 from dream.obstacles import Obstacle
 from dream.radios import GraphRadio
 from dream.robot import RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec
-from dream.timers import create_timer, update_timers
-from dream.world import World
+from dream.timers import create_timer
 
 NAME = "affine-formation"
 LEADERS = 3
@@ -62,6 +59,7 @@ RECOVER = 450  #: steps back in the nominal shape between two passes
 ENTRY = 0.15  #: the bars enter and leave this far beyond the walls (m)
 BAR_SPEED = 0.15  #: bars sweep leftwards at this speed (m/s)
 BAR_WIDTH = 0.1  #: thickness of a bar (m)
+TOLERANCE = 0.05  #: largest follower error of a formed formation (m)
 GAPS = (0.55, 0.3)  #: the wide and the narrow gap between a pair of bars (m)
 #: Affine maps (formation units -> formation units) the leaders use: nominal, for the wide gap
 #: (compressed), for the narrow gap (collinear; the shear keeps the robots 1/3 unit apart).
@@ -204,46 +202,43 @@ def schedule() -> list[tuple[int, int, int, str, float]]:
     return passes
 
 
-def run(
-    n: int = 7,
-    seed: int = 0,
-    backend: str = "auto",
-    steps: int | None = None,
-    *,
-    trace: bool = False,
-    progress: Any = None,
-    record: Callable[[Frame], None] | None = None,
-) -> ExperimentResult:
-    """Run the formation through both pairs of bars (default: until 30 s after the last has left).
+class AffineFormation(Experiment):
+    """The affine-formation experiment (see the module docs).
 
     ``n`` is 7 (the thesis's formation) or a multiple of 7: then each group of seven has its
     own Robotarium-sized tile of a larger arena, its own bars and the same manoeuvres.
-
-    ``measures``: the followers' error to their affine target just before the first bars set
-    off and at the end (m, largest over the formations), the iterations in which a robot
-    touched a bar, and the largest error while bars are on the arena.
     """
-    if n < 7 or n % 7:
-        raise ValueError(
-            f"the affine formation has 7 robots (3 leaders, 4 followers) per group: n must be a multiple of 7, got n={n}"
-        )
-    groups = n // 7
-    centres = tile_centres(groups)
-    weights = np.kron(np.eye(groups), WEIGHTS)
-    leader = np.arange(n) % 7 < LEADERS
-    passes = schedule()
-    cap = passes[-1][2] + 2 * RECOVER if steps is None else steps
-    with World(seed) as world:
-        sim = make_robotarium(n, backend, corner_starts(world.rng, centres), arena=tiled_arena(groups))
-        adjacency = (weights != 0).astype(float)
-        robots: list[Leader | Follower] = []
+
+    name = NAME
+    default_n = 7
+    success = (
+        "follower error below 0.05 m before the first bars, no robot touching a bar, zero violations, "
+        "through both passes and back to the nominal shape"
+    )
+
+    def check(self, n: int, backend: str) -> None:
+        if n % 7:
+            raise ValueError(
+                "the affine formation has 7 robots (3 leaders, 4 followers) per group: "
+                f"n must be a multiple of 7, got n={n}"
+            )
+
+    def arena_for(self, n: int) -> ArenaSpec:
+        return tiled_arena(n // 7)
+
+    def build(self, n: int) -> None:
+        self.centres = tile_centres(n // 7)
+        self.weights = np.kron(np.eye(n // 7), WEIGHTS)
+        self.leader = np.arange(n) % 7 < LEADERS
+        self.passes = schedule()
+        adjacency = (self.weights != 0).astype(float)
         for i in range(n):
             robot: Leader | Follower
-            if leader[i]:
-                robot = Leader(i, f"leader_{i}", arena=sim.arena)
-                robot.goal = formation("nominal")[i % 7] + centres[i // 7]
+            if self.leader[i]:
+                robot = Leader(i, f"leader_{i}", arena=self.arena)
+                robot.goal = formation("nominal")[i % 7] + self.centres[i // 7]
             else:
-                robot = Follower(i, f"follower_{i}", weights, safety=SAFETY, arena=sim.arena)
+                robot = Follower(i, f"follower_{i}", self.weights, safety=SAFETY, arena=self.arena)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             radio = GraphRadio(i, f"radio_{i}", robot.update_radio, adjacency)
             entries = [
@@ -255,64 +250,68 @@ def run(
                 movement = MovementSensor(i, f"movement_{i}", robot.update_sensor, range=0.6)
                 entries.insert(1, {"delay": 3, "tag": "movement", "call": movement.update})
             create_timer(i, 10 + i % 7, entries)
-            robots.append(robot)
+            self.robots.append(robot)
+        self.bars: list[Obstacle] = []
+        self.contacts, self.settled_error, self.deformed_error, self.error = 0, math.nan, 0.0, math.nan
 
-        dxu = np.zeros((2, n))
-        obstacles: list[Obstacle] = []
-        poses = [sim.poses] if trace else []
-        contacts, settled_error, deformed_error = 0, math.nan, 0.0
-        start = time.perf_counter()
-        for t in range(cap):
-            for deform, enter, leave, shape, gap in passes:
-                if t in (deform, leave):
-                    for robot in robots:
-                        if isinstance(robot, Leader):
-                            place = formation(shape if t == deform else "nominal")[robot.robot_id % 7]
-                            robot.goal = place + centres[robot.robot_id // 7]
-                if t == enter:
-                    obstacles = [bar for centre in centres for bar in bars(gap, ROBOTARIUM.xmax + ENTRY, centre)]
-                if t == leave:
-                    obstacles = []
-            x = sim.get_poses()
-            update_timers(t, {"odom": (x,), "movement": (x, dxu), "radio": (x,), "robot": (dxu,)})
-            sim.set_velocities(np.arange(n), dxu)
-            sim.step()
-            for bar in obstacles:
-                bar.step(sim.time_step)
-            now = sim.poses
-            targets = follower_positions(now[:2].T, leader)
-            error = float(np.linalg.norm(now[:2, ~leader].T - targets, axis=1).max())
-            if t + 1 == passes[0][0]:
-                settled_error = error
-            if obstacles:
-                deformed_error = max(deformed_error, error)
-            contacts += bool(obstacles) and bool(_touching(obstacles, now[:2].T).any())
-            if trace:
-                poses.append(now)
-            if progress is not None:
-                progress(t + 1, cap)
-            if record is not None:
-                goals = np.zeros((n, 2))
-                goals[leader] = [r.goal for r in robots if isinstance(r, Leader)]
-                goals[~leader] = targets
-                record(
-                    Frame(
-                        t + 1,
-                        sim.arena,
-                        now,
-                        goals=goals,
-                        velocities=np.array([r.dxi for r in robots]),
-                        links=np.argwhere(np.triu(weights) != 0),
-                        obstacles=[bar.polygon for bar in obstacles],
-                        title=f"{NAME}: follower error {error:.3f} m, bar contacts {contacts}",
-                    )
-                )
-        wall = time.perf_counter() - start
-    measures = {
-        "error_before_bars": settled_error,
-        "error_end": error,
-        "error_while_deformed": deformed_error,
-        "bar_contacts": contacts,
-    }
-    done = passes[-1][2] if cap >= passes[-1][2] and contacts == 0 else None
-    return ExperimentResult.from_backend(NAME, seed, sim, done, wall, measures, np.array(poses) if trace else None)
+    def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        return corner_starts(rng, self.centres)
+
+    def steps(self, n: int) -> int:
+        """Until 30 s after the last bars have left."""
+        return self.passes[-1][2] + 2 * RECOVER
+
+    def before_step(self, step: int) -> None:
+        for deform, enter, leave, shape, gap in self.passes:
+            if step in (deform, leave):
+                for robot in self.robots:
+                    if isinstance(robot, Leader):
+                        place = formation(shape if step == deform else "nominal")[robot.robot_id % 7]
+                        robot.goal = place + self.centres[robot.robot_id // 7]
+            if step == enter:
+                self.bars = [bar for centre in self.centres for bar in bars(gap, ROBOTARIUM.xmax + ENTRY, centre)]
+            if step == leave:
+                self.bars = []
+
+    def after_step(self, step: int, poses: np.ndarray) -> None:
+        for bar in self.bars:
+            bar.step(self.sim.time_step)
+        self.targets = follower_positions(poses[:2].T, self.leader)
+        self.error = float(np.linalg.norm(poses[:2, ~self.leader].T - self.targets, axis=1).max())
+        if step == self.passes[0][0]:
+            self.settled_error = self.error
+        if self.bars:
+            self.deformed_error = max(self.deformed_error, self.error)
+            self.contacts += bool(_touching(self.bars, poses[:2].T).any())
+
+    def done(self, step: int, poses: np.ndarray) -> bool:
+        return step >= self.steps(self.n) and self.contacts == 0 and self.settled_error < TOLERANCE
+
+    def measures(self) -> dict[str, Any]:
+        """The followers' error to their affine target just before the first bars set off and at
+        the end (m, largest over the formations), the iterations in which a robot touched a bar,
+        and the largest error while bars are on the arena."""
+        return {
+            "error_before_bars": self.settled_error,
+            "error_end": self.error,
+            "error_while_deformed": self.deformed_error,
+            "bar_contacts": self.contacts,
+        }
+
+    def frame(self, step: int, poses: np.ndarray) -> Frame:
+        goals = np.zeros((self.n, 2))
+        goals[self.leader] = [r.goal for r in self.robots if isinstance(r, Leader)]
+        goals[~self.leader] = self.targets
+        return Frame(
+            step,
+            self.arena,
+            poses,
+            goals=goals,
+            velocities=np.array([r.dxi for r in self.robots]),
+            links=np.argwhere(np.triu(self.weights) != 0),
+            obstacles=[bar.polygon for bar in self.bars],
+            title=f"{NAME}: follower error {self.error:.3f} m, bar contacts {self.contacts}",
+        )
+
+
+run = AffineFormation.run

@@ -20,20 +20,20 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
 from dream import kernels
 from dream.backends import make_robotarium
 from dream.experiments.result import ExperimentResult
+from dream.experiments.spec import Experiment
 from dream.frames import Frame
 from dream.radios import RangeRadio
 from dream.robot import RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec
-from dream.timers import create_timer, update_timers
-from dream.world import World
+from dream.timers import create_timer
 
 NAME = "hrvo-circle"
 CIRCLES = 3
@@ -127,49 +127,25 @@ def default_steps(n: int) -> int:
     return 4000 + 40 * n
 
 
-def run(
-    n: int = 10,
-    seed: int = 0,
-    backend: str = "auto",
-    steps: int | None = None,
-    *,
-    trace: bool = False,
-    progress: Any = None,
-    record: Callable[[Frame], None] | None = None,
-) -> ExperimentResult:
-    """Run the circle experiment until every robot completes the third circle (or ``steps``).
+class HrvoCircle(Experiment):
+    """The circle experiment (see the module docs)."""
 
-    Parameters
-    ----------
-    n : int
-        Number of robots.
-    seed : int
-        Seeds the initial poses and everything random in the run.
-    backend : {"auto", "robotarium", "fast"}
-    steps : int, optional
-        Iteration cap; default :func:`default_steps`.
-    trace : bool
-        Record the poses of every step in ``result.trace``.
-    progress : callable, optional
-        Called as ``progress(step, cap)`` after every step.
-    record : callable, optional
-        Called with a :class:`~dream.frames.Frame` after every step (see :mod:`dream.viz`).
+    name = NAME
+    default_n = 10
+    success = "every robot finishes the third circle with zero collisions, boundary and actuator violations"
 
-    Returns
-    -------
-    ExperimentResult
-        ``measures``: ``circles_completed`` (by every robot) and the circle radius.
-    """
-    cap = default_steps(n) if steps is None else steps
-    # On the real Robotarium the arena cannot grow: keep the thesis's circle (beyond 17 robots
-    # its goals are closer than a robot's diameter, so the robots cannot all arrive).
-    grow = backend != "robotarium"
-    goals = circle_goals(n, grow)
-    with World(seed):
-        sim = make_robotarium(n, backend, arena=circle_arena(n, grow), seed=seed)
-        robots = []
+    def check(self, n: int, backend: str) -> None:
+        # On the real Robotarium the arena cannot grow: keep the thesis's circle (beyond 17
+        # robots its goals are closer than a robot's diameter, so the robots cannot all arrive).
+        self.grow = backend != "robotarium"
+
+    def arena_for(self, n: int) -> ArenaSpec:
+        return circle_arena(n, self.grow)
+
+    def build(self, n: int) -> None:
+        goals = circle_goals(n, self.grow)
         for i in range(n):
-            robot = CircleRobot(i, f"robot_{i}", goals[i], n, arena=sim.arena)
+            robot = CircleRobot(i, f"robot_{i}", goals[i], n, arena=self.arena)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             movement = MovementSensor(i, f"movement_{i}", robot.update_sensor)
             radio = RangeRadio(i, f"radio_{i}", robot.update_radio)
@@ -183,32 +159,24 @@ def run(
                     {"delay": 4 + i % 2, "tag": "robot", "call": robot.update},
                 ],
             )
-            robots.append(robot)
+            self.robots.append(robot)
 
-        dxu = np.zeros((2, n))
-        poses = [sim.poses] if trace else []
-        done_at = None
-        start = time.perf_counter()
-        for t in range(cap):
-            x = sim.get_poses()
-            update_timers(t, {"odom": (x,), "movement": (x, dxu), "radio": (x,), "robot": (dxu,)})
-            sim.set_velocities(np.arange(n), dxu)
-            sim.step()
-            if trace:
-                poses.append(sim.poses)
-            if progress is not None:
-                progress(t + 1, cap)
-            if record is not None:
-                record(circle_frame(t + 1, sim, robots))
-            if all(robot.state >= CIRCLES for robot in robots):
-                done_at = t + 1
-                break
-        wall = time.perf_counter() - start
-    measures = {
-        "circles_completed": min((r.state for r in robots), default=CIRCLES),
-        "circle_radius": circle_radius(n, grow),
-    }
-    return ExperimentResult.from_backend(NAME, seed, sim, done_at, wall, measures, np.array(poses) if trace else None)
+    def steps(self, n: int) -> int:
+        return default_steps(n)
+
+    def done(self, step: int, poses: np.ndarray) -> bool:
+        return all(robot.state >= CIRCLES for robot in self.robots)
+
+    def measures(self) -> dict[str, Any]:
+        """``circles_completed`` (by every robot) and the circle radius (m)."""
+        circles = min((r.state for r in self.robots), default=CIRCLES)
+        return {"circles_completed": circles, "circle_radius": circle_radius(self.n, self.grow)}
+
+    def frame(self, step: int, poses: np.ndarray) -> Frame:
+        return circle_frame(step, self.sim, self.robots)
+
+
+run = HrvoCircle.run
 
 
 def run_batch(

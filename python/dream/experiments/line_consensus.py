@@ -11,20 +11,17 @@ Success: y spread and spacing error below 0.02 m, zero collisions.
 from __future__ import annotations
 
 import math
-import time
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
-from dream.backends import make_robotarium
-from dream.experiments.result import ExperimentResult
+from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
 from dream.radios import GraphRadio
 from dream.robot import RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import ROBOTARIUM, ArenaSpec
-from dream.timers import create_timer, update_timers
-from dream.world import World
+from dream.timers import create_timer
 
 NAME = "line-consensus"
 SPACING = 0.3  #: distance between neighbours on the line (m)
@@ -104,78 +101,59 @@ class LineRobot(RobotHRVO):
         self.command(dxu)
 
 
-def run(
-    n: int = 6,
-    seed: int = 0,
-    backend: str = "auto",
-    steps: int | None = None,
-    *,
-    spacing: float = SPACING,
-    radio_gap: int = 10,
-    trace: bool = False,
-    progress: Any = None,
-    record: Callable[[Frame], None] | None = None,
-) -> ExperimentResult:
-    """Run until the line has formed (both errors below 0.02 m) or ``steps`` (default 3000).
+class LineConsensus(Experiment):
+    """The line-consensus experiment (see the module docs)."""
 
-    ``measures``: the final ``y_spread`` and ``spacing_error`` (m) and the convergence time (s).
-    """
-    cap = 3000 if steps is None else steps
-    with World(seed) as world:
-        adjacency = graph(n, world.rng)
-        sim = make_robotarium(n, backend, arena=line_arena(n, spacing), seed=seed)
-        robots = []
+    name = NAME
+    default_n = 6
+    success = "y spread and spacing error below 0.02 m (the line has formed), zero violations"
+    spacing: float = param(SPACING, "distance between neighbours on the line (m)")
+    radio_gap: int = param(10, "steps between radio exchanges")
+
+    def arena_for(self, n: int) -> ArenaSpec:
+        return line_arena(n, self.spacing)
+
+    def build(self, n: int) -> None:
+        self.adjacency = graph(n, self.world.rng)
         for i in range(n):
-            robot = LineRobot(i, f"robot_{i}", spacing, arena=sim.arena)
+            robot = LineRobot(i, f"robot_{i}", self.spacing, arena=self.arena)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             movement = MovementSensor(i, f"movement_{i}", robot.update_sensor)
-            radio = GraphRadio(i, f"radio_{i}", robot.update_radio, adjacency)
+            radio = GraphRadio(i, f"radio_{i}", robot.update_radio, self.adjacency)
             create_timer(
                 i,
                 10 + i % 3,
                 [
                     {"delay": 2, "tag": "odom", "call": odometry.update},
                     {"delay": 3, "tag": "movement", "call": movement.update},
-                    {"delay": radio_gap, "tag": "radio", "call": radio.update},
+                    {"delay": self.radio_gap, "tag": "radio", "call": radio.update},
                     {"delay": 4, "tag": "robot", "call": robot.update},
                 ],
             )
-            robots.append(robot)
+            self.robots.append(robot)
 
-        dxu = np.zeros((2, n))
-        poses = [sim.poses] if trace else []
-        done_at = None
-        start = time.perf_counter()
-        for t in range(cap):
-            x = sim.get_poses()
-            update_timers(t, {"odom": (x,), "movement": (x, dxu), "radio": (x,), "robot": (dxu,)})
-            sim.set_velocities(np.arange(n), dxu)
-            sim.step()
-            if trace:
-                poses.append(sim.poses)
-            if progress is not None:
-                progress(t + 1, cap)
-            if record is not None:
-                spread, error = line_errors(sim.poses, spacing)
-                record(
-                    Frame(
-                        t + 1,
-                        sim.arena,
-                        sim.poses,
-                        goals=np.array([np.full(2, np.nan) if r.target is None else r.target for r in robots]),
-                        velocities=np.array([r.dxi for r in robots]).reshape(-1, 2),
-                        links=np.argwhere(np.triu(adjacency) > 0),
-                        title=f"{NAME}: y spread {spread:.3f} m, spacing error {error:.3f} m",
-                    )
-                )
-            if max(line_errors(sim.poses, spacing)) < TOLERANCE:
-                done_at = t + 1
-                break
-        wall = time.perf_counter() - start
-    spread, error = line_errors(sim.poses, spacing)
-    measures = {
-        "y_spread": spread,
-        "spacing_error": error,
-        "convergence_time_s": None if done_at is None else done_at * sim.time_step,
-    }
-    return ExperimentResult.from_backend(NAME, seed, sim, done_at, wall, measures, np.array(poses) if trace else None)
+    def done(self, step: int, poses: np.ndarray) -> bool:
+        self.errors = line_errors(poses, self.spacing)
+        self.done_at = step if max(self.errors) < TOLERANCE else None
+        return self.done_at is not None
+
+    def measures(self) -> dict[str, Any]:
+        """The final ``y_spread`` and ``spacing_error`` (m) and the convergence time (s)."""
+        spread, error = line_errors(self.sim.poses, self.spacing)
+        time = None if self.done_at is None else self.done_at * self.sim.time_step
+        return {"y_spread": spread, "spacing_error": error, "convergence_time_s": time}
+
+    def frame(self, step: int, poses: np.ndarray) -> Frame:
+        spread, error = line_errors(poses, self.spacing)
+        return Frame(
+            step,
+            self.arena,
+            poses,
+            goals=np.array([np.full(2, np.nan) if r.target is None else r.target for r in self.robots]),
+            velocities=np.array([r.dxi for r in self.robots]).reshape(-1, 2),
+            links=np.argwhere(np.triu(self.adjacency) > 0),
+            title=f"{NAME}: y spread {spread:.3f} m, spacing error {error:.3f} m",
+        )
+
+
+run = LineConsensus.run

@@ -33,10 +33,16 @@ class ExperimentResult:
     wall_time: float
     measures: dict[str, Any] = field(default_factory=dict)
     trace: np.ndarray | None = field(default=None, repr=False)
+    params: dict[str, Any] = field(default_factory=dict)
 
     @property
     def completed(self) -> bool:
         return self.completed_step is not None
+
+    @property
+    def success(self) -> bool:
+        """Completed, with zero collisions, boundary and actuator violations."""
+        return self.completed and not (self.collisions or self.boundary or self.actuator)
 
     @property
     def steps_per_second(self) -> float:
@@ -52,6 +58,7 @@ class ExperimentResult:
         wall_time: float,
         measures: dict[str, Any],
         trace: np.ndarray | None = None,
+        params: dict[str, Any] | None = None,
     ) -> ExperimentResult:
         b, c, a = backend.violations
         return cls(
@@ -67,6 +74,7 @@ class ExperimentResult:
             wall_time,
             measures,
             trace,
+            dict(params or {}),
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -75,6 +83,7 @@ class ExperimentResult:
         data.pop("trace")
         data["steps_per_second"] = self.steps_per_second
         data["completed"] = self.completed
+        data["success"] = self.success
         return data
 
     def summary(self) -> str:
@@ -84,11 +93,13 @@ class ExperimentResult:
             ("robots", self.n),
             ("seed", self.seed),
             ("backend", self.backend),
+            *((f"  {key}", value) for key, value in self.params.items()),
             ("steps run", self.steps),
             ("completed at step", "not completed" if self.completed_step is None else self.completed_step),
             ("collisions", self.collisions),
             ("boundary", self.boundary),
             ("actuator", self.actuator),
+            ("success", "yes" if self.success else "no"),
             *self.measures.items(),
             ("wall time (s)", f"{self.wall_time:.2f}"),
             ("steps/s", f"{self.steps_per_second:.0f}"),

@@ -15,22 +15,19 @@ coverage cost falls, and without moving obstacles the team comes to rest.
 from __future__ import annotations
 
 import math
-import time
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
 from dream import kernels
-from dream.backends import make_robotarium
-from dream.experiments.result import ExperimentResult
+from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
 from dream.obstacles import Obstacle
 from dream.radios import RangeRadio
 from dream.robot import Robot
 from dream.sensors import ObstacleSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec
-from dream.timers import create_timer, update_timers
-from dream.world import World
+from dream.timers import create_timer
 
 NAME = "voronoi-coverage"
 CELL_RADIUS = 1.0  #: radius of the disc a robot's cell starts from (m)
@@ -137,33 +134,27 @@ class CoverageRobot(Robot):
         self.command(dxu)
 
 
-def run(
-    n: int = 15,
-    seed: int = 0,
-    backend: str = "auto",
-    steps: int | None = None,
-    *,
-    moving_obstacles: bool = True,
-    trace: bool = False,
-    progress: Any = None,
-    record: Callable[[Frame], None] | None = None,
-) -> ExperimentResult:
-    """Run the coverage experiment for ``steps`` (default 1500), stopping early once the team rests.
+class VoronoiCoverage(Experiment):
+    """The coverage experiment (see the module docs)."""
 
-    ``measures``: the coverage cost at the start and the end (m^4), the iterations in which a
-    robot's body touched a static obstacle, and how many robots were still moving at the end.
-    """
-    cap = 1500 if steps is None else steps
-    arena = coverage_arena(n)
-    with World(seed) as world:
-        obstacles = thesis_obstacles(world.rng, moving_obstacles, scale_for(n))
-        sim = make_robotarium(n, backend, corner_poses(n, world.rng, arena), arena=arena)
-        robots = []
+    name = NAME
+    default_n = 15
+    success = (
+        "the team comes to rest with zero collisions and no contact with the static obstacles "
+        "(with moving obstacles, it never rests: turn them off with moving_obstacles=false)"
+    )
+    moving_obstacles: bool = param(True, "two small obstacles wander and bounce off the walls")
+
+    def arena_for(self, n: int) -> ArenaSpec:
+        return coverage_arena(n)
+
+    def build(self, n: int) -> None:
+        self.obstacles = thesis_obstacles(self.world.rng, self.moving_obstacles, scale_for(n))
         for i in range(n):
-            robot = CoverageRobot(i, f"robot_{i}", arena=arena)
-            robots.append(robot)
+            robot = CoverageRobot(i, f"robot_{i}", arena=self.arena)
+            self.robots.append(robot)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
-            sensor = ObstacleSensor(i, f"obstacles_{i}", robot.update_obstacles, obstacles, range=CELL_RADIUS)
+            sensor = ObstacleSensor(i, f"obstacles_{i}", robot.update_obstacles, self.obstacles, range=CELL_RADIUS)
             radio = RangeRadio(i, f"radio_{i}", robot.update_radio, range=2 * CELL_RADIUS)
             create_timer(
                 i,
@@ -175,48 +166,52 @@ def run(
                     {"delay": 5, "tag": "robot", "call": robot.update},
                 ],
             )
+        self.static = [o for o in self.obstacles if not o.moving]
+        self.sampling = 0.02 * scale_for(n)
+        self.contacts, self.still = 0, 0
 
-        dxu = np.zeros((2, n))
-        sampling = 0.02 * scale_for(n)
-        start_cost = coverage_cost(sim.poses[:2], arena, obstacles, sampling)
-        static = [o for o in obstacles if not o.moving]
-        contacts, still, done_at = 0, 0, None
-        poses = [sim.poses] if trace else []
-        start = time.perf_counter()
-        for t in range(cap):
-            x = sim.get_poses()
-            update_timers(t, {"odom": (x,), "obstacles": (x,), "radio": (x,), "robot": (dxu,)})
-            sim.set_velocities(np.arange(n), dxu)
-            sim.step()
-            for obstacle in obstacles:
-                obstacle.step(sim.time_step, arena)
-            now = sim.poses
-            contacts += any(o.distance(now[:2, i]) < GRITSBOT.radius for o in static for i in range(n))
-            still = still + 1 if t > 20 + n % 5 and not dxu.any() else 0
-            if trace:
-                poses.append(now)
-            if progress is not None:
-                progress(t + 1, cap)
-            if record is not None:
-                record(
-                    Frame(
-                        t + 1,
-                        arena,
-                        now,
-                        goals=np.array([np.full(2, np.nan) if r.centroid is None else r.centroid for r in robots]),
-                        obstacles=[o.polygon for o in obstacles],
-                        cells=[r.cell for r in robots],
-                        title=f"{NAME}: static contacts {contacts}, collisions {sim.violations.collision}",
-                    )
-                )
-            if still >= REST_STEPS:
-                done_at = t + 1
-                break
-        wall = time.perf_counter() - start
-    measures = {
-        "cost_start": start_cost,
-        "cost_end": coverage_cost(sim.poses[:2], arena, obstacles, sampling),
-        "static_contacts": contacts,
-        "moving_at_end": int(np.count_nonzero(np.any(dxu != 0, axis=0))),
-    }
-    return ExperimentResult.from_backend(NAME, seed, sim, done_at, wall, measures, np.array(poses) if trace else None)
+    def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        return corner_poses(n, rng, self.arena)
+
+    def steps(self, n: int) -> int:
+        return 1500
+
+    def timer_params(self, x: np.ndarray, dxu: np.ndarray) -> dict[str, tuple[Any, ...]]:
+        return {"odom": (x,), "obstacles": (x,), "radio": (x,), "robot": (dxu,)}
+
+    def before_step(self, step: int) -> None:
+        if step == 0:
+            self.cost_start = coverage_cost(self.sim.poses[:2], self.arena, self.obstacles, self.sampling)
+
+    def after_step(self, step: int, poses: np.ndarray) -> None:
+        for obstacle in self.obstacles:
+            obstacle.step(self.sim.time_step, self.arena)
+        self.contacts += any(o.distance(poses[:2, i]) < GRITSBOT.radius for o in self.static for i in range(self.n))
+        self.still = self.still + 1 if step > 21 + self.n % 5 and not self.dxu.any() else 0
+
+    def done(self, step: int, poses: np.ndarray) -> bool:
+        return self.still >= REST_STEPS
+
+    def measures(self) -> dict[str, Any]:
+        """Coverage cost at the start and the end (m^4), iterations in which a robot's body
+        touched a static obstacle, robots still moving at the end."""
+        return {
+            "cost_start": self.cost_start,
+            "cost_end": coverage_cost(self.sim.poses[:2], self.arena, self.obstacles, self.sampling),
+            "static_contacts": self.contacts,
+            "moving_at_end": int(np.count_nonzero(np.any(self.dxu != 0, axis=0))),
+        }
+
+    def frame(self, step: int, poses: np.ndarray) -> Frame:
+        return Frame(
+            step,
+            self.arena,
+            poses,
+            goals=np.array([np.full(2, np.nan) if r.centroid is None else r.centroid for r in self.robots]),
+            obstacles=[o.polygon for o in self.obstacles],
+            cells=[r.cell for r in self.robots],
+            title=f"{NAME}: static contacts {self.contacts}, collisions {self.sim.violations.collision}",
+        )
+
+
+run = VoronoiCoverage.run

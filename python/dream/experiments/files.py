@@ -1,0 +1,51 @@
+"""Experiments from a researcher's own file: ``dream run my_experiment.py``."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+from dream.experiments.spec import Experiment
+
+
+class ExperimentFileError(ValueError):
+    """A file that does not define exactly one experiment, or that fails to load."""
+
+
+def load_file(path: str | Path) -> type[Experiment]:
+    """The one :class:`~dream.Experiment` subclass that the Python file ``path`` defines.
+
+    Raises
+    ------
+    ExperimentFileError
+        The file is missing, fails to import (the error and its line), or defines no
+        Experiment or more than one.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ExperimentFileError(f"{path}: no such file")
+    module_name = f"dream_user_{path.stem}_{abs(hash(path.resolve()))}"
+    spec = importlib.util.spec_from_file_location(module_name, path)
+    if spec is None or spec.loader is None:
+        raise ExperimentFileError(f"{path}: not a Python file")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[module_name] = module  # dataclasses and pickling look the module up by name
+    try:
+        spec.loader.exec_module(module)
+    except SyntaxError as err:
+        del sys.modules[module_name]
+        raise ExperimentFileError(f"{path}, line {err.lineno}: syntax error: {err.msg}") from None
+    except Exception as err:  # the user's code: report it, whatever it raised
+        del sys.modules[module_name]
+        raise ExperimentFileError(f"{path}: loading it raised {type(err).__name__}: {err}") from err
+    found = [
+        value
+        for value in vars(module).values()
+        if isinstance(value, type) and issubclass(value, Experiment) and value.__module__ == module_name
+    ]
+    if len(found) != 1:
+        names = ", ".join(cls.__name__ for cls in found)
+        what = "no Experiment subclass" if not found else f"{len(found)} Experiment subclasses ({names})"
+        raise ExperimentFileError(f"{path}: defines {what}; a file for `dream run` defines exactly one")
+    return found[0]

@@ -1,0 +1,114 @@
+"""The one experiment loop: every experiment, built-in or a researcher's own, runs through :func:`run`."""
+
+from __future__ import annotations
+
+import numbers
+import time
+from typing import Any, Callable
+
+import numpy as np
+
+from dream.backends import BACKENDS, make_robotarium
+from dream.experiments.result import ExperimentResult
+from dream.experiments.spec import Experiment
+from dream.frames import Frame
+from dream.world import World
+
+Progress = Callable[[int, int], None]
+
+
+def run(
+    experiment: type[Experiment] | Experiment | str,
+    n: int | None = None,
+    seed: int = 0,
+    backend: str = "auto",
+    steps: int | None = None,
+    *,
+    record: Callable[[Frame], None] | None = None,
+    progress: Progress | None = None,
+    trace: bool = False,
+    **params: Any,
+) -> ExperimentResult:
+    """Run ``experiment`` until it is done or ``steps`` have run.
+
+    Parameters
+    ----------
+    experiment : Experiment subclass, instance, or the name of a built-in experiment
+        An instance contributes its parameter values; the run uses a fresh copy.
+    n : int, optional
+        Number of robots (default: the experiment's ``default_n``).
+    seed : int
+        Seeds the run's one random generator (``world.rng``): initial poses, noise, losses and
+        whatever the experiment draws. The same seed gives the same run.
+    backend : {"auto", "robotarium", "fast"}
+        See :func:`dream.make_robotarium`.
+    steps : int, optional
+        Step cap (default: the experiment's :meth:`~Experiment.steps`).
+    record : callable, optional
+        Called with the experiment's :class:`~dream.frames.Frame` after every step.
+    progress : callable, optional
+        Called as ``progress(step, cap)`` after every step.
+    trace : bool
+        Keep the poses of every step in ``result.trace`` ``(steps + 1, 3, n)``.
+    **params
+        Values of the experiment's declared parameters.
+
+    Returns
+    -------
+    ExperimentResult
+    """
+    exp = _instance(experiment, params)
+    n = exp.default_n if n is None else _count(n, "n", 1)
+    seed = _count(seed, "seed", 0)
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
+    exp.check(n, backend)
+    with World(seed) as world:
+        exp.n, exp.world, exp.arena = n, world, exp.arena_for(n)
+        exp.build(n)
+        sim = make_robotarium(n, backend, exp.initial_poses(n, world.rng), arena=exp.arena)
+        exp.sim, exp.dxu = sim, np.zeros((2, n))
+        cap = exp.steps(n) if steps is None else _count(steps, "steps", 1)
+        everyone = np.arange(n)
+        poses = [sim.poses] if trace else []
+        done_at = None
+        start = time.perf_counter()
+        for t in range(cap):
+            exp.before_step(t)
+            x = sim.get_poses()
+            world.update_timers(t, exp.timer_params(x, exp.dxu))
+            sim.set_velocities(everyone, exp.dxu)
+            sim.step()
+            now = sim.poses
+            exp.after_step(t + 1, now)
+            if trace:
+                poses.append(now)
+            if progress is not None:
+                progress(t + 1, cap)
+            if record is not None:
+                record(exp.frame(t + 1, now))
+            if exp.done(t + 1, now):
+                done_at = t + 1
+                break
+        wall = time.perf_counter() - start
+    return ExperimentResult.from_backend(
+        exp.label(), seed, sim, done_at, wall, exp.measures(), np.array(poses) if trace else None, exp.params
+    )
+
+
+def _instance(experiment: type[Experiment] | Experiment | str, params: dict[str, Any]) -> Experiment:
+    if isinstance(experiment, str):
+        from dream.experiments import find
+
+        experiment = find(experiment)
+    if isinstance(experiment, Experiment):
+        return type(experiment)(**{**experiment.params, **params})
+    if isinstance(experiment, type) and issubclass(experiment, Experiment):
+        return experiment(**params)
+    raise TypeError(f"run() takes an Experiment subclass, instance or name, got {experiment!r}")
+
+
+def _count(value: Any, name: str, least: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least:
+        raise ValueError(f"{name} must be an integer >= {least}, got {value!r}")
+    return int(value)

@@ -1,0 +1,211 @@
+"""What an experiment declares: its parameters, how its robots are built, and when it succeeded.
+
+An experiment is a subclass of :class:`Experiment`. It declares its name, its default size, its
+parameters (with :func:`param`) and a few hooks; :func:`dream.run` owns the loop, so every
+experiment, the thesis's four and a researcher's own, gets the same runner, metrics, video,
+progress bar, CLI (``dream run my_experiment.py --param gain=2``) and sweeps::
+
+    class GoRight(Experiment):
+        name = "go-right"
+        default_n = 5
+        speed: float = param(0.1, "how fast the robots drive right (m/s)")
+
+        def build(self, n):
+            for i in range(n):
+                robot = MyRobot(i, speed=self.speed, arena=self.arena)
+                odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
+                create_timer(i, 10, [{"delay": 2, "tag": "odom", "call": odometry.update},
+                                     {"delay": 4, "tag": "robot", "call": robot.update}])
+                self.robots.append(robot)
+
+        def done(self, step, poses):
+            return bool((poses[0] > 1.0).all())
+
+A run creates a fresh instance, so an experiment keeps its run's state on ``self``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from dream.backends import Backend, initial_poses
+from dream.frames import Frame
+from dream.specs import ROBOTARIUM, ArenaSpec
+from dream.world import World
+
+_TRUE = {"1", "true", "yes", "on"}
+_FALSE = {"0", "false", "no", "off"}
+
+
+@dataclass(frozen=True)
+class Param:
+    """A declared parameter: its default (whose type is the parameter's type) and its help."""
+
+    default: Any
+    help: str
+    name: str = ""
+
+    @property
+    def kind(self) -> type:
+        return type(self.default)
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        object.__setattr__(self, "name", name)
+
+    def __get__(self, instance: Any, owner: type) -> Any:
+        # On the class: the declaration itself. An instance holds its value in its own dict,
+        # which Python looks up before this (non-data) descriptor.
+        return self if instance is None else self.default
+
+    def convert(self, value: Any, experiment: str) -> Any:
+        """``value`` (a Python value, or the text given on the command line) as this parameter's type."""
+        where = f"parameter {self.name!r} of {experiment}"
+        kind = self.kind
+        if isinstance(value, str) and kind is not str:
+            text = value.strip().lower()
+            try:
+                if kind is bool:
+                    if text not in _TRUE | _FALSE:
+                        raise ValueError
+                    return text in _TRUE
+                return kind(value)
+            except ValueError:
+                raise ValueError(f"{where} expects {_kind_name(kind)}, got {value!r}") from None
+        if kind is float and isinstance(value, (int, np.integer)) and not isinstance(value, bool):
+            return float(value)
+        if isinstance(value, bool) != (kind is bool) or not isinstance(value, kind):
+            raise ValueError(f"{where} expects {_kind_name(kind)}, got {value!r}")
+        return value
+
+
+def _kind_name(kind: type) -> str:
+    return {bool: "true or false", int: "an integer", float: "a number", str: "text"}.get(kind, kind.__name__)
+
+
+def param(default: Any, help: str) -> Any:
+    """Declare a parameter of an :class:`Experiment` (type: that of ``default``)."""
+    if not isinstance(default, (bool, int, float, str)):
+        raise TypeError(f"a parameter's default must be a bool, int, float or str, got {default!r}")
+    return Param(default, help)
+
+
+class Experiment:
+    """Base class of an experiment run by :func:`dream.run` (see the module docs).
+
+    Class attributes
+    ----------------
+    name : str
+        The name the CLI and the results use (``hrvo-circle``).
+    default_n : int
+        Number of robots when the run does not say.
+    success : str
+        One sentence: what counts as success (``dream list NAME`` prints it).
+
+    Hooks, in the order the runner calls them (all but :meth:`build` optional)
+    --------------------------------------------------------------------------
+    :meth:`check` (refuse sizes that cannot succeed), :meth:`arena_for`, :meth:`build`,
+    :meth:`initial_poses`, :meth:`steps`; then every step :meth:`before_step`, the timers with
+    :meth:`timer_params`, the simulator's step, :meth:`after_step`, :meth:`frame` (when recording)
+    and :meth:`done`; at the end :meth:`measures`.
+
+    Attributes the runner sets
+    --------------------------
+    n, world, arena (before :meth:`build`); sim, dxu (the swarm's command array, ``(2, n)``,
+    that controllers write into) once the simulator exists. ``robots`` is a list for
+    :meth:`build` to fill (used by the default :meth:`frame`).
+    """
+
+    name: ClassVar[str] = ""
+    default_n: ClassVar[int] = 10
+    success: ClassVar[str] = "the run reaches done() with zero collisions, boundary and actuator violations"
+
+    n: int
+    world: World
+    arena: ArenaSpec
+    sim: Backend
+    dxu: np.ndarray
+
+    def __init__(self, **params: Any) -> None:
+        declared = self.parameters()
+        for key, value in params.items():
+            if key not in declared:
+                have = ", ".join(declared) or "none"
+                raise ValueError(f"{self.label()} has no parameter {key!r} (its parameters: {have})")
+            setattr(self, key, declared[key].convert(value, self.label()))
+        self.robots: list[Any] = []
+
+    @classmethod
+    def label(cls) -> str:
+        return cls.name or cls.__name__
+
+    @classmethod
+    def parameters(cls) -> dict[str, Param]:
+        """The declared parameters, by name, in declaration order (base classes first)."""
+        found: dict[str, Param] = {}
+        for klass in reversed(cls.__mro__):
+            found.update({key: value for key, value in vars(klass).items() if isinstance(value, Param)})
+        return found
+
+    @property
+    def params(self) -> dict[str, Any]:
+        """This instance's parameter values."""
+        return {key: getattr(self, key) for key in self.parameters()}
+
+    @classmethod
+    def run(cls, n: int | None = None, seed: int = 0, backend: str = "auto", steps: int | None = None, **options: Any):  # type: ignore[no-untyped-def]
+        """:func:`dream.run` of this experiment (keyword arguments: the runner's and the parameters)."""
+        from dream.experiments.runner import run
+
+        return run(cls, n=n, seed=seed, backend=backend, steps=steps, **options)
+
+    # -- hooks -------------------------------------------------------------------------------
+    def check(self, n: int, backend: str) -> None:
+        """Raise ``ValueError`` (saying why and what the limit is) for a size that cannot succeed."""
+
+    def arena_for(self, n: int) -> ArenaSpec:
+        """The arena for ``n`` robots (default: the Robotarium's)."""
+        return ROBOTARIUM
+
+    def build(self, n: int) -> None:
+        """Create the robots, sensors, radios and timers (in :attr:`world`, the current world).
+
+        Draw anything random from ``self.world.rng`` (the run's only generator).
+        """
+        raise NotImplementedError(f"{self.label()} must define build(self, n)")
+
+    def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """Initial poses ``(3, n)`` (default: random grid points in the arena's centre, as rps)."""
+        return initial_poses(n, rng, self.arena)
+
+    def steps(self, n: int) -> int:
+        """The step cap when the run does not give one."""
+        return 3000
+
+    def timer_params(self, x: np.ndarray, dxu: np.ndarray) -> dict[str, tuple[Any, ...]]:
+        """The arguments of each timer tag at this step (``x``: poses ``(3, n)``)."""
+        return {"odom": (x,), "movement": (x, dxu), "radio": (x,), "robot": (dxu,)}
+
+    def before_step(self, step: int) -> None:
+        """Called before the robots decide at step ``step`` (0-based): scheduled events."""
+
+    def after_step(self, step: int, poses: np.ndarray) -> None:
+        """Called after the simulator's step; ``step`` steps have run, ``poses`` ``(3, n)``."""
+
+    def done(self, step: int, poses: np.ndarray) -> bool:
+        """Whether the experiment has reached its goal (the run stops there)."""
+        return False
+
+    def measures(self) -> dict[str, Any]:
+        """The experiment's own figures for the result (plain numbers)."""
+        return {}
+
+    def frame(self, step: int, poses: np.ndarray) -> Frame:
+        """What a renderer draws of this step (default: poses, and ``dxi`` of robots that have one)."""
+        velocities = [getattr(robot, "dxi", None) for robot in self.robots]
+        drawn = None
+        if self.robots and all(v is not None for v in velocities):
+            drawn = np.array(velocities, dtype=np.float64).reshape(-1, 2)
+        return Frame(step, self.arena, poses, velocities=drawn, title=self.label())

@@ -1,0 +1,115 @@
+"""`dream run FILE.py`, `--param`, `dream list NAME`, `dream new`, and bad input refused up front."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+from PIL import Image
+
+from dream.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+RENDEZVOUS = str(ROOT / "examples" / "rendezvous.py")
+
+
+def test_rendezvous_example_succeeds_with_20_robots(tmp_path, capsys):
+    out = tmp_path / "out.json"
+    assert main(["run", RENDEZVOUS, "-n", "20", "--json", str(out), "--check"]) == 0
+    metrics = json.loads(out.read_text())
+    assert metrics["experiment"] == "rendezvous" and metrics["n"] == 20
+    assert metrics["success"] and metrics["collisions"] == 0
+    assert metrics["measures"]["spread"] <= metrics["params"]["safety"] * 4  # the met radius, 0.75 m
+    assert re.search(r"^success\s+yes$", capsys.readouterr().out, re.M)
+
+
+def test_user_file_runs_with_params_json_and_video(tmp_path, capsys):
+    out, video = tmp_path / "m.json", tmp_path / "x.gif"
+    argv = ["run", RENDEZVOUS, "-n", "6", "--steps", "30", "--backend", "fast", "--param", "gain=0.8"]
+    argv += ["--param", "radio_range=0.7", "--json", str(out), "--video", str(video), "--every", "10"]
+    assert main(argv) == 0
+    metrics = json.loads(out.read_text())
+    assert metrics["params"]["gain"] == 0.8 and metrics["params"]["radio_range"] == 0.7
+    assert metrics["steps"] == 30 and metrics["backend"] == "fast"
+    assert Image.open(video).n_frames == 3
+    assert "video:" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("x = 1\n", "defines no Experiment subclass"),
+        ("from dream import Experiment\nclass A(Experiment): pass\nclass B(Experiment): pass\n", "2 Experiment"),
+        ("def broken(:\n", "line 1: syntax error"),
+    ],
+)
+def test_bad_files_give_one_line(tmp_path, capsys, text, message):
+    path = tmp_path / "bad.py"
+    path.write_text(text)
+    assert main(["run", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--param", "speed=1"], "has no parameter 'speed' (its parameters: radius, radio_range, gain, safety)"),
+        (["--param", "gain=fast"], "parameter 'gain' of rendezvous expects a number, got 'fast'"),
+        (["--param", "gain"], "--param takes NAME=VALUE, got 'gain'"),
+    ],
+)
+def test_bad_params_are_named(capsys, argv, message):
+    assert main(["run", RENDEZVOUS, *argv]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["-n", "0"], "argument -n: expected an integer >= 1, got 0"),
+        (["--steps", "-3"], "argument --steps: expected an integer >= 1, got -3"),
+        (["--seed", "-1"], "argument --seed: expected an integer >= 0, got -1"),
+    ],
+)
+def test_bad_values_name_the_option(capsys, argv, message):
+    with pytest.raises(SystemExit) as exited:
+        main(["run", "hrvo-circle", *argv])
+    assert exited.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_too_many_robots_for_the_robotarium_says_the_way_out(capsys):
+    assert main(["run", "hrvo-circle", "-n", "100", "--backend", "robotarium"]) == 2
+    assert "at most 50 robots; use --backend fast" in capsys.readouterr().err
+
+
+def test_unwritable_json_is_refused_before_the_run(tmp_path, capsys):
+    missing = tmp_path / "no" / "out.json"
+    assert main(["run", "hrvo-circle", "--json", str(missing)]) == 2
+    err = capsys.readouterr().err
+    assert "does not exist" in err and "--json" in err
+    assert not missing.parent.exists()
+
+
+def test_list_shows_parameters_and_success(capsys):
+    assert main(["list", "line-consensus"]) == 0
+    out = capsys.readouterr().out
+    assert "--param spacing=0.3" in out and "(float)" in out and "success:" in out and "robots by default: 6" in out
+
+
+def test_new_writes_a_starter_that_succeeds(tmp_path, capsys):
+    path = tmp_path / "spread.py"
+    assert main(["new", "spread", "-o", str(path)]) == 0
+    assert main(["run", str(path), "--backend", "fast", "--check"]) == 0
+    assert re.search(r"^experiment\s+spread$", capsys.readouterr().out, re.M)
+    assert main(["new", "spread", "-o", str(path)]) == 2  # never overwrites
+    assert "exists already" in capsys.readouterr().err
+
+
+def test_check_exits_1_when_the_run_fails(capsys):
+    assert main(["run", "line-consensus", "--steps", "5", "--backend", "fast", "--check"]) == 1
+    assert re.search(r"^success\s+no$", capsys.readouterr().out, re.M)

@@ -1,0 +1,133 @@
+"""The Experiment spec and the one runner: parameters, refusals, files, and the ported experiments."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dream
+from dream.experiments import EXPERIMENTS, Experiment, ExperimentFileError, load_file, param
+
+DATA = Path(__file__).parent / "data"
+
+
+class Still(Experiment):
+    """Robots that never move; done after `wait` steps."""
+
+    name = "still"
+    default_n = 3
+    wait: int = param(5, "steps before done")
+    gain: float = param(1.0, "unused")
+    loud: bool = param(False, "unused")
+
+    def build(self, n):
+        self.built = n
+
+    def done(self, step, poses):
+        return step >= self.wait
+
+    def measures(self):
+        return {"built": self.built}
+
+
+def test_params_are_declared_in_order_with_defaults_and_help():
+    declared = Still.parameters()
+    assert list(declared) == ["wait", "gain", "loud"]
+    assert declared["wait"].default == 5 and declared["wait"].help == "steps before done"
+    assert Still().params == {"wait": 5, "gain": 1.0, "loud": False}
+
+
+@pytest.mark.parametrize(
+    ("given", "expected"),
+    [({"wait": "7"}, 7), ({"gain": 2}, 2.0), ({"gain": "0.5"}, 0.5), ({"loud": "yes"}, True), ({"loud": "0"}, False)],
+)
+def test_params_convert_text_and_numbers(given, expected):
+    assert next(iter(Still(**given).params[name] for name in given)) == expected
+
+
+@pytest.mark.parametrize(
+    ("given", "message"),
+    [
+        ({"speed": 1}, r"still has no parameter 'speed' \(its parameters: wait, gain, loud\)"),
+        ({"wait": "x"}, r"parameter 'wait' of still expects an integer, got 'x'"),
+        ({"wait": 2.5}, r"parameter 'wait' of still expects an integer, got 2.5"),
+        ({"loud": "maybe"}, r"parameter 'loud' of still expects true or false"),
+        ({"gain": True}, r"parameter 'gain' of still expects a number"),
+    ],
+)
+def test_params_reject_unknown_names_and_wrong_types(given, message):
+    with pytest.raises(ValueError, match=message):
+        Still(**given)
+
+
+def test_run_takes_a_class_an_instance_or_a_name():
+    by_class = dream.run(Still, backend="fast", wait=3)
+    assert (by_class.completed_step, by_class.steps, by_class.n, by_class.params["wait"]) == (3, 3, 3, 3)
+    by_instance = dream.run(Still(wait=4), n=2, backend="fast")
+    assert by_instance.completed_step == 4 and by_instance.measures == {"built": 2}
+    assert by_instance.success
+    by_name = dream.run("line-consensus", backend="fast", steps=2)
+    assert by_name.experiment == "line-consensus" and by_name.steps == 2 and not by_name.completed
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"n": 0}, "n must be an integer >= 1, got 0"),
+        ({"seed": -1}, "seed must be an integer >= 0, got -1"),
+        ({"steps": 0}, "steps must be an integer >= 1, got 0"),
+        ({"backend": "gazebo"}, "unknown backend 'gazebo'"),
+    ],
+)
+def test_run_refuses_bad_options_before_any_step(options, message):
+    with pytest.raises(ValueError, match=message):
+        dream.run(Still, **options)
+
+
+def test_run_refuses_unknown_experiment_names():
+    with pytest.raises(ValueError, match="unknown experiment 'nope': choose one of affine-formation"):
+        dream.run("nope")
+
+
+@pytest.mark.parametrize("name", sorted(EXPERIMENTS))
+@pytest.mark.parametrize("backend", ["robotarium", "fast"])
+def test_ported_experiments_keep_their_trajectories(name, backend):
+    """Poses every 50 steps of seed 3, recorded with the hand-written loops before the runner."""
+    expected = np.load(DATA / "trajectories_seed3.npz")[f"{name}/{backend}"]
+    result = dream.run(name, seed=3, backend=backend, steps=400, trace=True)
+    np.testing.assert_allclose(result.trace[::50], expected, rtol=0, atol=1e-9)
+
+
+def _write(tmp_path, text):
+    path = tmp_path / "mine.py"
+    path.write_text(text)
+    return path
+
+
+def test_load_file_finds_the_one_experiment(tmp_path):
+    path = _write(tmp_path, "from dream import Experiment\nclass Mine(Experiment):\n    name = 'mine'\n")
+    assert load_file(path).name == "mine"
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("x = 1\n", "defines no Experiment subclass"),
+        (
+            "from dream import Experiment\nclass A(Experiment): pass\nclass B(Experiment): pass\n",
+            r"defines 2 Experiment subclasses \(A, B\)",
+        ),
+        ("def broken(:\n", "line 1: syntax error"),
+        ("import not_a_module_anywhere\n", "loading it raised ModuleNotFoundError"),
+    ],
+)
+def test_load_file_refuses_files_without_exactly_one_experiment(tmp_path, text, message):
+    with pytest.raises(ExperimentFileError, match=message):
+        load_file(_write(tmp_path, text))
+
+
+def test_load_file_refuses_a_missing_file(tmp_path):
+    with pytest.raises(ExperimentFileError, match="no such file"):
+        load_file(tmp_path / "absent.py")
