@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -212,6 +213,7 @@ def _run(args: argparse.Namespace) -> int:
         except (ValueError, OSError) as err:
             raise UsageError(str(err)) from None
     progress = _progress(not args.no_progress)
+    signal.signal(signal.SIGTERM, _Stop.on_sigterm)  # `kill` stops the run as Ctrl-C does: nothing lost
     try:
         result = run(cls, n=n, seed=args.seed, backend=args.backend, steps=args.steps, progress=progress,
                      **({"record": recorder} if recorder is not None else {}), **params)  # fmt: skip
@@ -230,10 +232,26 @@ def _run(args: argparse.Namespace) -> int:
     print(result.summary())
     if args.json:
         _write_json(args.json, result.to_dict())
+    if result.interrupted:
+        kept = f"; metrics so far in {args.json}" if args.json else ""
+        print(f"dream: interrupted after {result.steps} steps{kept}", file=sys.stderr)
+        return 128 + _Stop.signal
     if recorder is not None and recorder.live:
         print("close the window to exit", file=sys.stderr)
         recorder.hold()  # keep the live window on the last frame until the user closes it
     return 1 if args.check and not result.success else 0
+
+
+class _Stop:
+    """Which signal stopped the run: Ctrl-C's SIGINT, or SIGTERM, which the handler turns into
+    the same ``KeyboardInterrupt`` so that the runner keeps what has run either way."""
+
+    signal = signal.SIGINT
+
+    @classmethod
+    def on_sigterm(cls, signum: int, frame: object) -> None:
+        cls.signal = signal.Signals(signum)
+        raise KeyboardInterrupt
 
 
 def _new(name: str, output: str | None) -> int:
@@ -261,6 +279,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UsageError as err:
         print(f"dream: error: {err}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # before or after the steps, where the runner cannot keep a result
+        print("dream: interrupted", file=sys.stderr)
+        return 128 + _Stop.signal
 
 
 if __name__ == "__main__":

@@ -34,6 +34,7 @@ class ExperimentResult:
     measures: dict[str, Any] = field(default_factory=dict)
     trace: np.ndarray | None = field(default=None, repr=False)
     params: dict[str, Any] = field(default_factory=dict)
+    interrupted: bool = False
 
     @property
     def completed(self) -> bool:
@@ -99,7 +100,7 @@ class ExperimentResult:
             ("collisions", self.collisions),
             ("boundary", self.boundary),
             ("actuator", self.actuator),
-            ("success", "yes" if self.success else "no"),
+            ("success", "yes" if self.success else "no (interrupted)" if self.interrupted else "no"),
             *self.measures.items(),
             ("wall time (s)", f"{self.wall_time:.2f}"),
             ("steps/s", f"{self.steps_per_second:.0f}"),

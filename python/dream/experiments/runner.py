@@ -56,6 +56,8 @@ def run(
     Returns
     -------
     ExperimentResult
+        A run stopped by ``KeyboardInterrupt`` (Ctrl-C) returns what it has measured so far,
+        with ``interrupted`` set.
     """
     exp = _instance(experiment, params)
     n = exp.default_n if n is None else _count(n, "n", 1)
@@ -72,28 +74,34 @@ def run(
         everyone = np.arange(n)
         poses = [sim.poses] if trace else []
         done_at = None
+        interrupted = False
         start = time.perf_counter()
-        for t in range(cap):
-            exp.before_step(t)
-            x = sim.get_poses()
-            world.update_timers(t, exp.timer_params(x, exp.dxu))
-            sim.set_velocities(everyone, exp.dxu)
-            sim.step()
-            now = sim.poses
-            exp.after_step(t + 1, now)
-            if trace:
-                poses.append(now)
-            if progress is not None:
-                progress(t + 1, cap)
-            if record is not None:
-                record(exp.frame(t + 1, now))
-            if exp.done(t + 1, now):
-                done_at = t + 1
-                break
+        try:
+            for t in range(cap):
+                exp.before_step(t)
+                x = sim.get_poses()
+                world.update_timers(t, exp.timer_params(x, exp.dxu))
+                sim.set_velocities(everyone, exp.dxu)
+                sim.step()
+                now = sim.poses
+                exp.after_step(t + 1, now)
+                if trace:
+                    poses.append(now)
+                if progress is not None:
+                    progress(t + 1, cap)
+                if record is not None:
+                    record(exp.frame(t + 1, now))
+                if exp.done(t + 1, now):
+                    done_at = t + 1
+                    break
+        except KeyboardInterrupt:  # Ctrl-C (or SIGTERM, through the CLI): keep what has run
+            interrupted = True
         wall = time.perf_counter() - start
-    return ExperimentResult.from_backend(
+    result = ExperimentResult.from_backend(
         exp.label(), seed, sim, done_at, wall, exp.measures(), np.array(poses) if trace else None, exp.params
     )
+    result.interrupted = interrupted
+    return result
 
 
 def _instance(experiment: type[Experiment] | Experiment | str, params: dict[str, Any]) -> Experiment:
