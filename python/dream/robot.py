@@ -7,13 +7,16 @@ pose is unknown (NaN) and it commands zero velocity, whatever order its timers r
 from __future__ import annotations
 
 import math
+import warnings
 from typing import Any
 
 import numpy as np
 
 from dream import kernels
 from dream._checks import FloatArray, as_array
+from dream.kernels import Bounds
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec, RobotSpec
+from dream.world import current_world
 
 
 class Robot:
@@ -126,8 +129,8 @@ class RobotHRVO(Robot):
         Only choose velocities that keep ``position + v`` inside the arena, shrunk by
         ``boundary_margin`` (default: the robot's radius, so its body stays inside; the
         original used no margin).
-    arena : ArenaSpec
-        The arena (default: the Robotarium's).
+    arena : ArenaSpec, optional
+        The arena (default: that of the simulator in the robot's world, see :attr:`arena`).
     n_angles, n_speeds : int
         Candidate velocity grid (see :func:`dream.kernels.hrvo`).
     include_preferred : bool
@@ -144,7 +147,7 @@ class RobotHRVO(Robot):
         check_boundaries: bool = True,
         *,
         spec: RobotSpec = GRITSBOT,
-        arena: ArenaSpec = ROBOTARIUM,
+        arena: ArenaSpec | None = None,
         boundary_margin: float | None = None,
         n_angles: int = 20,
         n_speeds: int = 10,
@@ -155,23 +158,13 @@ class RobotHRVO(Robot):
             raise ValueError(f"safety must be finite and >= 0, got {safety}")
         self.safety = safety
         self.check_boundaries = check_boundaries
-        self.arena = arena
-        margin = spec.radius if boundary_margin is None else boundary_margin
-        self.bounds = arena.shrunk(margin)
-        self.bound_x = [self.bounds[0], self.bounds[1]]
-        self.bound_y = [self.bounds[2], self.bounds[3]]
+        self.world = current_world()
+        self._arena = arena
+        self._margin = spec.radius if boundary_margin is None else boundary_margin
         self.include_preferred = include_preferred
-        self.planner = kernels.HrvoPlanner(
-            safety=safety,
-            v_max=self.v_max,
-            bounds=self.bounds,
-            n_angles=n_angles,
-            n_speeds=n_speeds,
-            include_preferred=include_preferred,
-        )
-        self._free_planner = kernels.HrvoPlanner(
-            safety=safety, v_max=self.v_max, n_angles=n_angles, n_speeds=n_speeds, include_preferred=include_preferred
-        )
+        self._sampling = {"n_angles": n_angles, "n_speeds": n_speeds, "include_preferred": include_preferred}
+        self._planners: tuple[Bounds, kernels.HrvoPlanner, kernels.HrvoPlanner] | None = None
+        self._warned_outside = False
         self.detections: FloatArray = np.zeros((0, 4))
         self.sidestep = 0  # decisions left stepping aside (see `steer`)
         self.side = 1.0  # 1: to the right, -1: to the left
@@ -204,11 +197,60 @@ class RobotHRVO(Robot):
         empty = np.ndim(detections) <= 1 and np.size(detections) == 0
         d = np.zeros((0, 4)) if empty else as_array(detections, "detections", (None, 4))
         preferred = as_array(desired_velocity, "desired_velocity", (2,))
-        planner = self.planner if self.check_boundaries else self._free_planner
+        bounded, free = self._planner()
+        self._check_inside()
+        planner = bounded if self.check_boundaries else free
         self.dxi = planner.velocity(
             d, np.asarray(self.dxi, dtype=np.float64), preferred, np.array([self.pos_x, self.pos_y])
         )
         return self.dxi
+
+    @property
+    def arena(self) -> ArenaSpec:
+        """The arena the robot keeps to: the one given, else its simulator's (the Robotarium's
+        until a simulator exists in the robot's world)."""
+        if self._arena is not None:
+            return self._arena
+        simulator = self.world.simulator
+        return ROBOTARIUM if simulator is None else simulator.arena
+
+    @arena.setter
+    def arena(self, arena: ArenaSpec) -> None:
+        self._arena = arena
+
+    @property
+    def bounds(self) -> Bounds:
+        """``(xmin, xmax, ymin, ymax)`` the robot's centre keeps within: the arena less the margin."""
+        return self.arena.shrunk(self._margin)
+
+    @property
+    def bound_x(self) -> list[float]:
+        return [self.bounds[0], self.bounds[1]]
+
+    @property
+    def bound_y(self) -> list[float]:
+        return [self.bounds[2], self.bounds[3]]
+
+    def _planner(self) -> tuple[kernels.HrvoPlanner, kernels.HrvoPlanner]:
+        """HRVO planners with and without the boundary check, rebuilt when the arena changes."""
+        bounds = self.bounds
+        if self._planners is None or self._planners[0] != bounds:
+            options: dict[str, Any] = {"safety": self.safety, "v_max": self.v_max, **self._sampling}
+            self._planners = (bounds, kernels.HrvoPlanner(bounds=bounds, **options), kernels.HrvoPlanner(**options))
+        return self._planners[1], self._planners[2]
+
+    def _check_inside(self) -> None:
+        """Warn once when the robot decides from outside its arena: HRVO would keep it there."""
+        xmin, xmax, ymin, ymax = self.arena.bounds
+        inside = xmin <= self.pos_x <= xmax and ymin <= self.pos_y <= ymax
+        if self.check_boundaries and not inside and not self._warned_outside:
+            self._warned_outside = True
+            warnings.warn(
+                f"robot {self.robot_id} is at ({self.pos_x:.2f}, {self.pos_y:.2f}), outside its arena "
+                f"x {xmin:g}..{xmax:g}, y {ymin:g}..{ymax:g}, and will not move: give it the simulator's "
+                "arena (leave `arena` unset, or pass arena=sim.arena)",
+                stacklevel=3,
+            )
 
     def steer(self, detections: Any, desired_velocity: Any, sidestep_updates: int = 10) -> FloatArray:
         """:meth:`HRVO`, for a robot that must not wait forever.

@@ -28,6 +28,7 @@ from dream import kernels
 from dream._checks import as_poses
 
 if TYPE_CHECKING:
+    from dream.backends import Backend
     from dream.timers import Timer
 
 
@@ -45,6 +46,7 @@ class World:
         self.rng = np.random.default_rng(seed)
         self.time = 0  #: the ``current_time`` of the last ``update_timers`` call
         self.timers: list[Timer] = []
+        self.simulator: Backend | None = None  #: the simulator made last in this world
         self._board: dict[int, Any] = {}
         self._in_flight: list[tuple[int, int, Any]] = []  # (visible at, sender, data)
         self._indexed_poses: np.ndarray | None = None  # the pose array the indexes were built for

@@ -11,6 +11,7 @@ import numpy as np
 from dream import kernels
 from dream._checks import FloatArray, as_array, as_poses
 from dream.specs import ROBOTARIUM, RPS, ArenaSpec, SimulatorSpec
+from dream.world import current_world
 
 
 class Backend(ABC):
@@ -50,6 +51,7 @@ class Backend(ABC):
         self._poses_taken = False
         self._figure: Any = None
         self._axes: Any = None
+        current_world().simulator = self  # robots without an arena of their own take this one
 
     @property
     def poses(self) -> FloatArray:
