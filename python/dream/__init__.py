@@ -13,6 +13,7 @@ convention); positions given to geometry kernels are ``(n, 2)``.
 from dream import kernels, specs
 from dream.backends import Backend, Fast, Robotarium, initial_poses, make_robotarium
 from dream.experiments import Experiment, ExperimentResult, Param, param, run
+from dream.faults import Faults
 from dream.radios import GraphRadio, Radio, RangeRadio
 from dream.robot import Robot, RobotHRVO
 from dream.obstacles import Obstacle
@@ -50,6 +51,7 @@ __all__ = [
     "Experiment",
     "ExperimentResult",
     "Fast",
+    "Faults",
     "GraphRadio",
     "Movement_sensor",
     "MovementSensor",

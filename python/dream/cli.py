@@ -27,6 +27,7 @@ from typing import Any, Callable
 from dream.backends import BACKENDS
 from dream.backends.robotarium import MAX_ROBOTS
 from dream.experiments import EXPERIMENTS, Experiment, find, run
+from dream.faults import KINDS, Faults
 
 STARTER = Path(__file__).parent / "templates" / "starter.py"
 
@@ -65,6 +66,13 @@ def _parser() -> argparse.ArgumentParser:
     runner.add_argument("--steps", type=_whole(1), default=None, help="step cap (default: what the run needs)")
     runner.add_argument(
         "--param", action="append", default=[], metavar="NAME=VALUE", help="set a parameter (repeatable)"
+    )
+    runner.add_argument(
+        "--fault",
+        action="append",
+        default=[],
+        metavar="KIND=VALUE",
+        help="inject a fault (repeatable): " + ", ".join(f"{kind}={form}" for kind, form in KINDS.items()),
     )
     runner.add_argument("--json", metavar="PATH", help="also write the metrics as JSON")
     runner.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -199,6 +207,10 @@ def _progress(enabled: bool) -> Any:
 def _run(args: argparse.Namespace) -> int:
     cls = _experiment(args.experiment)
     params = _params(cls, args.param)
+    try:
+        faults = Faults.parse(args.fault)
+    except ValueError as err:
+        raise UsageError(str(err)) from None
     n = cls.default_n if args.n is None else args.n
     if args.backend == "robotarium" and n > MAX_ROBOTS:
         raise UsageError(f"-n {n}: the Robotarium backend runs at most {MAX_ROBOTS} robots; use --backend fast")
@@ -213,9 +225,8 @@ def _run(args: argparse.Namespace) -> int:
         except (ValueError, OSError) as err:
             raise UsageError(str(err)) from None
     progress = _progress(not args.no_progress)
-    signal.signal(signal.SIGTERM, _Stop.on_sigterm)  # `kill` stops the run as Ctrl-C does: nothing lost
     try:
-        result = run(cls, n=n, seed=args.seed, backend=args.backend, steps=args.steps, progress=progress,
+        result = run(cls, n=n, seed=args.seed, backend=args.backend, steps=args.steps, progress=progress, faults=faults,
                      **({"record": recorder} if recorder is not None else {}), **params)  # fmt: skip
     except ValueError as err:  # an experiment's refusal (a size it cannot do), said before any step
         raise UsageError(str(err)) from None
@@ -235,23 +246,11 @@ def _run(args: argparse.Namespace) -> int:
     if result.interrupted:
         kept = f"; metrics so far in {args.json}" if args.json else ""
         print(f"dream: interrupted after {result.steps} steps{kept}", file=sys.stderr)
-        return 128 + _Stop.signal
+        return 128 + (result.signal or signal.SIGINT)
     if recorder is not None and recorder.live:
         print("close the window to exit", file=sys.stderr)
         recorder.hold()  # keep the live window on the last frame until the user closes it
     return 1 if args.check and not result.success else 0
-
-
-class _Stop:
-    """Which signal stopped the run: Ctrl-C's SIGINT, or SIGTERM, which the handler turns into
-    the same ``KeyboardInterrupt`` so that the runner keeps what has run either way."""
-
-    signal = signal.SIGINT
-
-    @classmethod
-    def on_sigterm(cls, signum: int, frame: object) -> None:
-        cls.signal = signal.Signals(signum)
-        raise KeyboardInterrupt
 
 
 def _new(name: str, output: str | None) -> int:
@@ -281,7 +280,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except KeyboardInterrupt:  # before or after the steps, where the runner cannot keep a result
         print("dream: interrupted", file=sys.stderr)
-        return 128 + _Stop.signal
+        return 128 + signal.SIGINT
 
 
 if __name__ == "__main__":

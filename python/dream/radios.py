@@ -47,7 +47,7 @@ class Radio:
         self._poses = poses
 
     def _exchange(self, callback: Callback, senders: np.ndarray) -> None:
-        data = callback(self.world.receive((int(j) for j in senders), self.loss))
+        data = callback(self.world.receive((int(j) for j in senders), self.loss, self.robot_id))
         if data is not None:
             self.send_data(data)
 

@@ -7,6 +7,7 @@ its origin and reports through a callback. Noise is Gaussian with standard devia
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, Callable
 
@@ -25,6 +26,9 @@ PROJECTION_DISTANCE = 0.05
 class Sensor:
     """Base sensor attached to robot ``robot_id``.
 
+    A sensor's ``update`` reads the simulator's arrays and hands the reading to its
+    ``callback`` (subclasses take one).
+
     Attributes
     ----------
     pos_x, pos_y, rot_w : float
@@ -40,6 +44,7 @@ class Sensor:
         self.pos_y = 0.0
         self.rot_w = 0.0
         self.ret: Any = 0
+        self.noise = 0.0  #: standard deviation of the noise on every value of a reading
         self.world = current_world()
 
     def add_noise(self, values: Any, noise: float) -> FloatArray:
@@ -48,6 +53,20 @@ class Sensor:
         if check_nonnegative(noise, "noise") > 0:
             array = array + self.world.rng.normal(0.0, noise, array.shape)
         return array
+
+    callback: Callable[[Any], Any]
+
+    def _report(self, values: Any) -> None:
+        """Hand a reading to ``self.callback``: with this sensor's noise, and the world's sensor
+        faults (a dropped reading never arrives; fault noise adds to the sensor's own)."""
+        noise = self.noise
+        state = self.world.fault_state
+        if state is not None:
+            if state.dropped():
+                return
+            noise = math.hypot(noise, state.faults.sensor_noise)
+        self.ret = self.add_noise(values, noise)
+        self.callback(self.ret)
 
     def update(self, x: Any) -> None:
         """Take the attached robot's pose from the pose array ``x`` ``(3, n)``."""
@@ -121,8 +140,7 @@ class MovementSensor(Sensor):
                 lin * np.sin(theta) + PROJECTION_DISTANCE * ang * np.cos(theta),
             )
         )
-        self.ret = self.add_noise(detections, self.noise)
-        self.callback(self.ret)
+        self._report(detections)
 
 
 class OdometrySensor(Sensor):
@@ -136,8 +154,7 @@ class OdometrySensor(Sensor):
     def update(self, x: Any) -> None:
         """Read the pose from ``x`` ``(3, n)`` and call the callback."""
         super().update(x)
-        self.ret = self.add_noise([self.pos_x, self.pos_y, self.rot_w], self.noise)
-        self.callback(self.ret)
+        self._report([self.pos_x, self.pos_y, self.rot_w])
 
 
 class ObstacleSensor(Sensor):
@@ -173,5 +190,4 @@ class ObstacleSensor(Sensor):
             for c in (o.closest_point(here) for o in self.obstacles)
             if c is not None and np.hypot(*(c - here)) <= self.range
         ]
-        self.ret = self.add_noise(np.array(found).reshape(-1, 2), self.noise)
-        self.callback(self.ret)
+        self._report(np.array(found).reshape(-1, 2))

@@ -26,6 +26,7 @@ import numpy as np
 
 from dream import kernels
 from dream._checks import as_poses
+from dream.faults import Faults, FaultState
 
 if TYPE_CHECKING:
     from dream.backends import Backend
@@ -44,6 +45,7 @@ class World:
     def __init__(self, seed: int | None = None) -> None:
         self.seed = seed
         self.rng = np.random.default_rng(seed)
+        self.fault_state: FaultState | None = None  #: the run's faults as drawn (see :meth:`inject`)
         self.time = 0  #: the ``current_time`` of the last ``update_timers`` call
         self.timers: list[Timer] = []
         self.simulator: Backend | None = None  #: the simulator made last in this world
@@ -100,6 +102,21 @@ class World:
         seen = (np.abs(relative) <= fov / 2) | (dist == 0)
         return found[seen], dist[seen]
 
+    # -- faults ----------------------------------------------------------------------------
+    def inject(self, faults: Faults | None, n: int) -> FaultState | None:
+        """Make ``faults`` happen to this world's ``n`` robots from now on.
+
+        Who fails and when is drawn from a child of the world's generator: the same seed gives
+        the same fault events, and a run without faults draws nothing.
+        """
+        self.fault_state = None if faults is None or not faults.any else FaultState(faults, n, self.rng.spawn(1)[0])
+        return self.fault_state
+
+    def _silence(self, robot_id: int) -> None:
+        """A crashed robot stops talking: its messages leave the board and the air."""
+        self._board.pop(robot_id, None)
+        self._in_flight = [message for message in self._in_flight if message[1] != robot_id]
+
     # -- radio -----------------------------------------------------------------------------
     def publish(self, robot_id: int, data: Any, latency: int = 0) -> None:
         """Put ``data`` on the board under ``robot_id`` (a later send overwrites an earlier one).
@@ -108,6 +125,13 @@ class World:
         ``latency`` > 0 the message becomes visible ``latency`` steps of the world's clock later.
         """
         snapshot = _copy(data)
+        state = self.fault_state
+        if state is not None:
+            if state.crashed[robot_id]:
+                return
+            if state.byzantine[robot_id]:
+                snapshot = state.lie(robot_id, snapshot, int(self.time))
+            latency = state.delay(latency)
         if latency > 0:
             self._in_flight.append((self.time + latency, robot_id, snapshot))
         else:
@@ -119,18 +143,33 @@ class World:
         self._deliver()
         return self._board
 
-    def receive(self, senders: Iterable[int], loss: float = 0.0) -> list[Any]:
+    def receive(self, senders: Iterable[int], loss: float = 0.0, receiver: int | None = None) -> list[Any]:
         """Copies of the visible messages of ``senders`` (in the given order).
 
         Robots that have not published are skipped; each message is dropped with probability
-        ``loss``, drawn from the world's generator.
+        ``loss``, drawn from the world's generator, and by the world's radio faults, if any
+        (``receiver`` names the robot listening, for per-link and distance losses).
         """
         board = self.messages
+        state = self.fault_state
         received = []
         for sender in senders:
-            if sender in board and (loss <= 0 or self.rng.random() >= loss):
+            if sender not in board:
+                continue
+            if state is None:
+                through = loss <= 0 or self.rng.random() >= loss
+            else:
+                through = state.delivered(receiver, sender, loss, self._distance(receiver, sender))
+            if through:
                 received.append(_copy(board[sender]))
         return received
+
+    def _distance(self, a: int | None, b: int) -> float:
+        """Distance between robots ``a`` and ``b`` in the poses checked last (0 if unknown)."""
+        poses = self._checked
+        if a is None or max(a, b) >= poses.shape[1]:
+            return 0.0
+        return float(np.hypot(*(poses[:2, a] - poses[:2, b])))
 
     def _deliver(self) -> None:
         if not self._in_flight:
@@ -153,10 +192,25 @@ class World:
         return timer
 
     def update_timers(self, current_time: float, param: Mapping[str, Sequence[Any]]) -> None:
-        """Advance the clock to ``current_time`` and update every timer of this world."""
+        """Advance the clock to ``current_time`` and update every timer of this world.
+
+        Under faults, crashed robots' timers stand still and each robot's timers read its own
+        (drifting, jittery) clock.
+        """
         self.time = current_time
+        state = self.fault_state
+        if state is None:
+            for timer in self.timers:
+                timer.update(current_time, param)
+            return
+        for robot in np.flatnonzero(state.advance(int(current_time))):
+            self._silence(int(robot))
+        clocked = bool(state.faults.drift or state.faults.clock_jitter)
         for timer in self.timers:
-            timer.update(current_time, param)
+            robot = timer.robot_id
+            if robot < state.n and state.crashed[robot]:
+                continue
+            timer.update(state.clock(robot, current_time) if clocked and robot < state.n else current_time, param)
 
     # -- current world ---------------------------------------------------------------------
     def __enter__(self) -> World:

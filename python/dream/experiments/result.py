@@ -35,6 +35,8 @@ class ExperimentResult:
     trace: np.ndarray | None = field(default=None, repr=False)
     params: dict[str, Any] = field(default_factory=dict)
     interrupted: bool = False
+    signal: int | None = field(default=None, repr=False)  #: the signal that interrupted the run
+    faults: dict[str, Any] = field(default_factory=dict)
 
     @property
     def completed(self) -> bool:
@@ -42,7 +44,8 @@ class ExperimentResult:
 
     @property
     def success(self) -> bool:
-        """Completed, with zero collisions, boundary and actuator violations."""
+        """Completed, with zero collisions, boundary and actuator violations (under faults, the
+        experiment's ``done`` decides what completing means for the robots still correct)."""
         return self.completed and not (self.collisions or self.boundary or self.actuator)
 
     @property
@@ -82,6 +85,7 @@ class ExperimentResult:
         """The metrics as plain JSON-ready values (without the trace)."""
         data = asdict(self)
         data.pop("trace")
+        data.pop("signal")
         data["steps_per_second"] = self.steps_per_second
         data["completed"] = self.completed
         data["success"] = self.success
@@ -102,6 +106,7 @@ class ExperimentResult:
             ("actuator", self.actuator),
             ("success", "yes" if self.success else "no (interrupted)" if self.interrupted else "no"),
             *self.measures.items(),
+            *_fault_rows(self.faults),
             ("wall time (s)", f"{self.wall_time:.2f}"),
             ("steps/s", f"{self.steps_per_second:.0f}"),
         ]
@@ -110,3 +115,19 @@ class ExperimentResult:
             f"{name:<{width}}  {value:.4g}" if isinstance(value, float) else f"{name:<{width}}  {value}"
             for name, value in rows
         )
+
+
+def _fault_rows(faults: dict[str, Any]) -> list[tuple[str, Any]]:
+    """Summary rows of a run's faults: settings, robot fault events by kind, lost messages."""
+    if not faults:
+        return []
+    settings = ", ".join(f"{key}={value}" for key, value in faults["settings"].items())
+    kinds: dict[str, int] = {}
+    for event in faults["events"]:
+        kinds[event["kind"]] = kinds.get(event["kind"], 0) + 1
+    return [
+        ("faults", settings),
+        *((f"  {kind} robots", count) for kind, count in kinds.items()),
+        ("  messages lost", faults["messages_lost"]),
+        ("  readings dropped", faults["readings_dropped"]),
+    ]

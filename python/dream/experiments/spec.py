@@ -150,6 +150,13 @@ class Experiment:
         return found
 
     @property
+    def correct(self) -> np.ndarray:
+        """``(n,)`` bool: robots that have neither crashed, got stuck, nor lie (all of them in a
+        run without faults). Success under faults is the job done by these."""
+        state = self.world.fault_state
+        return np.ones(self.n, dtype=bool) if state is None else state.correct
+
+    @property
     def params(self) -> dict[str, Any]:
         """This instance's parameter values."""
         return {key: getattr(self, key) for key in self.parameters()}
