@@ -7,6 +7,7 @@ import re
 import subprocess
 import sys
 import types
+from importlib import metadata
 from pathlib import Path
 
 import dream
@@ -85,3 +86,18 @@ def test_api_page_renders_all_of_dream_kernels():
         if not name.startswith("_") and getattr(value, "__module__", None) == "dream.kernels"
     }
     assert defined | {"IMPLEMENTATION"} <= set(dream.kernels.__all__)
+
+
+def test_version_without_the_extension_comes_from_the_metadata(monkeypatch):
+    # A pure-Python copy: `from dream import _core` fails, the installed metadata answers.
+    monkeypatch.delattr(dream, "_core", raising=False)
+    monkeypatch.setitem(sys.modules, "dream._core", None)
+    try:
+        installed = metadata.version(_version.DISTRIBUTION)
+    except metadata.PackageNotFoundError:
+        installed = None
+    got = _version.version()
+    if installed is None:
+        assert got == "unknown"
+    else:
+        assert got == installed == _cargo_version()
