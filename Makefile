@@ -1,5 +1,5 @@
 # DREAM developer tasks. `make help` lists them.
-.PHONY: help build-dev test test-pure bench stubs
+.PHONY: help build-dev test test-pure bench stubs wheel docs docs-serve
 
 help:  ## list the targets
 	@grep -E '^[a-z-]+:.*##' $(MAKEFILE_LIST) | sed 's/:.*## /\t/'
@@ -7,7 +7,7 @@ help:  ## list the targets
 build-dev:  ## editable install: Python edits are live, rerun after Rust edits
 	pip install -e ".[test]"
 
-test:  ## the README's test command (what CI runs)
+test:  ## what CI runs: the README's test command, then .ci/package (wheel, sdist, docs)
 	bash .ci/run
 
 test-pure:  ## the Python suite on the NumPy reference kernels only
@@ -18,3 +18,13 @@ bench:  ## benchmark figures for the README (medians and ratios, one run)
 
 stubs:  ## check python/dream/_core.pyi against the compiled module
 	python -m mypy.stubtest dream._core
+
+wheel:  ## dist/: the abi3 wheel (any CPython >= 3.10, no Rust needed to install) and the sdist
+	maturin build --release --out dist
+	maturin sdist --out dist
+
+docs:  ## site/: the documentation, warnings as errors (needs the docs extra: pip install ".[docs]")
+	mkdocs build --strict
+
+docs-serve:  ## the documentation on http://127.0.0.1:8000, rebuilt on every edit
+	mkdocs serve

@@ -11,7 +11,9 @@ convention); positions given to geometry kernels are ``(n, 2)``.
 """
 
 from dream import kernels, specs
+from dream import _version
 from dream.backends import Backend, Fast, Robotarium, initial_poses, make_robotarium
+from dream.errors import GeometryError
 from dream.experiments import Experiment, ExperimentResult, Param, param, run
 from dream.faults import Faults
 from dream.radios import GraphRadio, Radio, RangeRadio
@@ -36,7 +38,7 @@ from dream.specs import (
 from dream.timers import Timer, create_timer, update_timers
 from dream.world import World, current_world, reset_default_world
 
-__version__ = "0.1.0"
+__version__ = _version.version()
 
 # The original names, for scripts written for the prototype.
 Robot_hrvo = RobotHRVO
@@ -52,6 +54,7 @@ __all__ = [
     "ExperimentResult",
     "Fast",
     "Faults",
+    "GeometryError",
     "GraphRadio",
     "Movement_sensor",
     "MovementSensor",
