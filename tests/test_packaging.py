@@ -52,7 +52,7 @@ def test_python_m_dream_lists_the_experiments():
         [sys.executable, "-m", "dream", "list"], capture_output=True, text=True, env=env, timeout=120, check=False
     )
     assert run.returncode == 0, run.stderr
-    listed = [line.split()[0] for line in run.stdout.splitlines() if line.strip()]
+    listed = [line.split()[0] for line in run.stdout.splitlines() if line.strip() and not line.startswith("`")]
     assert listed == sorted(["hrvo-circle", "line-consensus", "voronoi-coverage", "affine-formation"])
 
 
