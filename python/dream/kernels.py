@@ -44,8 +44,8 @@ IMPLEMENTATION = "numpy" if _core is None else "rust"
 class Violations(NamedTuple):
     """Validation counts of one iteration, by the Robotarium simulator's criteria."""
 
-    boundary: int  #: robots outside the arena
-    collision: int  #: pairs of robots whose centres are within one diameter
+    boundary: int  #: robots outside the arena (rps 2.1: 1 if any robot is)
+    collision: int  #: pairs of robots whose colliders are within one diameter
     actuator: int  #: 1 if any command needs a wheel faster than allowed
 
 
@@ -69,26 +69,50 @@ def unicycle_step(poses: Any, velocities: Any, dt: float = RPS.time_step) -> Flo
 
 
 def threshold_velocities(velocities: Any, sim: SimulatorSpec = RPS) -> FloatArray:
-    """Commands ``(2, n)`` clipped to the simulator's linear and angular limits (rps ``set_velocities``)."""
+    """Commands ``(2, n)`` clipped as the simulator ``sim`` clips them.
+
+    rps 0.0.0 (``sim.wheel_thresholding`` off) clips ``v`` and ``w`` to their limits separately;
+    rps 2.1 clips each wheel's speed to ``sim.max_wheel`` and converts back to ``(v, w)``.
+    """
     u = _commands(velocities, "velocities")
+    if sim.wheel_thresholding:
+        wheels = {"wheel_radius": sim.wheel_radius, "base_length": sim.base_length, "max_wheel": sim.max_wheel}
+        if _core is None:
+            return _reference.threshold_wheels(u, **wheels)
+        return _core.threshold_wheels(u, **wheels)
     if _core is None:
         return _reference.threshold_velocities(u, sim.max_linear, sim.max_angular)
     return _core.threshold_velocities(u, sim.max_linear, sim.max_angular)
 
 
-def validate(poses: Any, velocities: Any, arena: ArenaSpec = ROBOTARIUM, sim: SimulatorSpec = RPS) -> Violations:
-    """Boundary, collision and actuator counts for one iteration, as rps counts them.
+def wheel_speeds(velocities: Any, sim: SimulatorSpec = RPS) -> FloatArray:
+    """Left and right wheel speeds ``(2, n)`` (rad/s) of unicycle commands ``(2, n)`` on ``sim``'s robot.
 
-    Collisions are pairs within ``sim.diameter`` (found with a grid by the Rust kernel: O(n)).
+    Elementwise NumPy (nothing for the Rust core to gain): ``(2v -+ L w) / (2 r)``.
+    """
+    return _reference.wheel_speeds(_commands(velocities, "velocities"), sim.wheel_radius, sim.base_length)
+
+
+def validate(poses: Any, velocities: Any, arena: ArenaSpec = ROBOTARIUM, sim: SimulatorSpec = RPS) -> Violations:
+    """Boundary, collision and actuator counts for one iteration, as the simulator ``sim`` counts them.
+
+    Collisions are pairs of colliders (``sim.collider_offset`` ahead of the centres) within
+    ``sim.diameter``, found with a grid by the Rust kernel (O(n)); robots outside the arena count
+    one each, or once per iteration when ``sim.boundary_per_iteration`` (rps 2.1).
     """
     p = as_poses(poses)
     u = _commands(velocities, "velocities", p.shape[1])
-    wheels = dict(
-        diameter=sim.diameter, wheel_radius=sim.wheel_radius, base_length=sim.base_length, max_wheel=sim.max_wheel
-    )
+    rules = {
+        "diameter": sim.diameter,
+        "wheel_radius": sim.wheel_radius,
+        "base_length": sim.base_length,
+        "max_wheel": sim.max_wheel,
+        "collider_offset": sim.collider_offset,
+        "boundary_per_iteration": sim.boundary_per_iteration,
+    }
     if _core is None:
-        return Violations(*_reference.validate(p, u, arena.bounds, **wheels))
-    return Violations(*_core.validate(p, u, arena.bounds, **wheels))
+        return Violations(*_reference.validate(p, u, arena.bounds, **rules))
+    return Violations(*_core.validate(p, u, arena.bounds, **rules))
 
 
 def dxi_to_dxu(dxi: Any, poses: Any, vel_gain: float = 0.8, ang_gain: float = 3.0) -> FloatArray:
@@ -532,6 +556,7 @@ __all__ = [
     "threshold_velocities",
     "unicycle_step",
     "validate",
+    "wheel_speeds",
     "obstacle_agents",
     "virtual_agents",
     "voronoi_cell",

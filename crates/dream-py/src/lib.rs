@@ -16,6 +16,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(dynamics::unicycle_step, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::threshold_velocities, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::threshold_wheels, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::validate, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::dxi_to_dxu, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::actuator_limit, m)?)?;
