@@ -15,6 +15,7 @@ from dream.backends import Backend, Fast, Robotarium, initial_poses, make_robota
 from dream.radios import GraphRadio, Radio, RangeRadio
 from dream.robot import Robot, RobotHRVO
 from dream.obstacles import Obstacle
+from dream.onboard import DistanceSensor, EncoderSensor, ImuReading, ImuSensor
 from dream.sensors import MovementSensor, ObstacleSensor, OdometrySensor, Sensor
 from dream.specs import (
     R_AC_MAX,

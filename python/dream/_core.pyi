@@ -19,6 +19,7 @@ __all__ = [
     "voronoi_cells",
     "voronoi_cell",
     "virtual_agents",
+    "distance_rays",
 ]
 
 _Bounds = tuple[float, float, float, float]
@@ -122,3 +123,15 @@ def voronoi_cell(
     position: _Floats, others: _Floats, virtual_points: _Floats, *, radius: float, bounds: _Bounds, resolution: int = 64
 ) -> tuple[_Floats, float, _Floats]:
     """One robot's cell: (centroid (2,), area, counter-clockwise vertices (m, 2))."""
+
+def distance_rays(
+    poses: _Floats,
+    walls: _Floats,
+    rays: _Floats,
+    *,
+    centre_offset: float,
+    robot_diameter: float,
+    range: float,
+    robots: _Ints | None = None,
+) -> _Floats:
+    """Readings (k, n) of the rays (3, k) of every robot (or of `robots`) against walls (m, 4) and the other robots; -1 for nothing."""

@@ -7,6 +7,7 @@ mod errors;
 mod hrvo;
 mod neighbours;
 mod obstacles;
+mod raycast;
 mod voronoi;
 
 use pyo3::prelude::*;
@@ -26,5 +27,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(voronoi::voronoi_cells, m)?)?;
     m.add_function(wrap_pyfunction!(voronoi::voronoi_cell, m)?)?;
     m.add_function(wrap_pyfunction!(obstacles::virtual_agents, m)?)?;
+    m.add_function(wrap_pyfunction!(raycast::distance_rays, m)?)?;
     Ok(())
 }

@@ -18,6 +18,7 @@ from dream._reference.dynamics import (
 from dream._reference.hrvo import candidate_grid, detection_directions, hrvo, hrvo_velocity, unit_directions
 from dream._reference.neighbours import neighbours, neighbours_of
 from dream._reference.obstacles import agents_from_closest, virtual_agents
+from dream._reference.raycast import distance_rays
 from dream._reference.voronoi import voronoi_cell, voronoi_cells
 
 __all__ = [
@@ -25,6 +26,7 @@ __all__ = [
     "agents_from_closest",
     "candidate_grid",
     "detection_directions",
+    "distance_rays",
     "dxi_to_dxu",
     "hrvo",
     "hrvo_velocity",
