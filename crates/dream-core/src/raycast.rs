@@ -86,6 +86,22 @@ pub struct Wall {
     pub b: [f64; 2],
 }
 
+impl Wall {
+    /// Squared distance from `p` to the closest point of the segment.
+    fn distance_squared(&self, p: [f64; 2]) -> f64 {
+        let e = [self.b[0] - self.a[0], self.b[1] - self.a[1]];
+        let w = [p[0] - self.a[0], p[1] - self.a[1]];
+        let length_squared = e[0] * e[0] + e[1] * e[1];
+        let t = if length_squared > 0.0 {
+            ((w[0] * e[0] + w[1] * e[1]) / length_squared).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let (dx, dy) = (w[0] - t * e[0], w[1] - t * e[1]);
+        dx * dx + dy * dy
+    }
+}
+
 fn cross(u: [f64; 2], v: [f64; 2]) -> f64 {
     u[0] * v[1] - u[1] * v[0]
 }
@@ -111,11 +127,12 @@ fn disc_hit(start: [f64; 2], d: [f64; 2], centre: [f64; 2], radius: f64, range: 
         return None;
     }
     let (px, py) = (start[0] + along * d[0] - centre[0], start[1] + along * d[1] - centre[1]);
-    let off = px.hypot(py);
-    if off > radius {
+    // Squared distances: `hypot` costs more than the rest of the test.
+    let off_squared = px * px + py * py;
+    if off_squared.sqrt() > radius {
         return None;
     }
-    let hit = along - (radius * radius - off * off).sqrt();
+    let hit = along - (radius * radius - off_squared).sqrt();
     (hit >= 0.0).then_some(hit)
 }
 
@@ -160,15 +177,23 @@ pub fn distance_rays(
         .map(|i| [xs[i] + offset * thetas[i].cos(), ys[i] + offset * thetas[i].sin()])
         .collect();
     let (cx, cy): (Vec<f64>, Vec<f64>) = centres.iter().map(|c| (c[0], c[1])).unzip();
-    let grid = Grid::new(&cx, &cy, sensors.reach());
+    let reach = sensors.reach();
+    let grid = Grid::new(&cx, &cy, reach);
 
     let robot = |i: usize| -> Vec<f64> {
+        // Only robots whose disc some ray can reach: the grid block is ~3x larger than that circle.
         let mut near = Vec::new();
         grid.for_each_near(cx[i], cy[i], |m| {
-            if m != i {
+            let (dx, dy) = (cx[m] - cx[i], cy[m] - cy[i]);
+            if m != i && dx * dx + dy * dy <= reach * reach {
                 near.push(m);
             }
         });
+        // Walls out of reach cannot be hit (the margin covers rounding in the distance).
+        let reachable: Vec<&Wall> = walls
+            .iter()
+            .filter(|w| w.distance_squared(centres[i]) <= (reach + 1e-9) * (reach + 1e-9))
+            .collect();
         let (c, s) = (thetas[i].cos(), thetas[i].sin());
         sensors
             .rays
@@ -181,7 +206,7 @@ pub fn distance_rays(
                 let heading = thetas[i] + ray.angle;
                 let d = [heading.cos(), heading.sin()];
                 let range = sensors.range;
-                let walls = walls.iter().filter_map(|w| wall_hit(start, d, w, range));
+                let walls = reachable.iter().filter_map(|w| wall_hit(start, d, w, range));
                 let robots = near
                     .iter()
                     .filter_map(|&m| disc_hit(start, d, centres[m], sensors.robot_radius, range));
