@@ -166,12 +166,20 @@ class FakeRps2:
 
     made: ClassVar[list[dict]] = []
 
+    stuck = False  #: whether the start-up phase deadlocks
+
     def __init__(self, **kwargs):
         FakeRps2.made.append(kwargs)
         self._poses = kwargs["initial_conditions"].copy()
-        if not kwargs["skip_initialization"]:
-            self._poses[:2] += 0.01  # the start-up phase ends near, not at, the initial conditions
         self._velocities = np.zeros((2, kwargs["number_of_robots"]))
+        self._iteration = 0
+        self.initializing = True
+        if not kwargs["skip_initialization"]:
+            self.step()
+            while self.stuck:
+                self.step()
+            self._poses[:2] += 0.01  # the start-up phase ends near, not at, the initial conditions
+        self.initializing = False
 
     def _validate(self, errors):
         return errors
@@ -183,6 +191,7 @@ class FakeRps2:
         self._velocities[:, ids] = velocities
 
     def step(self):
+        self._iteration += 1
         self._poses[0] += 0.033 * self._velocities[0] * np.cos(self._poses[2])
 
     def debug(self):
@@ -216,6 +225,13 @@ def test_robotarium_backend_drives_rps2_without_throttling_and_passes_its_option
     Robotarium(start, skip_initialization=True, sim_in_real_time=True)
     assert fake_rps2.made[-1]["skip_initialization"] is True and fake_rps2.made[-1]["sim_in_real_time"] is True
     assert make_robotarium(2, initial_conditions=start).sim == RPS2  # auto: the installed generation
+
+
+def test_robotarium_backend_stops_a_deadlocked_rps2_start_up_with_an_error(fake_rps2, monkeypatch):
+    monkeypatch.setattr(fake_rps2, "stuck", True)
+    with pytest.raises(RuntimeError, match="skip_initialization=True"):
+        Robotarium(np.zeros((3, 1)))
+    assert Robotarium(np.zeros((3, 1)), skip_initialization=True).iterations == 0
 
 
 # -- the start-up phase ------------------------------------------------------------------------------

@@ -25,6 +25,9 @@ from dream.specs import ROBOTARIUM, RULES
 
 #: rps refuses more robots than this.
 MAX_ROBOTS = 50
+#: rps 2.x's start-up phase normally ends in ~500-1,100 steps; it loops forever when its barrier
+#: certificates deadlock (initial conditions too close together): stop it with an error instead.
+MAX_STARTUP_STEPS = 5_000
 
 
 def rps_available() -> bool:
@@ -57,6 +60,23 @@ def as_obstacles(obstacles: Any) -> FloatArray:
     if obstacles is None:
         return np.zeros((0, 2, 2))
     return as_array(obstacles, "obstacles", (None, 2, 2))
+
+
+def _bounded(simulator: type) -> type:
+    """rps 2.x's simulator class whose start-up phase raises after :data:`MAX_STARTUP_STEPS` steps."""
+
+    class Bounded(simulator):  # type: ignore[misc, valid-type]
+        def step(self) -> None:
+            super().step()
+            if getattr(self, "initializing", False) and self._iteration > MAX_STARTUP_STEPS:
+                raise RuntimeError(
+                    f"rps's start-up phase did not bring the robots to their initial conditions in "
+                    f"{MAX_STARTUP_STEPS} steps (its barrier certificates deadlock when initial conditions "
+                    "are too close together; rps itself draws them 0.5 m apart): spread them out or pass "
+                    "skip_initialization=True"
+                )
+
+    return Bounded
 
 
 class Robotarium(Backend):
@@ -105,7 +125,9 @@ class Robotarium(Backend):
             "sim_in_real_time": bool(sim_in_real_time),
             "initial_conditions": self._poses.copy(),
         }
+        simulator = robotarium.Robotarium
         if generation == "rps2":
+            simulator = _bounded(simulator)
             options["skip_initialization"] = bool(skip_initialization)
             options["use_distance_sensors"] = bool(use_distance_sensors)
             options["obstacles"] = self.obstacles if len(self.obstacles) else None
@@ -114,7 +136,7 @@ class Robotarium(Backend):
                 "rps 0.0.0 has no start-up phase, obstacles or distance sensors: "
                 "`skip_initialization`, `obstacles` and `use_distance_sensors` need rps 2.x"
             )
-        self.rps = robotarium.Robotarium(**options)
+        self.rps = simulator(**options)
         # rps 0.0.0's `_validate(errors={})` shares one dict between all instances, so counts
         # would leak from one simulation to the next; give this instance a dict of its own.
         validate = self.rps._validate
