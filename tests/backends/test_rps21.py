@@ -153,6 +153,15 @@ def test_make_robotarium_follows_the_installed_rps_by_default_and_takes_rules():
         make_robotarium(3, seed=0, rules="rps1")
 
 
+def test_fast_takes_the_rules_by_name():
+    assert Fast(np.zeros((3, 1)), rules="rps2").sim == RPS2
+    assert Fast(np.zeros((3, 1)), rules="rps0").sim == RPS0
+    with pytest.raises(ValueError, match="'rps3'"):
+        Fast(np.zeros((3, 1)), rules="rps3")
+    with pytest.raises(ValueError, match="disagree"):
+        Fast(np.zeros((3, 1)), sim=RPS2, rules="rps0")
+
+
 @pytest.mark.skipif(rps_generation() != "rps0", reason="needs rps 0.0.0 installed")
 def test_make_robotarium_refuses_other_rules_on_the_installed_rps():
     with pytest.raises(ValueError, match="rps2"):

@@ -18,7 +18,7 @@ from dream.backends.base import Backend
 from dream.backends.robotarium import as_obstacles
 from dream.backends.startup import StartUp
 from dream.backends.startup import start_up as drive_from_chargers
-from dream.specs import ROBOTARIUM, RPS, ArenaSpec, SimulatorSpec
+from dream.specs import ROBOTARIUM, RPS, RULES, ArenaSpec, SimulatorSpec
 
 
 class Fast(Backend):
@@ -30,6 +30,8 @@ class Fast(Backend):
     arena : ArenaSpec
     sim : SimulatorSpec
         The rules to follow: :data:`dream.specs.RPS0` (default) or :data:`dream.specs.RPS2`.
+    rules : {"rps0", "rps2"}, optional
+        The same by name (:data:`dream.specs.RULES`); give ``sim`` or ``rules``, not both.
     obstacles : (m, 2, 2) array_like, optional
         Line-segment walls (``[k, 0]`` start, ``[k, 1]`` end), as rps 2.1 takes them; the robots'
         distance sensors see them (:class:`dream.DistanceSensor`), the dynamics do not.
@@ -48,10 +50,17 @@ class Fast(Backend):
         arena: ArenaSpec = ROBOTARIUM,
         sim: SimulatorSpec = RPS,
         *,
+        rules: str | None = None,
         obstacles: Any = None,
         start_up: bool = False,
         rng: np.random.Generator | None = None,
     ) -> None:
+        if rules is not None:
+            if rules not in RULES:
+                raise ValueError(f"unknown rules {rules!r}: choose one of {', '.join(RULES)}")
+            if sim != RPS and sim != RULES[rules]:
+                raise ValueError(f"`sim` and `rules={rules!r}` disagree: give one of them")
+            sim = RULES[rules]
         super().__init__(initial_conditions, arena, sim)
         self.obstacles = as_obstacles(obstacles)
         self.startup: StartUp | None = None
