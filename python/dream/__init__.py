@@ -19,6 +19,7 @@ from dream.faults import Faults
 from dream.radios import GraphRadio, Radio, RangeRadio
 from dream.robot import Robot, RobotHRVO
 from dream.obstacles import Obstacle
+from dream.onboard import DistanceSensor, EncoderSensor, ImuReading, ImuSensor
 from dream.sensors import MovementSensor, ObstacleSensor, OdometrySensor, Sensor
 from dream.specs import (
     R_AC_MAX,

@@ -9,6 +9,7 @@ __all__ = [
     "__version__",
     "unicycle_step",
     "threshold_velocities",
+    "threshold_wheels",
     "validate",
     "dxi_to_dxu",
     "actuator_limit",
@@ -18,6 +19,7 @@ __all__ = [
     "voronoi_cells",
     "voronoi_cell",
     "virtual_agents",
+    "distance_rays",
 ]
 
 _Bounds = tuple[float, float, float, float]
@@ -30,6 +32,11 @@ def unicycle_step(poses: NDArray[np.float64], velocities: NDArray[np.float64], d
 def threshold_velocities(velocities: NDArray[np.float64], max_linear: float, max_angular: float) -> NDArray[np.float64]:
     """Commands (2, n) clipped to |v| <= max_linear and |w| <= max_angular, signs kept."""
 
+def threshold_wheels(
+    velocities: NDArray[np.float64], *, wheel_radius: float, base_length: float, max_wheel: float
+) -> NDArray[np.float64]:
+    """Commands (2, n) whose wheel speeds are clipped to max_wheel (rps 2.1)."""
+
 def validate(
     poses: NDArray[np.float64],
     velocities: NDArray[np.float64],
@@ -39,8 +46,10 @@ def validate(
     wheel_radius: float,
     base_length: float,
     max_wheel: float,
+    collider_offset: float = 0.0,
+    boundary_per_iteration: bool = False,
 ) -> tuple[int, int, int]:
-    """(boundary, collision, actuator) counts of one iteration by rps's criteria."""
+    """(boundary, collision, actuator) counts of one iteration by rps's criteria (0.0.0 by default, 2.1's with the options)."""
 
 def dxi_to_dxu(
     dxi: NDArray[np.float64], poses: NDArray[np.float64], vel_gain: float, ang_gain: float
@@ -114,3 +123,15 @@ def voronoi_cell(
     position: _Floats, others: _Floats, virtual_points: _Floats, *, radius: float, bounds: _Bounds, resolution: int = 64
 ) -> tuple[_Floats, float, _Floats]:
     """One robot's cell: (centroid (2,), area, counter-clockwise vertices (m, 2))."""
+
+def distance_rays(
+    poses: _Floats,
+    walls: _Floats,
+    rays: _Floats,
+    *,
+    centre_offset: float,
+    robot_diameter: float,
+    range: float,
+    robots: _Ints | None = None,
+) -> _Floats:
+    """Readings (k, n) of the rays (3, k) of every robot (or of `robots`) against walls (m, 4) and the other robots; -1 for nothing."""

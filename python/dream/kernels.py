@@ -20,7 +20,7 @@ import numpy as np
 from dream import _reference
 from dream._checks import FloatArray, as_array, as_poses, check_nonnegative, check_robot_id
 from dream.errors import GeometryError
-from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec, RobotSpec, SimulatorSpec
+from dream.specs import GRITSBOT, ONBOARD, ROBOTARIUM, RPS, ArenaSpec, OnboardSpec, RobotSpec, SimulatorSpec
 
 Bounds = tuple[float, float, float, float]
 
@@ -44,8 +44,8 @@ IMPLEMENTATION = "numpy" if _core is None else "rust"
 class Violations(NamedTuple):
     """Validation counts of one iteration, by the Robotarium simulator's criteria."""
 
-    boundary: int  #: robots outside the arena
-    collision: int  #: pairs of robots whose centres are within one diameter
+    boundary: int  #: robots outside the arena (rps 2.1: 1 if any robot is)
+    collision: int  #: pairs of robots whose colliders are within one diameter
     actuator: int  #: 1 if any command needs a wheel faster than allowed
 
 
@@ -69,26 +69,50 @@ def unicycle_step(poses: Any, velocities: Any, dt: float = RPS.time_step) -> Flo
 
 
 def threshold_velocities(velocities: Any, sim: SimulatorSpec = RPS) -> FloatArray:
-    """Commands ``(2, n)`` clipped to the simulator's linear and angular limits (rps ``set_velocities``)."""
+    """Commands ``(2, n)`` clipped as the simulator ``sim`` clips them.
+
+    rps 0.0.0 (``sim.wheel_thresholding`` off) clips ``v`` and ``w`` to their limits separately;
+    rps 2.1 clips each wheel's speed to ``sim.max_wheel`` and converts back to ``(v, w)``.
+    """
     u = _commands(velocities, "velocities")
+    if sim.wheel_thresholding:
+        wheels = {"wheel_radius": sim.wheel_radius, "base_length": sim.base_length, "max_wheel": sim.max_wheel}
+        if _core is None:
+            return _reference.threshold_wheels(u, **wheels)
+        return _core.threshold_wheels(u, **wheels)
     if _core is None:
         return _reference.threshold_velocities(u, sim.max_linear, sim.max_angular)
     return _core.threshold_velocities(u, sim.max_linear, sim.max_angular)
 
 
-def validate(poses: Any, velocities: Any, arena: ArenaSpec = ROBOTARIUM, sim: SimulatorSpec = RPS) -> Violations:
-    """Boundary, collision and actuator counts for one iteration, as rps counts them.
+def wheel_speeds(velocities: Any, sim: SimulatorSpec = RPS) -> FloatArray:
+    """Left and right wheel speeds ``(2, n)`` (rad/s) of unicycle commands ``(2, n)`` on ``sim``'s robot.
 
-    Collisions are pairs within ``sim.diameter`` (found with a grid by the Rust kernel: O(n)).
+    Elementwise NumPy (nothing for the Rust core to gain): ``(2v -+ L w) / (2 r)``.
+    """
+    return _reference.wheel_speeds(_commands(velocities, "velocities"), sim.wheel_radius, sim.base_length)
+
+
+def validate(poses: Any, velocities: Any, arena: ArenaSpec = ROBOTARIUM, sim: SimulatorSpec = RPS) -> Violations:
+    """Boundary, collision and actuator counts for one iteration, as the simulator ``sim`` counts them.
+
+    Collisions are pairs of colliders (``sim.collider_offset`` ahead of the centres) within
+    ``sim.diameter``, found with a grid by the Rust kernel (O(n)); robots outside the arena count
+    one each, or once per iteration when ``sim.boundary_per_iteration`` (rps 2.1).
     """
     p = as_poses(poses)
     u = _commands(velocities, "velocities", p.shape[1])
-    wheels = dict(
-        diameter=sim.diameter, wheel_radius=sim.wheel_radius, base_length=sim.base_length, max_wheel=sim.max_wheel
-    )
+    rules = {
+        "diameter": sim.diameter,
+        "wheel_radius": sim.wheel_radius,
+        "base_length": sim.base_length,
+        "max_wheel": sim.max_wheel,
+        "collider_offset": sim.collider_offset,
+        "boundary_per_iteration": sim.boundary_per_iteration,
+    }
     if _core is None:
-        return Violations(*_reference.validate(p, u, arena.bounds, **wheels))
-    return Violations(*_core.validate(p, u, arena.bounds, **wheels))
+        return Violations(*_reference.validate(p, u, arena.bounds, **rules))
+    return Violations(*_core.validate(p, u, arena.bounds, **rules))
 
 
 def dxi_to_dxu(dxi: Any, poses: Any, vel_gain: float = 0.8, ang_gain: float = 3.0) -> FloatArray:
@@ -518,6 +542,44 @@ def virtual_agents(
     return _core.virtual_agents(p, vertices, offsets, range=range, offset=offset)
 
 
+def distance_rays(poses: Any, walls: Any = None, *, spec: OnboardSpec = ONBOARD, robots: Any = None) -> FloatArray:
+    """Noiseless readings ``(k, n)`` of every robot's infrared distance sensors (rps 2.1's model).
+
+    Ray ``j`` starts at ``spec.rays[:2, j]`` in the body frame of a centre ``spec.centre_offset``
+    ahead of the pose and points at ``heading + spec.rays[2, j]``; it reads the distance (m) to
+    the nearest line-segment wall or other robot (a disc of ``spec.robot_diameter`` around its
+    own offset centre) within ``spec.range``, or -1. The arena's edges are not seen; a robot
+    whose disc contains a ray's start is not seen by that ray (as in rps 2.1). A grid makes this
+    O(n k m) in Rust (m robots within reach), in parallel over robots.
+
+    Parameters
+    ----------
+    poses : (3, n)
+    walls : (w, 2, 2), optional
+        Line segments, ``walls[i, 0]`` start and ``walls[i, 1]`` end (rps 2.1's ``obstacles``).
+    spec : OnboardSpec
+        The sensor head; its noise settings are not used here (see :class:`dream.DistanceSensor`).
+    robots : (b,) int, optional
+        Cast only these robots' rays (the others' columns read -1); all by default.
+    """
+    p = as_poses(poses)
+    n = p.shape[1]
+    segments = np.zeros((0, 4)) if walls is None else as_array(walls, "walls", (None, 2, 2)).reshape(-1, 4)
+    rays = as_array(spec.rays, "spec.rays", (3, None))
+    check_nonnegative(spec.robot_diameter, "robot_diameter")
+    if not (np.isfinite(spec.range) and spec.range > 0):
+        raise ValueError(f"`range` must be finite and > 0, got {spec.range}")
+    ids = None
+    if robots is not None:
+        ids = np.ascontiguousarray(np.atleast_1d(robots), dtype=np.int64)
+        if ids.ndim != 1 or (len(ids) and (ids.min() < 0 or ids.max() >= n)):
+            raise ValueError(f"`robots` must be robot ids in [0, {n}), got {robots!r}")
+    options = {"centre_offset": spec.centre_offset, "robot_diameter": spec.robot_diameter, "range": spec.range}
+    if _core is None:
+        return _reference.distance_rays(p, segments, rays, robots=ids, **options)
+    return _core.distance_rays(p, segments, rays, robots=ids, **options)
+
+
 __all__ = [
     "IMPLEMENTATION",
     "GeometryError",
@@ -525,6 +587,7 @@ __all__ = [
     "Violations",
     "VoronoiCells",
     "actuator_limit",
+    "distance_rays",
     "dxi_to_dxu",
     "hrvo",
     "neighbours",
@@ -532,6 +595,7 @@ __all__ = [
     "threshold_velocities",
     "unicycle_step",
     "validate",
+    "wheel_speeds",
     "obstacle_agents",
     "virtual_agents",
     "voronoi_cell",

@@ -15,7 +15,7 @@ Units: metres, seconds, radians.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 # Robot values (GRITSbot).
 R_V_MAX: float = 0.2  #: max linear velocity (m/s)
@@ -55,7 +55,13 @@ class RobotSpec:
 
 @dataclass(frozen=True)
 class SimulatorSpec:
-    """The limits rps enforces and checks (they differ slightly from the robot's own)."""
+    """The limits rps enforces and checks (they differ slightly from the robot's own).
+
+    The defaults are rps 0.0.0's rules (:data:`RPS0`); :data:`RPS2` holds rps 2.1's. The two
+    generations differ in how commands are clipped (``v`` and ``w`` separately, or each wheel's
+    speed), where the collider sits (the centre, or ``collider_offset`` ahead along the heading)
+    and how robots outside the arena are counted (each one, or once per iteration).
+    """
 
     time_step: float = TIME_STEP
     max_linear: float = 0.2
@@ -63,7 +69,21 @@ class SimulatorSpec:
     max_wheel: float = 0.2 / 0.016
     wheel_radius: float = R_R_WHEEL
     base_length: float = R_R_LENGTH
-    diameter: float = 0.11
+    diameter: float = 0.11  #: colliders closer than this (centre to centre, inclusive) collide
+    rules: str = "rps0"  #: the generation's name, as ``make_robotarium(..., rules=...)`` takes it
+    collider_offset: float = 0.0  #: how far ahead of the robot's centre its collider sits (m)
+    wheel_thresholding: bool = False  #: clip each wheel's speed instead of ``v`` and ``w``
+    boundary_per_iteration: bool = False  #: count 1 per iteration with a robot outside, not each robot
+    validates_requested: bool = False  #: check the actuator limit on commands before clipping
+
+    def __post_init__(self) -> None:
+        positive = ("time_step", "max_linear", "max_angular", "max_wheel", "wheel_radius", "base_length", "diameter")
+        for name in positive:
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"`{name}` must be finite and > 0, got {value}")
+        if not math.isfinite(self.collider_offset):
+            raise ValueError(f"`collider_offset` must be finite, got {self.collider_offset}")
 
 
 @dataclass(frozen=True)
@@ -103,6 +123,76 @@ class ArenaSpec:
         return (self.xmin + margin, self.xmax - margin, self.ymin + margin, self.ymax - margin)
 
 
+@dataclass(frozen=True)
+class OnboardSpec:
+    """The GRITSbot's onboard sensors as rps 2.1 models them (SI units unless stated).
+
+    The seven infrared distance sensors sit at ``rays[:2, k]`` in the body frame of a centre
+    ``centre_offset`` ahead of the robot's pose, pointing at ``rays[2, k]`` from its heading.
+    They see line-segment walls and other robots as discs of ``robot_diameter`` (rps 2.1 uses the
+    body's 0.11 m here, not the 0.135 m collider: its recorded readings agree), not the arena's
+    edges. A reading is the distance when something is within ``range``, else -1; with noise
+    on, a hit is dropped (-1) with probability ``dropout``, otherwise replaced by a uniform value
+    in ``[0, range)`` with probability ``outlier``, otherwise perturbed by Gaussian noise of
+    std ``distance_error`` times the distance and clipped to ``[0, range]``.
+    """
+
+    rays: tuple[tuple[float, ...], ...] = (
+        (-0.04, 0.0, 0.04, 0.05, 0.04, 0.0, -0.04),
+        (0.04, 0.06, 0.05, 0.0, -0.05, -0.06, -0.04),
+        (math.pi, math.pi / 2, math.pi / 4, 0.0, -math.pi / 4, -math.pi / 2, -math.pi),
+    )
+    centre_offset: float = 0.01
+    robot_diameter: float = 0.11
+    range: float = 1.2
+    distance_error: float = 0.03  #: Gaussian std as a fraction of the distance
+    dropout: float = 0.035
+    outlier: float = 0.014
+    counts_per_revolution: int = 28
+    gear_ratio: float = 100.37
+    encoder_noise: float = 0.25  #: counts; the std of a step's count is this times sqrt(max(|counts|, 1))
+    imu_position: tuple[float, float] = (0.0594 - 0.00319, 0.0344628 - 0.0475)  #: from the axle centre (m)
+    accelerometer_noise: tuple[float, float, float] = (0.012929, 0.012127, 0.052979)  #: m/s^2
+    gyro_noise: tuple[float, float, float] = (0.001663, 0.001216, 0.002372)  #: rad/s
+    magnetometer_noise: tuple[float, float, float] = (3.275843, 2.365798, 5.232685)  #: uT
+    magnetic_xy: float = 6.0712  #: horizontal field strength (uT)
+    magnetic_z: float = -39.8594  #: vertical field (uT)
+    compass_noise: float = 0.310830  #: degrees
+    gravity: float = 9.81  #: m/s^2
+
+    def noiseless(self) -> OnboardSpec:
+        """The same sensors with every noise, dropout and outlier rate set to zero."""
+        return replace(
+            self,
+            distance_error=0.0,
+            dropout=0.0,
+            outlier=0.0,
+            encoder_noise=0.0,
+            accelerometer_noise=(0.0, 0.0, 0.0),
+            gyro_noise=(0.0, 0.0, 0.0),
+            magnetometer_noise=(0.0, 0.0, 0.0),
+            compass_noise=0.0,
+        )
+
+
 GRITSBOT = RobotSpec()
 ROBOTARIUM = ArenaSpec()
 RPS = SimulatorSpec()
+#: rps 0.0.0 (PyPI, 2017): the default rules.
+RPS0 = RPS
+#: rps 2.1 (the lab's simulator since April 2026): wheel base 0.11, wheel-speed clipping,
+#: colliders of 0.135 m placed 0.025 m ahead, boundary counted once per iteration, and the
+#: actuator limit checked on the commands as given (before clipping).
+RPS2 = SimulatorSpec(
+    base_length=0.11,
+    diameter=0.135,
+    rules="rps2",
+    collider_offset=0.025,
+    wheel_thresholding=True,
+    boundary_per_iteration=True,
+    validates_requested=True,
+)
+#: Each generation's rules by name.
+RULES: dict[str, SimulatorSpec] = {"rps0": RPS0, "rps2": RPS2}
+#: The GRITSbot's onboard sensors (rps 2.1's constants).
+ONBOARD = OnboardSpec()

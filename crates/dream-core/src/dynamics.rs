@@ -3,6 +3,11 @@
 //! Poses are `(3, n)` row-major (`x` row, `y` row, `theta` row) and unicycle commands `(2, n)`
 //! (`v` row, `w` row), the Robotarium's layout, so NumPy arrays pass through without reshaping.
 //! The arithmetic follows rps operation by operation, so the Fast backend reproduces its poses.
+//!
+//! Two generations of rps are covered: 0.0.0 (PyPI) clips `v` and `w` separately, counts every
+//! robot outside the arena and every pair of centres within 0.11 m; 2.1 (the lab's, 2026) clips
+//! the wheel speeds, counts the boundary once per iteration and compares colliders placed
+//! 0.025 m ahead of the centres with a diameter of 0.135 m ([`Checks`]).
 
 use crate::error::{check_finite, check_len, check_positive, GeomError, Result};
 use crate::grid::Grid;
@@ -32,12 +37,49 @@ impl Wheels {
         })
     }
 
+    /// Left and right wheel speeds (rad/s) of the command `(v, w)`, written as rps writes them.
+    pub fn speeds(&self, v: f64, w: f64) -> (f64, f64) {
+        let (r, l) = (self.radius, self.base_length);
+        (1.0 / (2.0 * r) * (2.0 * v - l * w), 1.0 / (2.0 * r) * (2.0 * v + l * w))
+    }
+
     /// Whether the command `(v, w)` needs a wheel faster than `max_speed` (rps's criterion).
     fn exceeded_by(&self, v: f64, w: f64) -> bool {
-        let (r, l) = (self.radius, self.base_length);
-        let left = 1.0 / (2.0 * r) * (2.0 * v - l * w);
-        let right = 1.0 / (2.0 * r) * (2.0 * v + l * w);
+        let (left, right) = self.speeds(v, w);
         left.abs() > self.max_speed || right.abs() > self.max_speed
+    }
+}
+
+/// How robots outside the arena are counted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BoundaryCount {
+    /// Every robot outside, every iteration (rps 0.0.0).
+    Robots,
+    /// 1 per iteration in which any robot is outside (rps 2.1).
+    Iterations,
+}
+
+/// The collision and boundary criteria of one rps generation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Checks {
+    /// Two colliders touch when their centres are this close or closer (m).
+    pub diameter: f64,
+    /// How far ahead of the robot's centre, along its heading, the collider sits (m).
+    pub collider_offset: f64,
+    pub boundary: BoundaryCount,
+}
+
+impl Checks {
+    /// # Errors
+    /// [`GeomError::InvalidParameter`] unless `diameter > 0` and `collider_offset` is finite.
+    pub fn new(diameter: f64, collider_offset: f64, boundary: BoundaryCount) -> Result<Self> {
+        check_positive("diameter", diameter)?;
+        check_finite("collider_offset", &[collider_offset])?;
+        Ok(Self {
+            diameter,
+            collider_offset,
+            boundary,
+        })
     }
 }
 
@@ -71,9 +113,9 @@ impl Arena {
 /// The three rps validation counts of one iteration.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Violations {
-    /// Robots outside the arena.
+    /// Robots outside the arena, or 1 if any is ([`BoundaryCount`]).
     pub boundary: u64,
-    /// Pairs of robots whose centres are within one diameter.
+    /// Pairs of robots whose colliders are within one diameter.
     pub collision: u64,
     /// 1 if any robot's command needs a wheel faster than allowed, else 0.
     pub actuator: u64,
@@ -111,11 +153,31 @@ pub fn threshold_velocities(velocities: &mut [f64], n: usize, max_linear: f64, m
     Ok(())
 }
 
-/// Counts boundary, collision and actuator violations of the current poses and commands,
-/// with the criteria of rps's `_validate`; collisions use a grid, so the cost is O(n).
+/// Clips each wheel's speed to `max_speed` (keeping its sign) and converts back to `(v, w)`, as
+/// rps 2.1's `_threshold`: a command too fast for one wheel keeps its curvature only if both
+/// wheels stay within the limit.
 ///
 /// # Errors
-/// Length or finiteness problems of `poses` (`3 * n`) or `velocities` (`2 * n`).
+/// Length or finiteness problems of `velocities` (`2 * n` values).
+pub fn threshold_wheels(velocities: &mut [f64], n: usize, wheels: &Wheels) -> Result<()> {
+    rows("velocities", velocities, 2, n)?;
+    let (v, w) = velocities.split_at_mut(n);
+    let (r, l, top) = (wheels.radius, wheels.base_length, wheels.max_speed);
+    let clip = |speed: f64| if speed.abs() > top { top * speed.signum() } else { speed };
+    for i in 0..n {
+        let (left, right) = wheels.speeds(v[i], w[i]);
+        let (left, right) = (clip(left), clip(right));
+        v[i] = r / 2.0 * (left + right);
+        w[i] = r / l * (right - left);
+    }
+    Ok(())
+}
+
+/// Counts boundary, collision and actuator violations of the current poses and commands with
+/// rps 0.0.0's criteria (centres within `diameter`, every robot outside counted).
+///
+/// # Errors
+/// As [`validate_with`].
 pub fn validate(
     poses: &[f64],
     velocities: &[f64],
@@ -124,19 +186,48 @@ pub fn validate(
     diameter: f64,
     wheels: &Wheels,
 ) -> Result<Violations> {
-    check_positive("diameter", diameter)?;
+    let checks = Checks::new(diameter, 0.0, BoundaryCount::Robots)?;
+    validate_with(poses, velocities, n, arena, &checks, wheels)
+}
+
+/// Counts boundary, collision and actuator violations of the current poses and commands with
+/// the criteria `checks`; collisions use a grid, so the cost is O(n).
+///
+/// # Errors
+/// Length or finiteness problems of `poses` (`3 * n`) or `velocities` (`2 * n`).
+pub fn validate_with(
+    poses: &[f64],
+    velocities: &[f64],
+    n: usize,
+    arena: &Arena,
+    checks: &Checks,
+    wheels: &Wheels,
+) -> Result<Violations> {
     let p = rows("poses", poses, 3, n)?;
     let u = rows("velocities", velocities, 2, n)?;
     let (xs, ys) = (p[0], p[1]);
 
-    let boundary = (0..n).filter(|&i| !arena.contains(xs[i], ys[i])).count() as u64;
+    let outside = (0..n).filter(|&i| !arena.contains(xs[i], ys[i])).count() as u64;
+    let boundary = match checks.boundary {
+        BoundaryCount::Robots => outside,
+        BoundaryCount::Iterations => u64::from(outside > 0),
+    };
 
-    let grid = Grid::new(xs, ys, diameter);
+    let offset = checks.collider_offset;
+    let (cx, cy): (Vec<f64>, Vec<f64>) = if offset == 0.0 {
+        (xs.to_vec(), ys.to_vec())
+    } else {
+        (0..n)
+            .map(|i| (xs[i] + offset * p[2][i].cos(), ys[i] + offset * p[2][i].sin()))
+            .unzip()
+    };
+    let diameter = checks.diameter;
+    let grid = Grid::new(&cx, &cy, diameter);
     let mut collision = 0_u64;
     for i in 0..n {
-        grid.for_each_near(xs[i], ys[i], |j| {
+        grid.for_each_near(cx[i], cy[i], |j| {
             if j > i {
-                let (dx, dy) = (xs[i] - xs[j], ys[i] - ys[j]);
+                let (dx, dy) = (cx[i] - cx[j], cy[i] - cy[j]);
                 if (dx * dx + dy * dy).sqrt() <= diameter {
                     collision += 1;
                 }
@@ -249,6 +340,43 @@ mod tests {
                 actuator: 1
             }
         );
+    }
+
+    #[test]
+    fn rps2_checks_use_offset_colliders_and_count_the_boundary_once() {
+        // Robots 0 and 1 are 0.15 m apart (no collision in rps 0.0.0) but face each other, so
+        // their colliders are 0.10 m apart; robots 2 and 3 are both outside.
+        let poses = [
+            0.0,
+            0.15,
+            1.7,
+            -1.7,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            std::f64::consts::PI,
+            0.0,
+            0.0,
+        ];
+        let checks = Checks::new(0.135, 0.025, BoundaryCount::Iterations).unwrap();
+        let counts = validate_with(&poses, &[0.0; 8], 4, &robotarium(), &checks, &gritsbot()).unwrap();
+        assert_eq!((counts.boundary, counts.collision), (1, 1));
+        let counts = validate(&poses, &[0.0; 8], 4, &robotarium(), 0.11, &gritsbot()).unwrap();
+        assert_eq!((counts.boundary, counts.collision), (2, 0));
+    }
+
+    #[test]
+    fn threshold_wheels_clips_the_faster_wheel_only() {
+        let wheels = Wheels::new(0.016, 0.11, 12.5).unwrap();
+        // v = 0.2 with a turn: the outer wheel is too fast, the inner one is not.
+        let mut u = vec![0.2, 0.0, 1.0, 0.1];
+        threshold_wheels(&mut u, 2, &wheels).unwrap();
+        let (left, right) = wheels.speeds(u[0], u[2]);
+        assert!((right - 12.5).abs() < 1e-12);
+        assert!((left - (0.2 - 0.055) / 0.016).abs() < 1e-12);
+        assert!((u[1] - 0.0).abs() < 1e-15 && (u[3] - 0.1).abs() < 1e-15);
     }
 
     #[test]

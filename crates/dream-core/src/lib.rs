@@ -8,6 +8,7 @@
 //! - [`dynamics`]: unicycle Euler step, rps velocity thresholding and validation counts,
 //!   single-integrator to unicycle conversion and actuator limiting, for the whole swarm.
 //! - [`grid`]: the uniform grid behind neighbour queries.
+//! - [`raycast`]: the GRITSbot's infrared distance sensors for the whole swarm (rps 2.1's model).
 
 pub mod dynamics;
 pub mod error;
@@ -15,6 +16,7 @@ pub mod grid;
 pub mod hrvo;
 pub mod neighbours;
 pub mod obstacles;
+pub mod raycast;
 pub mod voronoi;
 
 pub use error::{GeomError, Result};

@@ -1,6 +1,6 @@
 //! Bindings of `dream_core::dynamics`: the Fast backend's step and the rps validation counts.
 
-use dream_core::dynamics::{self, Arena, Wheels};
+use dream_core::dynamics::{self, Arena, BoundaryCount, Checks, Wheels};
 use numpy::{IntoPyArray, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
@@ -39,9 +39,29 @@ pub fn threshold_velocities<'py>(
     Ok(into_rows(py, u, 2, n)?)
 }
 
-/// `(boundary, collision, actuator)` violation counts of one iteration, by rps's criteria.
+/// Commands `(2, n)` whose wheel speeds are clipped to `max_wheel` (rps 2.1).
 #[pyfunction]
-#[pyo3(signature = (poses, velocities, bounds, *, diameter, wheel_radius, base_length, max_wheel))]
+#[pyo3(signature = (velocities, *, wheel_radius, base_length, max_wheel))]
+pub fn threshold_wheels<'py>(
+    py: Python<'py>,
+    velocities: Bound<'py, PyAny>,
+    wheel_radius: f64,
+    base_length: f64,
+    max_wheel: f64,
+) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
+    let (mut u, n) = rows_of("velocities", &velocities, 2)?;
+    let wheels = Wheels::new(wheel_radius, base_length, max_wheel)?;
+    dynamics::threshold_wheels(&mut u, n, &wheels)?;
+    Ok(into_rows(py, u, 2, n)?)
+}
+
+/// `(boundary, collision, actuator)` violation counts of one iteration, by rps's criteria
+/// (0.0.0's by default; 2.1's with `collider_offset=0.025, boundary_per_iteration=True`).
+#[pyfunction]
+#[pyo3(signature = (
+    poses, velocities, bounds, *, diameter, wheel_radius, base_length, max_wheel,
+    collider_offset = 0.0, boundary_per_iteration = false,
+))]
 #[allow(clippy::too_many_arguments)]
 pub fn validate(
     py: Python<'_>,
@@ -52,13 +72,21 @@ pub fn validate(
     wheel_radius: f64,
     base_length: f64,
     max_wheel: f64,
+    collider_offset: f64,
+    boundary_per_iteration: bool,
 ) -> PyDreamResult<(u64, u64, u64)> {
     let (p, n) = rows_of("poses", &poses, 3)?;
     let (u, m) = rows_of("velocities", &velocities, 2)?;
     same_count("velocities", n, m, 2)?;
     let arena = Arena::new(bounds.0, bounds.1, bounds.2, bounds.3)?;
     let wheels = Wheels::new(wheel_radius, base_length, max_wheel)?;
-    let counts = py.detach(|| dynamics::validate(&p, &u, n, &arena, diameter, &wheels))?;
+    let boundary = if boundary_per_iteration {
+        BoundaryCount::Iterations
+    } else {
+        BoundaryCount::Robots
+    };
+    let checks = Checks::new(diameter, collider_offset, boundary)?;
+    let counts = py.detach(|| dynamics::validate_with(&p, &u, n, &arena, &checks, &wheels))?;
     Ok((counts.boundary, counts.collision, counts.actuator))
 }
 

@@ -7,6 +7,7 @@ mod errors;
 mod hrvo;
 mod neighbours;
 mod obstacles;
+mod raycast;
 mod voronoi;
 
 use pyo3::prelude::*;
@@ -16,6 +17,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(dynamics::unicycle_step, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::threshold_velocities, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::threshold_wheels, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::validate, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::dxi_to_dxu, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::actuator_limit, m)?)?;
@@ -25,5 +27,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(voronoi::voronoi_cells, m)?)?;
     m.add_function(wrap_pyfunction!(voronoi::voronoi_cell, m)?)?;
     m.add_function(wrap_pyfunction!(obstacles::virtual_agents, m)?)?;
+    m.add_function(wrap_pyfunction!(raycast::distance_rays, m)?)?;
     Ok(())
 }

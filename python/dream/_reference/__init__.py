@@ -6,10 +6,19 @@ extension is absent (the Robotarium lab runs scripts with numpy, scipy and matpl
 They depend on NumPy alone.
 """
 
-from dream._reference.dynamics import actuator_limit, dxi_to_dxu, threshold_velocities, unicycle_step, validate
+from dream._reference.dynamics import (
+    actuator_limit,
+    dxi_to_dxu,
+    threshold_velocities,
+    threshold_wheels,
+    unicycle_step,
+    validate,
+    wheel_speeds,
+)
 from dream._reference.hrvo import candidate_grid, detection_directions, hrvo, hrvo_velocity, unit_directions
 from dream._reference.neighbours import neighbours, neighbours_of
 from dream._reference.obstacles import agents_from_closest, virtual_agents
+from dream._reference.raycast import distance_rays
 from dream._reference.voronoi import voronoi_cell, voronoi_cells
 
 __all__ = [
@@ -17,16 +26,19 @@ __all__ = [
     "agents_from_closest",
     "candidate_grid",
     "detection_directions",
+    "distance_rays",
     "dxi_to_dxu",
     "hrvo",
     "hrvo_velocity",
     "neighbours",
     "neighbours_of",
     "threshold_velocities",
+    "threshold_wheels",
     "unicycle_step",
     "unit_directions",
     "validate",
     "virtual_agents",
     "voronoi_cell",
     "voronoi_cells",
+    "wheel_speeds",
 ]

@@ -19,6 +19,23 @@ def threshold_velocities(velocities: FloatArray, max_linear: float, max_angular:
     return out
 
 
+def wheel_speeds(velocities: FloatArray, wheel_radius: float, base_length: float) -> FloatArray:
+    """Left and right wheel speeds ``(2, n)`` (rad/s) of unicycle commands ``(2, n)`` (rps ``_uni_to_diff``)."""
+    v, w = velocities[0], velocities[1]
+    return np.vstack(
+        (1 / (2 * wheel_radius) * (2 * v - base_length * w), 1 / (2 * wheel_radius) * (2 * v + base_length * w))
+    )
+
+
+def threshold_wheels(
+    velocities: FloatArray, *, wheel_radius: float, base_length: float, max_wheel: float
+) -> FloatArray:
+    """Commands ``(2, n)`` whose wheel speeds are clipped to ``max_wheel``, signs kept (rps 2.1)."""
+    wheels = wheel_speeds(velocities, wheel_radius, base_length)
+    wheels = np.where(np.abs(wheels) > max_wheel, max_wheel * np.sign(wheels), wheels)
+    return np.vstack((wheel_radius / 2 * (wheels[0] + wheels[1]), wheel_radius / base_length * (wheels[1] - wheels[0])))
+
+
 def validate(
     poses: FloatArray,
     velocities: FloatArray,
@@ -28,25 +45,29 @@ def validate(
     wheel_radius: float,
     base_length: float,
     max_wheel: float,
+    collider_offset: float = 0.0,
+    boundary_per_iteration: bool = False,
 ) -> tuple[int, int, int]:
     """``(boundary, collision, actuator)`` counts of one iteration by rps's ``_validate`` criteria.
 
-    boundary: robots outside ``bounds`` (xmin, xmax, ymin, ymax); collision: pairs whose centres
-    are within ``diameter`` (inclusive); actuator: 1 if any command needs a wheel faster than
-    ``max_wheel``.
+    boundary: robots outside ``bounds`` (xmin, xmax, ymin, ymax), or 1 if any is when
+    ``boundary_per_iteration``; collision: pairs whose colliders (``collider_offset`` ahead of the
+    centre along the heading) are within ``diameter`` (inclusive); actuator: 1 if any command
+    needs a wheel faster than ``max_wheel``.
     """
     x, y = poses[0], poses[1]
     xmin, xmax, ymin, ymax = bounds
     boundary = int(np.count_nonzero((x < xmin) | (x > xmax) | (y < ymin) | (y > ymax)))
+    if boundary_per_iteration:
+        boundary = min(boundary, 1)
+    if collider_offset != 0.0:
+        x = x + collider_offset * np.cos(poses[2])
+        y = y + collider_offset * np.sin(poses[2])
     dx = x[:, None] - x[None, :]
     dy = y[:, None] - y[None, :]
     close = np.sqrt(dx * dx + dy * dy) <= diameter
     collision = int(np.count_nonzero(np.triu(close, k=1)))
-    v, w = velocities[0], velocities[1]
-    wheels = np.vstack(
-        (1 / (2 * wheel_radius) * (2 * v - base_length * w), 1 / (2 * wheel_radius) * (2 * v + base_length * w))
-    )
-    actuator = int(np.any(np.abs(wheels) > max_wheel))
+    actuator = int(np.any(np.abs(wheel_speeds(velocities, wheel_radius, base_length)) > max_wheel))
     return boundary, collision, actuator
 
 

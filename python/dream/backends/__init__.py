@@ -9,11 +9,11 @@ import numpy as np
 from dream._checks import FloatArray, as_poses
 from dream.backends.base import Backend
 from dream.backends.fast import Fast
-from dream.backends.robotarium import MAX_ROBOTS, Robotarium, rps_available
-from dream.specs import ROBOTARIUM, ArenaSpec
+from dream.backends.robotarium import MAX_ROBOTS, Robotarium, rps_available, rps_generation
+from dream.specs import ROBOTARIUM, RULES, ArenaSpec
 from dream.world import current_world
 
-__all__ = ["Backend", "Fast", "Robotarium", "initial_poses", "make_robotarium", "rps_available"]
+__all__ = ["Backend", "Fast", "Robotarium", "initial_poses", "make_robotarium", "rps_available", "rps_generation"]
 
 BACKENDS = ("auto", "robotarium", "fast")
 
@@ -51,6 +51,7 @@ def make_robotarium(
     *,
     arena: ArenaSpec | None = None,
     seed: int | None = None,
+    rules: str | None = None,
 ) -> Backend:
     """A simulator for ``n`` robots.
 
@@ -64,23 +65,31 @@ def make_robotarium(
         world's generator).
     arena : ArenaSpec, optional
         Default: the Robotarium arena.
+    rules : {"rps0", "rps2"}, optional
+        Which rps generation's dynamics and validation to follow (:data:`dream.specs.RULES`);
+        default: the installed rps's, else "rps0". The Robotarium backend only has its own.
     """
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
         raise ValueError(f"the number of robots must be an integer >= 0, got {n!r}")
+    rules = rules if rules is not None else (rps_generation() or "rps0")
+    if rules not in RULES:
+        raise ValueError(f"unknown rules {rules!r}: choose one of {', '.join(RULES)}")
     arena = ROBOTARIUM if arena is None else arena
     if initial_conditions is None:
         rng = current_world().rng if seed is None else np.random.default_rng(seed)
         initial_conditions = initial_poses(n, rng, arena)
     poses = as_poses(initial_conditions, "initial_conditions", n)
     if backend == "auto":
-        real = rps_available() and n <= MAX_ROBOTS and arena == ROBOTARIUM
+        real = rps_available() and n <= MAX_ROBOTS and arena == ROBOTARIUM and rules == rps_generation()
         backend = "robotarium" if real else "fast"
     if backend == "robotarium":
         if n > MAX_ROBOTS:
             raise ValueError(f"the Robotarium runs at most {MAX_ROBOTS} robots, got {n}: use backend='fast'")
         if arena != ROBOTARIUM:
             raise ValueError("the Robotarium backend only has the Robotarium arena: use backend='fast'")
+        if rules != rps_generation():
+            raise ValueError(f"the installed rps follows {rps_generation()!r}, not rules={rules!r}: use backend='fast'")
         return Robotarium(poses)
-    return Fast(poses, arena)
+    return Fast(poses, arena, RULES[rules])

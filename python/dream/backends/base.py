@@ -19,8 +19,10 @@ class Backend(ABC):
 
     The protocol is the Robotarium's: each iteration calls :meth:`get_poses` once, then
     :meth:`set_velocities`, then :meth:`step`. Before each step the backend counts violations
-    by rps's criteria (robots outside the arena, pairs closer than a diameter, commands beyond
-    the wheel limit) into :attr:`violations`.
+    by the criteria of the rps generation ``sim`` follows (robots outside the arena, colliders
+    closer than a diameter, commands beyond the wheel limit) into :attr:`violations`. Scripts
+    end with :meth:`call_at_scripts_end` (rps 0.0.0) or :meth:`debug` (rps 2.1): both print the
+    same report, so a script written for either generation runs on every backend.
 
     Attributes
     ----------
@@ -29,7 +31,7 @@ class Backend(ABC):
     sim : SimulatorSpec
         Time step and the limits the simulator enforces.
     velocities : (2, n) ndarray
-        The last commands applied (after thresholding).
+        The commands applied at the next step (after thresholding).
     iterations : int
         Steps taken.
     violations : dream.kernels.Violations
@@ -45,6 +47,7 @@ class Backend(ABC):
         self.sim = sim
         self.time_step = sim.time_step
         self.velocities = np.zeros((2, self.number_of_robots))
+        self._requested = np.zeros((2, self.number_of_robots))
         self.iterations = 0
         self.violations = kernels.Violations(0, 0, 0)
         self._poses = poses.copy()
@@ -68,8 +71,9 @@ class Backend(ABC):
     def set_velocities(self, ids: Any, velocities: Any) -> None:
         """Command robots ``ids`` with unicycle velocities ``(2, len(ids))`` ``[v; w]``.
 
-        Commands beyond the simulator's linear or angular limit are clipped (keeping the sign),
-        as rps does; robots not in ``ids`` keep their previous command.
+        Commands beyond the simulator's limits are clipped as its rps generation clips them
+        (:func:`dream.kernels.threshold_velocities`); robots not in ``ids`` keep their previous
+        command.
         """
         index = np.atleast_1d(np.asarray(ids))
         if index.dtype.kind not in "iu" or index.ndim != 1:
@@ -79,14 +83,17 @@ class Backend(ABC):
             bad = index[(index < 0) | (index >= n)][0]
             raise IndexError(f"robot id {bad} is out of range for a simulation of {n} robots")
         commands = as_array(velocities, "velocities", (2, len(index)))
-        self.velocities = self.velocities.copy()
-        self.velocities[:, index] = kernels.threshold_velocities(commands, self.sim)
+        # Kept as given: rps 2.1 checks the actuator limit on commands before clipping them.
+        self._requested = self._requested.copy()
+        self._requested[:, index] = commands
+        self.velocities = kernels.threshold_velocities(self._requested, self.sim)
 
     def step(self) -> None:
         """Count this iteration's violations, then advance the simulation by one time step."""
         if not self._poses_taken:
             raise RuntimeError("call get_poses() before each step(), as on the Robotarium")
-        found = kernels.validate(self._poses, self.velocities, self.arena, self.sim)
+        checked = self._requested if self.sim.validates_requested else self.velocities
+        found = kernels.validate(self._poses, checked, self.arena, self.sim)
         self.violations = kernels.Violations(*(a + b for a, b in zip(self.violations, found)))
         self._advance()
         self.iterations += 1
@@ -97,7 +104,11 @@ class Backend(ABC):
         """Move the robots by one time step with ``self.velocities``; update ``self._poses``."""
 
     def call_at_scripts_end(self) -> None:
-        """Print the run's duration on the real Robotarium and its violation counts."""
+        """Print the run's duration on the real Robotarium and its violation counts (rps 0.0.0's name)."""
+        print(self.summary())
+
+    def debug(self) -> None:
+        """Print the same report as :meth:`call_at_scripts_end` (rps 2.1's name for it)."""
         print(self.summary())
 
     def summary(self) -> str:
@@ -106,8 +117,9 @@ class Backend(ABC):
         seconds = math.ceil(self.iterations * self.time_step)
         lines = [f"{self.iterations} iterations on the {self.name} backend (~{seconds} s on the Robotarium)."]
         if b or c or a:
+            outside = "iteration(s) with robots" if self.sim.boundary_per_iteration else "robot-iteration(s)"
             lines += [
-                f"  {b} robot-iteration(s) outside the boundaries",
+                f"  {b} {outside} outside the boundaries",
                 f"  {c} pair-iteration(s) where robots collided",
                 f"  {a} iteration(s) where the actuator limits were exceeded",
             ]

@@ -1,8 +1,14 @@
 """The Robotarium backend: the Georgia Tech simulator ``rps``, driven headless.
 
-Works with ``rps`` 0.0.0 (PyPI ``robotarium-python-simulator``) and the lab's rps 2.x: the
-simulator is built with keyword arguments and only the API common to both is used. rps always
-runs without its own figure (rps 0.0.0's figure fails on matplotlib >= 3.8); DREAM draws.
+Works with both generations of ``rps``: 0.0.0 (PyPI ``robotarium-python-simulator``, 2017) and
+the lab's 2.x (2026). The simulator is built with keyword arguments; DREAM counts violations
+itself with the rules of the generation found (:data:`dream.specs.RPS0` or
+:data:`dream.specs.RPS2`), so its counts equal rps's own. rps always runs without its own
+figure (0.0.0's figure fails on matplotlib >= 3.8); DREAM draws.
+
+On 2.x, real-time throttling (on by default there) is off unless asked for, and the start-up
+phase from the chargers runs unless ``skip_initialization=True``; the backend's poses are the
+ones rps reached at its end.
 """
 
 from __future__ import annotations
@@ -13,11 +19,15 @@ from typing import Any
 
 import numpy as np
 
+from dream._checks import FloatArray, as_array
 from dream.backends.base import Backend
-from dream.specs import ROBOTARIUM, RPS
+from dream.specs import ROBOTARIUM, RULES
 
 #: rps refuses more robots than this.
 MAX_ROBOTS = 50
+#: rps 2.x's start-up phase normally ends in ~500-1,100 steps; it loops forever when its barrier
+#: certificates deadlock (initial conditions too close together): stop it with an error instead.
+MAX_STARTUP_STEPS = 5_000
 
 
 def rps_available() -> bool:
@@ -29,6 +39,46 @@ def rps_available() -> bool:
     return True
 
 
+def rps_generation() -> str | None:
+    """``"rps0"`` for rps 0.0.0, ``"rps2"`` for rps 2.x, ``None`` when rps is not installed.
+
+    Told apart by their end-of-script report: 2.x renamed ``call_at_scripts_end()`` to
+    ``debug()`` (the distribution's version number is not reliable for a source checkout).
+    """
+    try:
+        from rps.robotarium import Robotarium as Simulator
+    except ImportError:
+        return None
+    return "rps0" if hasattr(Simulator, "call_at_scripts_end") else "rps2"
+
+
+def as_obstacles(obstacles: Any) -> FloatArray:
+    """Line-segment obstacles as a float64 ``(m, 2, 2)`` array (``[k, 0]`` start, ``[k, 1]`` end).
+
+    ``None`` gives ``(0, 2, 2)``; other shapes or non-finite values are a ``ValueError``.
+    """
+    if obstacles is None:
+        return np.zeros((0, 2, 2))
+    return as_array(obstacles, "obstacles", (None, 2, 2))
+
+
+def _bounded(simulator: type) -> type:
+    """rps 2.x's simulator class whose start-up phase raises after :data:`MAX_STARTUP_STEPS` steps."""
+
+    class Bounded(simulator):  # type: ignore[misc, valid-type]
+        def step(self) -> None:
+            super().step()
+            if getattr(self, "initializing", False) and self._iteration > MAX_STARTUP_STEPS:
+                raise RuntimeError(
+                    f"rps's start-up phase did not bring the robots to their initial conditions in "
+                    f"{MAX_STARTUP_STEPS} steps (its barrier certificates deadlock when initial conditions "
+                    "are too close together; rps itself draws them 0.5 m apart): spread them out or pass "
+                    "skip_initialization=True"
+                )
+
+    return Bounded
+
+
 class Robotarium(Backend):
     """The real Robotarium simulator behind DREAM's backend interface.
 
@@ -37,34 +87,73 @@ class Robotarium(Backend):
     initial_conditions : (3, n) array_like
         Initial poses; at most 50 robots (rps's limit) in the Robotarium arena.
     sim_in_real_time : bool
-        Passed to rps (it only matters when rps draws, which DREAM never asks for).
+        Passed to rps: with 2.x it makes every step wait for 0.033 s of wall time.
+    skip_initialization : bool
+        rps 2.x only: start at ``initial_conditions`` instead of driving there from the
+        chargers (2.x's default, and what the lab's verifier does, is to drive).
+    obstacles : (m, 2, 2) array_like, optional
+        rps 2.x only: line-segment walls that its distance sensors see.
+    use_distance_sensors : bool
+        rps 2.x only: simulate the infrared distance sensors (``self.rps.get_distances()``).
     """
 
     name = "robotarium"
 
-    def __init__(self, initial_conditions: Any, *, sim_in_real_time: bool = False) -> None:
-        super().__init__(initial_conditions, ROBOTARIUM, RPS)
+    def __init__(
+        self,
+        initial_conditions: Any,
+        *,
+        sim_in_real_time: bool = False,
+        skip_initialization: bool = False,
+        obstacles: Any = None,
+        use_distance_sensors: bool = False,
+    ) -> None:
+        generation = rps_generation()
+        if generation is None:
+            raise ImportError("the Robotarium backend needs the `rps` package (robotarium-python-simulator)")
+        super().__init__(initial_conditions, ROBOTARIUM, RULES[generation])
         if self.number_of_robots > MAX_ROBOTS:
             raise ValueError(
                 f"the Robotarium runs at most {MAX_ROBOTS} robots, got {self.number_of_robots}: use backend='fast'"
             )
+        self.obstacles = as_obstacles(obstacles)
         from rps import robotarium
 
-        self.rps = robotarium.Robotarium(
-            number_of_robots=self.number_of_robots,
-            show_figure=False,
-            sim_in_real_time=sim_in_real_time,
-            initial_conditions=self._poses.copy(),
-        )
+        options: dict[str, Any] = {
+            "number_of_robots": self.number_of_robots,
+            "show_figure": False,
+            "sim_in_real_time": bool(sim_in_real_time),
+            "initial_conditions": self._poses.copy(),
+        }
+        simulator = robotarium.Robotarium
+        if generation == "rps2":
+            simulator = _bounded(simulator)
+            options["skip_initialization"] = bool(skip_initialization)
+            options["use_distance_sensors"] = bool(use_distance_sensors)
+            options["obstacles"] = self.obstacles if len(self.obstacles) else None
+        elif skip_initialization or len(self.obstacles) or use_distance_sensors:
+            raise ValueError(
+                "rps 0.0.0 has no start-up phase, obstacles or distance sensors: "
+                "`skip_initialization`, `obstacles` and `use_distance_sensors` need rps 2.x"
+            )
+        self.rps = simulator(**options)
         # rps 0.0.0's `_validate(errors={})` shares one dict between all instances, so counts
         # would leak from one simulation to the next; give this instance a dict of its own.
         validate = self.rps._validate
-        if "errors" in inspect.signature(validate).parameters:
+        parameter = inspect.signature(validate).parameters.get("errors")
+        if parameter is not None and parameter.default is not inspect.Parameter.empty:
             self.rps._validate = functools.partial(validate, errors={})
+        # After 2.x's start-up phase the robots are near, not at, the initial conditions.
+        self._poses = self._rps_poses()
+
+    def _rps_poses(self) -> FloatArray:
+        # 0.0.0 keeps the poses in `poses`, 2.x in `_poses`; get_poses() would count as a call.
+        poses = self.rps.poses if hasattr(self.rps, "poses") else self.rps._poses
+        return np.array(poses, dtype=np.float64)
 
     def _advance(self) -> None:
         self.rps.get_poses()
         # rps thresholds the array it is given in place and keeps a reference: give it a copy.
-        self.rps.set_velocities(np.arange(self.number_of_robots), self.velocities.copy())
+        self.rps.set_velocities(np.arange(self.number_of_robots), self._requested.copy())
         self.rps.step()
-        self._poses = np.array(self.rps.poses, dtype=np.float64)
+        self._poses = self._rps_poses()
