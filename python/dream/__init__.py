@@ -50,6 +50,10 @@ Radio_range = RangeRadio
 # `from dream import *` gives every public name: the original ones, for scripts written for the
 # prototype, and the PEP 8 ones.
 __all__ = [
+    "ImuSensor",
+    "ImuReading",
+    "EncoderSensor",
+    "DistanceSensor",
     "Backend",
     "Experiment",
     "ExperimentResult",

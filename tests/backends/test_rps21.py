@@ -167,7 +167,7 @@ def test_make_robotarium_refuses_other_rules_on_the_installed_rps():
     with pytest.raises(ValueError, match="rps2"):
         make_robotarium(3, backend="robotarium", seed=0, rules="rps2")
     with pytest.raises(ValueError, match="skip_initialization"):
-        Robotarium(np.zeros((3, 1)), skip_initialization=True)
+        Robotarium(np.zeros((3, 1)), skip_initialization=False)
 
 
 class FakeRps2:
@@ -222,7 +222,9 @@ def test_robotarium_backend_drives_rps2_without_throttling_and_passes_its_option
     assert rps_generation() == "rps2"
     walls = np.array([[[-0.5, -0.6], [-0.5, 0.6]]])
     start = np.array([[0.0, 0.5], [0.0, 0.0], [0.0, 0.0]])
-    sim = Robotarium(start, obstacles=walls, use_distance_sensors=True)
+    assert Robotarium(start).iterations == 0  # DREAM's default: start at the initial conditions
+    assert fake_rps2.made[-1]["skip_initialization"] is True
+    sim = Robotarium(start, obstacles=walls, use_distance_sensors=True, skip_initialization=False)
     options = fake_rps2.made[-1]
     assert options["sim_in_real_time"] is False and options["skip_initialization"] is False
     assert_array_equal(options["obstacles"], walls) and options["use_distance_sensors"] is True
@@ -239,7 +241,7 @@ def test_robotarium_backend_drives_rps2_without_throttling_and_passes_its_option
 def test_robotarium_backend_stops_a_deadlocked_rps2_start_up_with_an_error(fake_rps2, monkeypatch):
     monkeypatch.setattr(fake_rps2, "stuck", True)
     with pytest.raises(RuntimeError, match="skip_initialization=True"):
-        Robotarium(np.zeros((3, 1)))
+        Robotarium(np.zeros((3, 1)), skip_initialization=False)
     assert Robotarium(np.zeros((3, 1)), skip_initialization=True).iterations == 0
 
 

@@ -6,9 +6,9 @@ itself with the rules of the generation found (:data:`dream.specs.RPS0` or
 :data:`dream.specs.RPS2`), so its counts equal rps's own. rps always runs without its own
 figure (0.0.0's figure fails on matplotlib >= 3.8); DREAM draws.
 
-On 2.x, real-time throttling (on by default there) is off unless asked for, and the start-up
-phase from the chargers runs unless ``skip_initialization=True``; the backend's poses are the
-ones rps reached at its end.
+On 2.x, real-time throttling (on by default there) is off unless asked for, and so is the
+start-up phase from the chargers (``skip_initialization=False`` runs it; the backend's poses are
+then the ones rps reached at its end).
 """
 
 from __future__ import annotations
@@ -88,9 +88,11 @@ class Robotarium(Backend):
         Initial poses; at most 50 robots (rps's limit) in the Robotarium arena.
     sim_in_real_time : bool
         Passed to rps: with 2.x it makes every step wait for 0.033 s of wall time.
-    skip_initialization : bool
-        rps 2.x only: start at ``initial_conditions`` instead of driving there from the
-        chargers (2.x's default, and what the lab's verifier does, is to drive).
+    skip_initialization : bool, optional
+        rps 2.x only. ``False`` first drives the robots from the chargers to
+        ``initial_conditions`` (2.x's own default, and what the lab's verifier does; its barrier
+        certificates deadlock when initial conditions are closer than ~0.45 m). DREAM's default
+        (``None``) starts at the initial conditions, as rps 0.0.0 does.
     obstacles : (m, 2, 2) array_like, optional
         rps 2.x only: line-segment walls that its distance sensors see.
     use_distance_sensors : bool
@@ -104,7 +106,7 @@ class Robotarium(Backend):
         initial_conditions: Any,
         *,
         sim_in_real_time: bool = False,
-        skip_initialization: bool = False,
+        skip_initialization: bool | None = None,
         obstacles: Any = None,
         use_distance_sensors: bool = False,
     ) -> None:
@@ -128,10 +130,10 @@ class Robotarium(Backend):
         simulator = robotarium.Robotarium
         if generation == "rps2":
             simulator = _bounded(simulator)
-            options["skip_initialization"] = bool(skip_initialization)
+            options["skip_initialization"] = skip_initialization is not False
             options["use_distance_sensors"] = bool(use_distance_sensors)
             options["obstacles"] = self.obstacles if len(self.obstacles) else None
-        elif skip_initialization or len(self.obstacles) or use_distance_sensors:
+        elif skip_initialization is not None or len(self.obstacles) or use_distance_sensors:
             raise ValueError(
                 "rps 0.0.0 has no start-up phase, obstacles or distance sensors: "
                 "`skip_initialization`, `obstacles` and `use_distance_sensors` need rps 2.x"
