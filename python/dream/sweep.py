@@ -15,11 +15,14 @@ import argparse
 import contextlib
 import csv
 import itertools
+import logging
 import os
+import signal
 import sys
 import tempfile
+import threading
 import time
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -295,14 +298,18 @@ def _execute(
     with contextlib.ExitStack() as stack:
         if scheduler is None:
             count = min(workers or os.cpu_count() or 1, len(tasks))  # no idle processes for a small sweep
-            cluster = LocalCluster(
-                n_workers=count,
-                threads_per_worker=1,  # a run holds the GIL: parallel runs need processes
-                processes=True,
-                dashboard_address=None,
-                # K single-threaded processes fill the cores already; a rayon pool in each would oversubscribe them.
-                env={"RAYON_NUM_THREADS": os.environ.get("RAYON_NUM_THREADS", "1")},
-            )
+            with _ignoring_ctrl_c():
+                cluster = LocalCluster(
+                    n_workers=count,
+                    threads_per_worker=1,  # a run holds the GIL: parallel runs need processes
+                    processes=True,
+                    # Every failure reaches its run's row (the exception, or the worker's death): the logs
+                    # would only add the noise of a close that stops running tasks (Ctrl-C).
+                    silence_logs=logging.CRITICAL,
+                    dashboard_address=":0",  # any free port: the default 8787 clashes with a second sweep
+                    # K single-threaded processes fill the cores already; a rayon pool in each would oversubscribe them.
+                    env={"RAYON_NUM_THREADS": os.environ.get("RAYON_NUM_THREADS", "1")},
+                )
             stack.enter_context(cluster)
             client = stack.enter_context(Client(cluster))
         else:
@@ -323,6 +330,23 @@ def _execute(
             record(row)
             future.release()
             bar.update()
+
+
+@contextlib.contextmanager
+def _ignoring_ctrl_c() -> Iterator[None]:
+    """Start processes that ignore Ctrl-C (they inherit it), so that only this process handles it.
+
+    A terminal's Ctrl-C reaches every process of its group: the workers would die on their own,
+    with tracebacks, while the client closes them in order.
+    """
+    if threading.current_thread() is not threading.main_thread():  # only the main thread sets handlers
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def command(args: argparse.Namespace) -> int:
