@@ -185,6 +185,10 @@ def sweep(
         if todo:
             _execute(sweep_plan.source, todo, workers, scheduler, progress, table.add)
         rows = [table.done[task.key()] for task in sweep_plan.tasks]
+    # The same columns in every row (a run that raised has no metrics; the file may hold other sweeps' columns).
+    found = (column for row in rows for column, value in row.items() if value is not None)
+    columns = _ordered([*INPUTS, *sweep_plan.inputs, *METRICS, *found, *TAIL])
+    rows = [{column: row.get(column) for column in columns} for row in rows]
     if plot is not None:
         from dream.sweep_plot import plot_sweep  # matplotlib only when drawing
 
