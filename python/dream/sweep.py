@@ -43,6 +43,10 @@ TAIL = ("wall_time", "worker", "error")
 
 Row = dict[str, Any]
 
+# The current world is one per process (``dream.world``): a worker with several threads (``dask
+# worker`` defaults to one per core) must run its tasks one at a time. A run holds the GIL anyway.
+_ONE_RUN_AT_A_TIME = threading.Lock()
+
 
 @dataclass(frozen=True)
 class Task:
@@ -204,7 +208,8 @@ def run_task(source: str | type[Experiment], task: Task) -> Row:
     row = task.inputs()
     try:
         cls = find(source) if isinstance(source, str) else source
-        result = run(cls, n=task.n, seed=task.seed, backend=task.backend, steps=task.step_cap, **dict(task.params))
+        with _ONE_RUN_AT_A_TIME:
+            result = run(cls, n=task.n, seed=task.seed, backend=task.backend, steps=task.step_cap, **dict(task.params))
         data = result.to_dict()
         row.update({"simulator": data["backend"], **{key: data[key] for key in METRICS[1:]}})
         row.update(_flatten(data["measures"], "measures."))

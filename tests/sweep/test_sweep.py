@@ -116,7 +116,8 @@ def test_sweep_on_a_dask_scheduler_and_worker(drift, tmp_path):
     try:
         started.append(subprocess.Popen([*dask, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
                                          "--no-dashboard"], **quiet))  # fmt: skip
-        started.append(subprocess.Popen([*dask, "worker", address, "--nthreads", "1", "--nworkers", "1",
+        # Two threads: the runs of one worker process must not share its current world.
+        started.append(subprocess.Popen([*dask, "worker", address, "--nthreads", "2", "--nworkers", "1",
                                          "--no-dashboard", "--host", "127.0.0.1"], **quiet))  # fmt: skip
         with distributed.Client(address, timeout="60s") as client:
             client.wait_for_workers(1, timeout=60)
