@@ -207,8 +207,8 @@ def run_task(source: str | type[Experiment], task: Task) -> Row:
     start = time.perf_counter()
     row = task.inputs()
     try:
-        cls = find(source) if isinstance(source, str) else source
         with _ONE_RUN_AT_A_TIME:
+            cls = find(source) if isinstance(source, str) else source
             result = run(cls, n=task.n, seed=task.seed, backend=task.backend, steps=task.step_cap, **dict(task.params))
         data = result.to_dict()
         row.update({"simulator": data["backend"], **{key: data[key] for key in METRICS[1:]}})
@@ -224,9 +224,9 @@ def run_task(source: str | type[Experiment], task: Task) -> Row:
 class Table:
     """The rows of a sweep: those already in the CSV ``path`` (if any) and those added as runs finish.
 
-    Entering rewrites the file once (header for this sweep's columns, failed runs of this sweep
-    dropped so they run again); then each row is appended and flushed, and the file is rewritten
-    only when a row brings a new column (a measure not seen before).
+    The first row rewrites the file (header for this sweep's columns, failed runs of this sweep
+    dropped since they run again), so a sweep that runs nothing leaves it as it was; then each row
+    is appended and flushed, and the file is rewritten only when a row brings a new column.
     """
 
     def __init__(self, path: str | Path | None, sweep_plan: Plan) -> None:
@@ -255,7 +255,6 @@ class Table:
         self._file: Any = None
 
     def __enter__(self) -> Table:
-        self._rewrite()
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -267,7 +266,7 @@ class Table:
         self.done[self._key(row)] = row  # an error row too: it is this sweep's answer for that task
         if self.path is None:
             return
-        if set(row) - set(self.columns):
+        if self._file is None or set(row) - set(self.columns):
             self.columns = _ordered([*self.columns, *row])
             self._rewrite()
         else:

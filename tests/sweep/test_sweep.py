@@ -216,3 +216,12 @@ def test_plan_of_a_builtin_sends_its_name_and_refuses_bad_values():
         plan("line-consensus", seeds=[0], params={"spacing": []})
     with pytest.raises(ValueError, match="unknown experiment 'nope'"):
         plan("nope", seeds=[0])
+
+
+def test_unreachable_scheduler_is_one_line_and_leaves_no_file(drift, tmp_path, capsys):
+    out = tmp_path / "none.csv"
+    argv = ["sweep", drift, "--scheduler", f"tcp://127.0.0.1:{free_port()}", "--out", str(out), "--no-progress"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("dream: error: scheduler: cannot reach tcp://127.0.0.1:") and err.count("\n") == 1
+    assert not out.exists()
