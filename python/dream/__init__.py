@@ -36,6 +36,7 @@ from dream.specs import (
     T_ORIGIN_Y,
     T_WIDTH,
 )
+from dream.sweep import sweep
 from dream.timers import Timer, create_timer, update_timers
 from dream.world import World, current_world, reset_default_world
 
@@ -100,5 +101,6 @@ __all__ = [
     "reset_default_world",
     "run",
     "specs",
+    "sweep",
     "update_timers",
 ]

@@ -89,6 +89,25 @@ def _parser() -> argparse.ArgumentParser:
         "bench", help="run the benchmarks of the repository's benches/ (needs a source checkout)"
     )
     bench.add_argument("--full", action="store_true", help="all kernel sizes (minutes) instead of --quick")
+    from dream.sweep import command, parse_counts, parse_seeds
+
+    sweeper = commands.add_parser("sweep", help="run an experiment over seeds, sizes and parameters on Dask, to a CSV")
+    sweeper.add_argument("experiment", help=f"one of {', '.join(sorted(EXPERIMENTS))}, or a .py file")
+    sweeper.add_argument(
+        "--seeds", type=parse_seeds, default=list(range(8)), help="A:B (B excluded) or 1,5,9 (default: 0:8)"
+    )
+    sweeper.add_argument("-n", type=parse_counts, default=None, help="robot counts, 10,20 (default: the experiment's)")
+    sweeper.add_argument(
+        "--param", action="append", default=[], metavar="NAME=V1,V2", help="values of a parameter (repeatable)"
+    )
+    sweeper.add_argument("--backend", choices=BACKENDS, default="auto")
+    sweeper.add_argument("--steps", type=_whole(1), default=None, help="step cap (default: what the run needs)")
+    sweeper.add_argument("--workers", type=_whole(1), default=None, help="local worker processes (default: cores)")
+    sweeper.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="use a running Dask scheduler instead")
+    sweeper.add_argument("--out", metavar="PATH", required=True, help="CSV of one row per run (resumes what it holds)")
+    sweeper.add_argument("--plot", metavar="PATH", help="PNG of success rate and measures against the swept values")
+    sweeper.add_argument("--no-progress", action="store_true", help="no progress bar")
+    sweeper.set_defaults(handler=command)
     return parser
 
 
@@ -274,6 +293,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _bench(args.full)
         if args.command == "new":
             return _new(args.name, args.output)
+        if args.command == "sweep":
+            return args.handler(args)
         return _run(args)
     except UsageError as err:
         print(f"dream: error: {err}", file=sys.stderr)

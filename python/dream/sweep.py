@@ -1,0 +1,488 @@
+"""Sweeps: one experiment over seeds, robot counts and parameter values, run on Dask distributed.
+
+    dream sweep hrvo-circle --seeds 0:8 -n 10 --workers 2 --out s.csv --plot s.png
+    dream sweep my_experiment.py --seeds 0:100 -n 10,20 --param loss=0,0.3 --scheduler tcp://head:8786 --out r.csv
+
+Every (n, parameter values, seed) of the cartesian product is one task; by default the tasks run on
+a ``LocalCluster`` of worker processes on this machine, with ``scheduler`` on an existing Dask
+cluster. Rows reach the CSV as runs finish, so an interrupted sweep keeps what it has done, and
+running it again with the same file only runs what is missing (or failed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import csv
+import itertools
+import logging
+import os
+import signal
+import sys
+import tempfile
+import threading
+import time
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from dream.backends import BACKENDS
+from dream.backends.robotarium import MAX_ROBOTS
+from dream.experiments import EXPERIMENTS, Experiment, find, run
+from dream.experiments.runner import _count
+
+#: Input columns of every row, before one ``params.NAME`` column per declared parameter.
+INPUTS = ("experiment", "n", "seed", "backend", "step_cap")
+#: Metric columns of every row (``simulator``: the backend that ran, when ``backend`` is "auto").
+METRICS = ("simulator", "steps", "completed_step", "collisions", "boundary", "actuator", "success")
+#: Last columns: one ``measures.NAME`` column per measure comes before them.
+TAIL = ("wall_time", "worker", "error")
+
+Row = dict[str, Any]
+
+# The current world is one per process (``dream.world``): a worker with several threads (``dask
+# worker`` defaults to one per core) must run its tasks one at a time. A run holds the GIL anyway.
+_ONE_RUN_AT_A_TIME = threading.Lock()
+
+
+@dataclass(frozen=True)
+class Task:
+    """The inputs of one run of a sweep (one Dask task)."""
+
+    experiment: str
+    n: int
+    seed: int
+    backend: str
+    step_cap: int | None
+    params: tuple[tuple[str, Any], ...]
+
+    def inputs(self) -> Row:
+        columns = dict(zip(INPUTS, (self.experiment, self.n, self.seed, self.backend, self.step_cap)))
+        return {**columns, **{f"params.{name}": value for name, value in self.params}}
+
+    def key(self) -> tuple[str, ...]:
+        return tuple(_cell(value) for value in self.inputs().values())
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A validated sweep: what the workers load, and the tasks in order (seeds innermost)."""
+
+    source: str | type[Experiment]
+    tasks: list[Task]
+    swept: list[str]  # the input columns that take more than one value (not the seed)
+
+    @property
+    def inputs(self) -> list[str]:
+        return list(self.tasks[0].inputs())
+
+
+def plan(
+    experiment: type[Experiment] | Experiment | str,
+    seeds: Iterable[int],
+    n: int | Iterable[int] | None = None,
+    params: Mapping[str, Any] | None = None,
+    backend: str = "auto",
+    steps: int | None = None,
+) -> Plan:
+    """Check a sweep and list its tasks, without running anything.
+
+    Parameter values (Python values, or text as on the command line) are converted to the
+    experiment's declared types; the experiment's ``check`` sees every size.
+
+    Raises
+    ------
+    ValueError
+        Naming the argument: an unknown experiment, parameter or backend, a value of the wrong
+        type, an empty list, a seed below 0, a robot count below 1 or one the experiment refuses.
+    """
+    source, cls, base = _source(experiment)
+    seeds = _counts(seeds, "seeds", 0)
+    sizes = _counts(cls.default_n if n is None else n, "n", 1)
+    if backend not in BACKENDS:
+        raise ValueError(f"backend: unknown backend {backend!r}, choose one of {', '.join(BACKENDS)}")
+    if steps is not None:
+        steps = _count(steps, "steps", 1)
+    grid = {name: _values(values, f"params[{name!r}]") for name, values in (params or {}).items()}
+    tasks: dict[tuple[str, ...], Task] = {}  # converted values can coincide ("0" and "0.0"): one task each
+    for combination in itertools.product(*grid.values()):
+        exp = cls(**{**base, **dict(zip(grid, combination))})  # converts and checks the values
+        for size in sizes:
+            if backend == "robotarium" and size > MAX_ROBOTS:
+                raise ValueError(f"n: the Robotarium backend runs at most {MAX_ROBOTS} robots, got {size}")
+            exp.check(size, backend)
+            for seed in seeds:
+                task = Task(cls.label(), size, seed, backend, steps, tuple(exp.params.items()))
+                tasks.setdefault(task.key(), task)
+    ordered = list(tasks.values())
+    columns = ordered[0].inputs()
+    swept = [c for c in columns if c != "seed" and len({_cell(t.inputs()[c]) for t in ordered}) > 1]
+    return Plan(source, ordered, swept)
+
+
+def sweep(
+    experiment: type[Experiment] | Experiment | str,
+    seeds: Iterable[int] = range(8),
+    n: int | Iterable[int] | None = None,
+    params: Mapping[str, Any] | None = None,
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    out: str | Path | None = None,
+    plot: str | Path | None = None,
+    backend: str = "auto",
+    steps: int | None = None,
+    progress: bool = True,
+) -> list[Row]:
+    """Run ``experiment`` for every (n, parameter values, seed) on Dask, one task per run.
+
+    Parameters
+    ----------
+    experiment : Experiment subclass, instance, built-in name or path of a ``.py`` file
+        A file is loaded again on each worker (:func:`dream.experiments.load_file`), so workers
+        on other machines need the file at the same absolute path.
+    seeds : iterable of int
+        The seeds of each combination (``range(A, B)`` or a list).
+    n : int or iterable of int, optional
+        Robot counts (default: the experiment's ``default_n``).
+    params : mapping of str to a list of values, optional
+        Each declared parameter to sweep and its values (a single value is a list of one).
+    workers : int, optional
+        Worker processes of the local cluster (default: the number of cores).
+    scheduler : str, optional
+        Address of a running Dask scheduler (``tcp://HOST:8786``) to use instead.
+    out : path, optional
+        CSV that receives a row per run as it finishes. Runs it already holds without an error
+        (same input columns) are not run again; rows of other sweeps in it are kept.
+    plot : path, optional
+        PNG of the success rate and the measures against the swept values.
+    backend, steps
+        As in :func:`dream.run` (``steps`` is the ``step_cap`` column).
+    progress : bool
+        A progress bar on stderr (only when stderr is a terminal).
+
+    Returns
+    -------
+    list of dict
+        One row per run of this sweep, in task order (``pandas.DataFrame(rows)`` makes a table):
+        the inputs (``experiment, n, seed, backend, step_cap, params.NAME``), the metrics
+        (``simulator, steps, completed_step, collisions, boundary, actuator, success,
+        measures.NAME``), ``wall_time`` (s, on the worker), ``worker`` (its address) and
+        ``error`` (``"Type: message"`` of a run that raised, else ``None``). Rows read back from
+        ``out`` hold numbers, booleans and ``None`` parsed from their text.
+
+    Raises
+    ------
+    ValueError
+        Bad arguments (see :func:`plan`), or a CSV that is not a sweep table; before any run.
+    """
+    if workers is not None and scheduler is not None:
+        raise ValueError("workers: sizes the local cluster; with scheduler, the cluster's own workers run the tasks")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    sweep_plan = plan(experiment, seeds, n, params, backend, steps)
+    with Table(out, sweep_plan) as table:
+        todo = [task for task in sweep_plan.tasks if task.key() not in table.done]
+        if todo:
+            _execute(sweep_plan.source, todo, workers, scheduler, progress, table.add)
+        rows = [table.done[task.key()] for task in sweep_plan.tasks]
+    # The same columns in every row (a run that raised has no metrics; the file may hold other sweeps' columns).
+    found = (column for row in rows for column, value in row.items() if value is not None)
+    columns = _ordered([*INPUTS, *sweep_plan.inputs, *METRICS, *found, *TAIL])
+    rows = [{column: row.get(column) for column in columns} for row in rows]
+    if plot is not None:
+        from dream.sweep_plot import plot_sweep  # matplotlib only when drawing
+
+        plot_sweep(rows, sweep_plan.swept, plot)
+    return rows
+
+
+def run_task(source: str | type[Experiment], task: Task) -> Row:
+    """Run one task (on a Dask worker): its row, with the error instead of metrics if it raised."""
+    from distributed import get_worker
+
+    start = time.perf_counter()
+    row = task.inputs()
+    try:
+        with _ONE_RUN_AT_A_TIME:
+            cls = find(source) if isinstance(source, str) else source
+            result = run(cls, n=task.n, seed=task.seed, backend=task.backend, steps=task.step_cap, **dict(task.params))
+        data = result.to_dict()
+        row.update({"simulator": data["backend"], **{key: data[key] for key in METRICS[1:]}})
+        row.update(_flatten(data["measures"], "measures."))
+        row["error"] = None
+    except Exception as err:  # noqa: BLE001 -- the experiment's code, whatever it raised: a row, not a lost sweep
+        row["error"] = f"{type(err).__name__}: {err}"
+    row["wall_time"] = time.perf_counter() - start
+    row["worker"] = get_worker().address
+    return row
+
+
+class Table:
+    """The rows of a sweep: those already in the CSV ``path`` (if any) and those added as runs finish.
+
+    The first row rewrites the file (header for this sweep's columns, failed runs of this sweep
+    dropped since they run again), so a sweep that runs nothing leaves it as it was; then each row
+    is appended and flushed, and the file is rewritten only when a row brings a new column.
+    """
+
+    def __init__(self, path: str | Path | None, sweep_plan: Plan) -> None:
+        self.path = None if path is None else Path(path)
+        self.inputs = sweep_plan.inputs
+        self.rows: list[Row] = []  # what the file holds: rows read (as text) and rows added
+        self.done: dict[tuple[str, ...], Row] = {}  # finished runs by their inputs, as Python values
+        columns: list[str] = [*INPUTS, *self.inputs, *METRICS, *TAIL]
+        if self.path is not None and self.path.is_file() and self.path.stat().st_size:
+            with self.path.open(newline="", encoding="utf-8") as file:
+                reader = csv.DictReader(file)
+                header = list(reader.fieldnames or [])
+                missing = [column for column in INPUTS if column not in header]
+                if missing:
+                    raise ValueError(f"out: {self.path} is not a sweep table (no column {missing[0]!r})")
+                ours = {task.key() for task in sweep_plan.tasks}
+                for row in reader:
+                    key = self._key(row)
+                    if not row.get("error"):
+                        self.done[key] = {column: _value(text) for column, text in row.items()}
+                    elif key in ours:
+                        continue  # a failed run of this sweep runs again: its old row goes
+                    self.rows.append(row)
+            columns = header + columns
+        self.columns = _ordered(columns)
+        self._file: Any = None
+
+    def __enter__(self) -> Table:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._file is not None:
+            self._file.close()
+
+    def add(self, row: Row) -> None:
+        self.rows.append(row)
+        self.done[self._key(row)] = row  # an error row too: it is this sweep's answer for that task
+        if self.path is None:
+            return
+        if self._file is None or set(row) - set(self.columns):
+            self.columns = _ordered([*self.columns, *row])
+            self._rewrite()
+        else:
+            csv.DictWriter(self._file, self.columns).writerow({k: _cell(v) for k, v in row.items()})
+            self._file.flush()
+
+    def _key(self, row: Row) -> tuple[str, ...]:
+        return tuple(_cell(row.get(column)) for column in self.inputs)
+
+    def _rewrite(self) -> None:
+        """Write every row, whole or not at all: a temporary file renamed over the CSV."""
+        if self.path is None:
+            return
+        if self._file is not None:
+            self._file.close()
+        folder = self.path.parent
+        with tempfile.NamedTemporaryFile("w", dir=folder, suffix=".tmp", delete=False, newline="") as tmp:
+            writer = csv.DictWriter(tmp, self.columns)
+            writer.writeheader()
+            writer.writerows({k: _cell(v) for k, v in row.items()} for row in self.rows)
+        os.replace(tmp.name, self.path)
+        self._file = self.path.open("a", newline="", encoding="utf-8")
+
+
+def _execute(
+    source: str | type[Experiment],
+    tasks: Sequence[Task],
+    workers: int | None,
+    scheduler: str | None,
+    progress: bool,
+    record: Callable[[Row], None],
+) -> None:
+    """Submit every task and record each row as its run finishes; the cluster closes on any exit."""
+    from distributed import Client, LocalCluster, as_completed
+    from tqdm import tqdm
+
+    with contextlib.ExitStack() as stack:
+        if scheduler is None:
+            count = min(workers or os.cpu_count() or 1, len(tasks))  # no idle processes for a small sweep
+            with _ignoring_ctrl_c():
+                cluster = LocalCluster(
+                    n_workers=count,
+                    threads_per_worker=1,  # a run holds the GIL: parallel runs need processes
+                    processes=True,
+                    # Every failure reaches its run's row (the exception, or the worker's death): the logs
+                    # would only add the noise of a close that stops running tasks (Ctrl-C).
+                    silence_logs=logging.CRITICAL,
+                    dashboard_address=":0",  # any free port: the default 8787 clashes with a second sweep
+                    # K single-threaded processes fill the cores already; a rayon pool in each would oversubscribe them.
+                    env={"RAYON_NUM_THREADS": os.environ.get("RAYON_NUM_THREADS", "1")},
+                )
+            stack.enter_context(cluster)
+            client = stack.enter_context(Client(cluster))
+        else:
+            try:
+                client = stack.enter_context(Client(scheduler, timeout="10s"))
+            except OSError as err:
+                raise ValueError(f"scheduler: cannot reach {scheduler}: {err}") from None
+        futures = {client.submit(run_task, source, task, pure=False): task for task in tasks}
+        bar = stack.enter_context(
+            tqdm(total=len(tasks), unit="run", file=sys.stderr, disable=None if progress else True, dynamic_ncols=True)
+        )
+        for future in as_completed(futures):
+            if future.status == "finished":
+                row = future.result()
+            else:  # the worker died (or the task was lost): the run's row says so
+                error = future.exception()
+                row = {**futures[future].inputs(), "error": f"{type(error).__name__}: {error}"}
+            record(row)
+            future.release()
+            bar.update()
+
+
+@contextlib.contextmanager
+def _ignoring_ctrl_c() -> Iterator[None]:
+    """Start processes that ignore Ctrl-C (they inherit it), so that only this process handles it.
+
+    A terminal's Ctrl-C reaches every process of its group: the workers would die on their own,
+    with tracebacks, while the client closes them in order.
+    """
+    if threading.current_thread() is not threading.main_thread():  # only the main thread sets handlers
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def command(args: argparse.Namespace) -> int:
+    """``dream sweep``: the parsed command line to :func:`sweep`, bad input as one line (exit 2)."""
+    from dream.cli import UsageError, _writable
+
+    grid: dict[str, list[str]] = {}
+    for pair in args.param:
+        name, equals, values = pair.partition("=")
+        name = name.strip()
+        if not equals or not name:
+            raise UsageError(f"--param takes NAME=V1,V2,..., got {pair!r}")
+        if name in grid:
+            raise UsageError(f"--param {name} given twice: list its values once, separated by commas")
+        grid[name] = values.split(",")
+    _writable(args.out, "--out")
+    if args.plot is not None:
+        _writable(args.plot, "--plot")
+    start = time.perf_counter()
+    try:
+        rows = sweep(
+            args.experiment, args.seeds, args.n, grid, workers=args.workers, scheduler=args.scheduler,
+            out=args.out, plot=args.plot, backend=args.backend, steps=args.steps, progress=not args.no_progress,
+        )  # fmt: skip
+    except ValueError as err:  # bad values or parameters, an unreachable scheduler, --out not a sweep table
+        raise UsageError(str(err)) from None
+    except KeyboardInterrupt:
+        print(f"\ninterrupted: the runs done so far are in {args.out}; run again to finish", file=sys.stderr)
+        return 130
+    failed = sum(1 for row in rows if row.get("error"))
+    succeeded = sum(1 for row in rows if row.get("success") is True)
+    print(
+        f"{len(rows)} runs of {rows[0]['experiment']}: {succeeded} succeeded, {failed} raised; "
+        f"{time.perf_counter() - start:.1f} s; rows in {args.out}" + (f", plot in {args.plot}" if args.plot else "")
+    )
+    return 0
+
+
+def parse_seeds(text: str) -> list[int]:
+    """``A:B`` (B exclusive) or ``1,5,9``, for argparse."""
+    start, colon, stop = text.partition(":")
+    try:
+        seeds = list(range(int(start), int(stop))) if colon else [int(part) for part in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected A:B or a list 1,5,9 of integers, got {text!r}") from None
+    if not seeds or min(seeds) < 0:
+        raise argparse.ArgumentTypeError(f"expected seeds >= 0 (A:B with A < B), got {text!r}")
+    return seeds
+
+
+def parse_counts(text: str) -> list[int]:
+    """``10,20``: robot counts, for argparse."""
+    try:
+        counts = [int(part) for part in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected integers >= 1 separated by commas, got {text!r}") from None
+    if min(counts) < 1:
+        raise argparse.ArgumentTypeError(f"expected integers >= 1, got {text!r}")
+    return counts
+
+
+def _source(experiment: type[Experiment] | Experiment | str) -> tuple[str | type[Experiment], type[Experiment], Row]:
+    """What the workers resolve, the class, and the base parameter values (an instance's)."""
+    base: Row = {}
+    if isinstance(experiment, Experiment):
+        base, experiment = experiment.params, type(experiment)
+    if isinstance(experiment, str):
+        cls = find(experiment)  # an unknown name or a broken file fails here, not on every worker
+        return (str(Path(experiment).resolve()) if experiment.endswith(".py") else experiment), cls, base
+    if not (isinstance(experiment, type) and issubclass(experiment, Experiment)):
+        raise TypeError(f"sweep() takes an Experiment subclass, instance, name or .py path, got {experiment!r}")
+    if EXPERIMENTS.get(experiment.name) is experiment:
+        return experiment.name, experiment, base
+    module = sys.modules.get(experiment.__module__)
+    path = getattr(module, "__file__", None)
+    if experiment.__module__.startswith("dream_user_") and path:  # load_file's modules: not importable by name
+        return path, experiment, base
+    return experiment, experiment, base  # importable, or from __main__ (cloudpickle sends it by value)
+
+
+def _counts(values: int | Iterable[int], name: str, least: int) -> list[int]:
+    return [_count(value, name, least) for value in _values(values, name)]
+
+
+def _values(values: Any, name: str) -> list[Any]:
+    listed = [values] if isinstance(values, (str, bytes)) or not isinstance(values, Iterable) else list(values)
+    if not listed:
+        raise ValueError(f"{name} has no values")
+    return listed
+
+
+def _flatten(data: Mapping[str, Any], prefix: str) -> Row:
+    flat: Row = {}
+    for key, value in data.items():
+        if isinstance(value, Mapping):
+            flat.update(_flatten(value, f"{prefix}{key}."))
+        else:
+            flat[f"{prefix}{key}"] = value.item() if isinstance(value, np.generic) else value
+    return flat
+
+
+def _ordered(columns: Iterable[str]) -> list[str]:
+    """Inputs, parameters, metrics, measures, then wall time, worker and error (first seen first in a group)."""
+    fixed = {column: rank for rank, group in enumerate((INPUTS, (), METRICS, (), TAIL)) for column in group}
+
+    def group(column: str) -> int:
+        if column in fixed:
+            return fixed[column]
+        return 1 if column.startswith("params.") else 3
+
+    unique = list(dict.fromkeys(columns))
+    return sorted(unique, key=lambda column: (group(column), unique.index(column)))
+
+
+def _cell(value: Any) -> str:
+    """A value as the CSV holds it (``None``: empty)."""
+    return "" if value is None else str(value)
+
+
+def _value(text: str | None) -> Any:
+    """A CSV cell back as a Python value: empty is ``None``, then bool, int, float, else the text."""
+    if text is None or text == "":
+        return None
+    if text in ("True", "False"):
+        return text == "True"
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text

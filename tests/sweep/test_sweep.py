@@ -1,0 +1,227 @@
+"""`dream sweep` / `dream.sweep`: real Dask clusters (a LocalCluster, and a `dask scheduler` + `dask worker`
+pair started here), rows streamed to a resumable CSV, a failing run as an error row, bad input refused up front."""
+
+from __future__ import annotations
+
+import csv
+import os
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import distributed
+import pytest
+from PIL import Image
+
+import dream
+from dream.cli import main
+from dream.sweep import Table, plan
+
+# A tiny experiment: three robots drive forward for a few steps; seed 2's build raises.
+DRIFT = """
+from dream import Experiment, param
+
+
+class Drift(Experiment):
+    name = "drift"
+    default_n = 3
+    speed: float = param(0.05, "forward speed (m/s)")
+
+    def build(self, n):
+        if self.world.seed == 2:
+            raise RuntimeError("seed 2 is cursed")
+
+    def after_step(self, step, poses):
+        self.dxu[0] = self.speed
+
+    def done(self, step, poses):
+        return step >= 4
+
+    def measures(self):
+        return {"mean_x": float(self.sim.poses[0].mean()), "seed": self.world.seed}
+"""
+
+
+@pytest.fixture
+def drift(tmp_path: Path) -> str:
+    path = tmp_path / "drift.py"
+    path.write_text(DRIFT)
+    return str(path)
+
+
+def read(path: Path) -> list[dict[str, str]]:
+    with path.open(newline="") as file:
+        return list(csv.DictReader(file))
+
+
+def no_cluster(*args, **kwargs):
+    raise AssertionError("a cluster was started")
+
+
+def test_sweep_on_local_cluster_writes_rows_error_rows_resumes_and_plots(drift, tmp_path, monkeypatch, capsys):
+    out, png = tmp_path / "runs.csv", tmp_path / "runs.png"
+    argv = ["sweep", drift, "-n", "2,3", "--param", "speed=0.05,0.1", "--backend", "fast", "--workers", "2"]
+    argv += ["--out", str(out), "--no-progress"]
+    assert main([*argv, "--seeds", "0:3", "--plot", str(png)]) == 0
+    rows = read(out)
+    assert len(rows) == 2 * 2 * 3
+    assert {(r["n"], r["params.speed"], r["seed"]) for r in rows} == {
+        (n, speed, seed) for n in ("2", "3") for speed in ("0.05", "0.1") for seed in ("0", "1", "2")
+    }
+    for row in rows:
+        assert row["experiment"] == "drift" and row["backend"] == "fast" and row["worker"].startswith("tcp://")
+        if row["seed"] == "2":
+            assert row["error"] == "RuntimeError: seed 2 is cursed" and row["success"] == ""
+        else:
+            assert row["error"] == "" and row["success"] == "True" and row["completed_step"] == "4"
+            assert row["collisions"] == "0" and row["simulator"] == "fast"
+            assert row["measures.seed"] == row["seed"]  # the row's metrics are its own run's
+            assert float(row["measures.mean_x"]) != 0.0
+    summary = capsys.readouterr().out
+    assert "12 runs of drift: 8 succeeded, 4 raised" in summary
+    with Image.open(png) as image:
+        assert image.format == "PNG" and image.width > 300
+
+    # Again with one more seed: only seed 3 and the failed seed 2 run; done rows stay as they were.
+    done_before = {(r["n"], r["params.speed"], r["seed"]): r for r in rows if r["error"] == ""}
+    assert main([*argv, "--seeds", "0:4"]) == 0
+    rows = read(out)
+    assert len(rows) == 2 * 2 * 4
+    for row in rows:
+        key = (row["n"], row["params.speed"], row["seed"])
+        if key in done_before:
+            assert row == done_before[key]
+    assert sum(1 for r in rows if r["error"]) == 4  # seed 2 failed again, once per combination
+
+    # Nothing left to do but the failed runs: with seeds 0 and 1 no cluster starts at all.
+    monkeypatch.setattr(distributed, "LocalCluster", no_cluster)
+    assert main([*argv, "--seeds", "0,1"]) == 0
+    assert read(out) == rows
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def test_sweep_on_a_dask_scheduler_and_worker(drift, tmp_path):
+    address = f"tcp://127.0.0.1:{free_port()}"
+    dask = [sys.executable, "-m", "dask"]
+    # The workers import this checkout's dream, as the test process does.
+    env = {**os.environ, "PYTHONPATH": str(Path(dream.__file__).parents[1])}
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, "env": env}
+    started = []
+    try:
+        started.append(subprocess.Popen([*dask, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
+                                         "--no-dashboard"], **quiet))  # fmt: skip
+        # Two threads: the runs of one worker process must not share its current world.
+        started.append(subprocess.Popen([*dask, "worker", address, "--nthreads", "2", "--nworkers", "1",
+                                         "--no-dashboard", "--host", "127.0.0.1"], **quiet))  # fmt: skip
+        with distributed.Client(address, timeout="60s") as client:
+            client.wait_for_workers(1, timeout=60)
+            (worker,) = client.scheduler_info()["workers"]
+        out = tmp_path / "remote.csv"
+        rows = dream.sweep(drift, seeds=[0, 1, 2], n=2, params={"speed": [0.1]}, scheduler=address, out=out,
+                           backend="fast", steps=10, progress=False)  # fmt: skip
+        assert [(r["seed"], r["success"], r["worker"]) for r in rows] == [
+            (0, True, worker),
+            (1, True, worker),
+            (2, None, worker),
+        ]
+        assert rows[2]["error"] == "RuntimeError: seed 2 is cursed"
+        assert rows[0]["params.speed"] == 0.1 and rows[0]["step_cap"] == 10 and rows[0]["steps"] == 4
+        assert len(read(out)) == 3
+        # Read back from the CSV, done rows come as Python values.
+        again = dream.sweep(drift, seeds=[0, 1], n=2, params={"speed": [0.1]}, scheduler=address, out=out,
+                            backend="fast", steps=10, progress=False)  # fmt: skip
+        assert again == rows[:2]
+    finally:
+        for process in reversed(started):
+            process.terminate()
+        for process in started:
+            try:
+                process.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                process.kill()
+
+
+def test_interrupted_sweep_keeps_the_rows_done(drift, tmp_path, monkeypatch):
+    """Ctrl-C (KeyboardInterrupt) after the first row: exit 130, that row in the CSV, nothing else."""
+    added = Table.add
+
+    def add_then_interrupt(self, row):
+        added(self, row)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(Table, "add", add_then_interrupt)
+    out = tmp_path / "cut.csv"
+    argv = ["sweep", drift, "--seeds", "0:6", "--backend", "fast", "--workers", "1", "--out", str(out), "--no-progress"]
+    assert main(argv) == 130
+    assert len(read(out)) == 1
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--param", "gain=1"], "drift has no parameter 'gain' (its parameters: speed)"),
+        (["--param", "speed=0.1,fast"], "parameter 'speed' of drift expects a number, got 'fast'"),
+        (["--param", "speed"], "--param takes NAME=V1,V2,..., got 'speed'"),
+        (["--param", "speed=1", "--param", "speed=2"], "--param speed given twice"),
+        (["--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "workers: sizes the local cluster"),
+        (["--backend", "robotarium", "-n", "51"], "n: the Robotarium backend runs at most 50 robots, got 51"),
+    ],
+)
+def test_bad_input_is_one_line_before_any_cluster(drift, tmp_path, monkeypatch, capsys, extra, message):
+    monkeypatch.setattr(distributed, "LocalCluster", no_cluster)
+    assert main(["sweep", drift, "--out", str(tmp_path / "x.csv"), *extra]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.startswith("dream: error:") and err.count("\n") == 1
+    assert not (tmp_path / "x.csv").exists()
+
+
+@pytest.mark.parametrize("seeds", ["5:2", "-1:3", "a:b", "1,x"])
+def test_bad_seeds_are_refused_by_the_parser(drift, tmp_path, capsys, seeds):
+    with pytest.raises(SystemExit) as exit_:
+        main(["sweep", drift, "--seeds", seeds, "--out", str(tmp_path / "x.csv")])
+    assert exit_.value.code == 2 and "--seeds" in capsys.readouterr().err
+
+
+def test_out_that_is_not_a_sweep_table_is_refused(drift, tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(distributed, "LocalCluster", no_cluster)
+    other = tmp_path / "other.csv"
+    other.write_text("a,b\n1,2\n")
+    assert main(["sweep", drift, "--out", str(other)]) == 2
+    assert "is not a sweep table (no column 'experiment')" in capsys.readouterr().err
+    assert other.read_text() == "a,b\n1,2\n"
+
+
+def test_plan_is_the_cartesian_product_with_converted_values(drift):
+    sweep_plan = plan(drift, seeds=range(3), n=[2, 4], params={"speed": ["0.1", 0.2, 0.1]}, steps=7)
+    keys = [(t.n, dict(t.params)["speed"], t.seed) for t in sweep_plan.tasks]
+    # "0.1" and 0.1 are the same run once converted: 2 speeds x 2 sizes x 3 seeds, seeds innermost.
+    assert keys == [(n, s, seed) for s in (0.1, 0.2) for n in (2, 4) for seed in range(3)]
+    assert sweep_plan.swept == ["n", "params.speed"]
+    assert sweep_plan.source == str(Path(drift).resolve())
+    assert all(t.step_cap == 7 and t.backend == "auto" and t.experiment == "drift" for t in sweep_plan.tasks)
+
+
+def test_plan_of_a_builtin_sends_its_name_and_refuses_bad_values():
+    assert plan("line-consensus", seeds=[0]).source == "line-consensus"
+    assert plan(dream.experiments.LineConsensus(radio_gap=5), seeds=[1]).tasks[0].params[-1] == ("radio_gap", 5)
+    with pytest.raises(ValueError, match="seeds must be an integer >= 0"):
+        plan("line-consensus", seeds=[-1])
+    with pytest.raises(ValueError, match=r"params\['spacing'\] has no values"):
+        plan("line-consensus", seeds=[0], params={"spacing": []})
+    with pytest.raises(ValueError, match="unknown experiment 'nope'"):
+        plan("nope", seeds=[0])
+
+
+def test_unreachable_scheduler_is_one_line_and_leaves_no_file(drift, tmp_path, capsys):
+    out = tmp_path / "none.csv"
+    argv = ["sweep", drift, "--scheduler", f"tcp://127.0.0.1:{free_port()}", "--out", str(out), "--no-progress"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("dream: error: scheduler: cannot reach tcp://127.0.0.1:") and err.count("\n") == 1
+    assert not out.exists()
