@@ -100,6 +100,9 @@ def _parser() -> argparse.ArgumentParser:
     sweeper.add_argument(
         "--param", action="append", default=[], metavar="NAME=V1,V2", help="values of a parameter (repeatable)"
     )
+    sweeper.add_argument(
+        "--fault", action="append", default=[], metavar="KIND=V1,V2", help="sweep a fault's values (repeatable)"
+    )
     sweeper.add_argument("--backend", choices=BACKENDS, default="auto")
     sweeper.add_argument("--steps", type=_whole(1), default=None, help="step cap (default: what the run needs)")
     sweeper.add_argument("--workers", type=_whole(1), default=None, help="local worker processes (default: cores)")

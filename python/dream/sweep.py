@@ -33,6 +33,7 @@ from dream.backends import BACKENDS
 from dream.backends.robotarium import MAX_ROBOTS
 from dream.experiments import EXPERIMENTS, Experiment, find, run
 from dream.experiments.runner import _count
+from dream.faults import Faults
 
 #: Input columns of every row, before one ``params.NAME`` column per declared parameter.
 INPUTS = ("experiment", "n", "seed", "backend", "step_cap")
@@ -58,10 +59,18 @@ class Task:
     backend: str
     step_cap: int | None
     params: tuple[tuple[str, Any], ...]
+    faults: tuple[tuple[str, str], ...] = ()  #: ``--fault`` kinds and values, as on the command line
 
     def inputs(self) -> Row:
         columns = dict(zip(INPUTS, (self.experiment, self.n, self.seed, self.backend, self.step_cap)))
-        return {**columns, **{f"params.{name}": value for name, value in self.params}}
+        return {
+            **columns,
+            **{f"params.{name}": value for name, value in self.params},
+            **{f"faults.{kind}": value for kind, value in self.faults},
+        }
+
+    def fault_model(self) -> Faults | None:
+        return Faults.parse(f"{kind}={value}" for kind, value in self.faults) if self.faults else None
 
     def key(self) -> tuple[str, ...]:
         return tuple(_cell(value) for value in self.inputs().values())
@@ -87,11 +96,14 @@ def plan(
     params: Mapping[str, Any] | None = None,
     backend: str = "auto",
     steps: int | None = None,
+    faults: Mapping[str, Iterable[Any]] | None = None,
 ) -> Plan:
     """Check a sweep and list its tasks, without running anything.
 
     Parameter values (Python values, or text as on the command line) are converted to the
-    experiment's declared types; the experiment's ``check`` sees every size.
+    experiment's declared types; the experiment's ``check`` sees every size. ``faults`` maps a
+    ``--fault`` kind to its values (``{"loss": [0, 0.3], "crash": ["0.1@300"]}``), swept like
+    the parameters.
 
     Raises
     ------
@@ -107,15 +119,22 @@ def plan(
     if steps is not None:
         steps = _count(steps, "steps", 1)
     grid = {name: _values(values, f"params[{name!r}]") for name, values in (params or {}).items()}
+    fault_grid = {
+        kind: [str(v) for v in _values(values, f"faults[{kind!r}]")] for kind, values in (faults or {}).items()
+    }
     tasks: dict[tuple[str, ...], Task] = {}  # converted values can coincide ("0" and "0.0"): one task each
-    for combination in itertools.product(*grid.values()):
+    for combination, broken in itertools.product(
+        itertools.product(*grid.values()), itertools.product(*fault_grid.values())
+    ):
         exp = cls(**{**base, **dict(zip(grid, combination))})  # converts and checks the values
+        fault_options = tuple(zip(fault_grid, broken))
+        Faults.parse(f"{kind}={value}" for kind, value in fault_options)  # checks them, naming the option
         for size in sizes:
             if backend == "robotarium" and size > MAX_ROBOTS:
                 raise ValueError(f"n: the Robotarium backend runs at most {MAX_ROBOTS} robots, got {size}")
             exp.check(size, backend)
             for seed in seeds:
-                task = Task(cls.label(), size, seed, backend, steps, tuple(exp.params.items()))
+                task = Task(cls.label(), size, seed, backend, steps, tuple(exp.params.items()), fault_options)
                 tasks.setdefault(task.key(), task)
     ordered = list(tasks.values())
     columns = ordered[0].inputs()
@@ -135,6 +154,7 @@ def sweep(
     plot: str | Path | None = None,
     backend: str = "auto",
     steps: int | None = None,
+    faults: Mapping[str, Iterable[Any]] | None = None,
     progress: bool = True,
 ) -> list[Row]:
     """Run ``experiment`` for every (n, parameter values, seed) on Dask, one task per run.
@@ -161,6 +181,9 @@ def sweep(
         PNG of the success rate and the measures against the swept values.
     backend, steps
         As in :func:`dream.run` (``steps`` is the ``step_cap`` column).
+    faults : mapping of str to a list of values, optional
+        ``--fault`` kinds to sweep and their values (:mod:`dream.faults`), e.g.
+        ``{"loss": [0, 0.3, 0.6]}``: the ``faults.KIND`` columns.
     progress : bool
         A progress bar on stderr (only when stderr is a terminal).
 
@@ -168,7 +191,7 @@ def sweep(
     -------
     list of dict
         One row per run of this sweep, in task order (``pandas.DataFrame(rows)`` makes a table):
-        the inputs (``experiment, n, seed, backend, step_cap, params.NAME``), the metrics
+        the inputs (``experiment, n, seed, backend, step_cap, params.NAME, faults.KIND``), the metrics
         (``simulator, steps, completed_step, collisions, boundary, actuator, success,
         measures.NAME``), ``wall_time`` (s, on the worker), ``worker`` (its address) and
         ``error`` (``"Type: message"`` of a run that raised, else ``None``). Rows read back from
@@ -183,7 +206,7 @@ def sweep(
         raise ValueError("workers: sizes the local cluster; with scheduler, the cluster's own workers run the tasks")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
-    sweep_plan = plan(experiment, seeds, n, params, backend, steps)
+    sweep_plan = plan(experiment, seeds, n, params, backend, steps, faults)
     with Table(out, sweep_plan) as table:
         todo = [task for task in sweep_plan.tasks if task.key() not in table.done]
         if todo:
@@ -209,7 +232,10 @@ def run_task(source: str | type[Experiment], task: Task) -> Row:
     try:
         with _ONE_RUN_AT_A_TIME:
             cls = find(source) if isinstance(source, str) else source
-            result = run(cls, n=task.n, seed=task.seed, backend=task.backend, steps=task.step_cap, **dict(task.params))
+            result = run(
+                cls, n=task.n, seed=task.seed, backend=task.backend, steps=task.step_cap,
+                faults=task.fault_model(), **dict(task.params),
+            )  # fmt: skip
         data = result.to_dict()
         row.update({"simulator": data["backend"], **{key: data[key] for key in METRICS[1:]}})
         row.update(_flatten(data["measures"], "measures."))
@@ -361,15 +387,7 @@ def command(args: argparse.Namespace) -> int:
     """``dream sweep``: the parsed command line to :func:`sweep`, bad input as one line (exit 2)."""
     from dream.cli import UsageError, _writable
 
-    grid: dict[str, list[str]] = {}
-    for pair in args.param:
-        name, equals, values = pair.partition("=")
-        name = name.strip()
-        if not equals or not name:
-            raise UsageError(f"--param takes NAME=V1,V2,..., got {pair!r}")
-        if name in grid:
-            raise UsageError(f"--param {name} given twice: list its values once, separated by commas")
-        grid[name] = values.split(",")
+    grid, fault_grid = _grid(args.param, "--param", "NAME"), _grid(args.fault, "--fault", "KIND")
     _writable(args.out, "--out")
     if args.plot is not None:
         _writable(args.plot, "--plot")
@@ -377,7 +395,8 @@ def command(args: argparse.Namespace) -> int:
     try:
         rows = sweep(
             args.experiment, args.seeds, args.n, grid, workers=args.workers, scheduler=args.scheduler,
-            out=args.out, plot=args.plot, backend=args.backend, steps=args.steps, progress=not args.no_progress,
+            out=args.out, plot=args.plot, backend=args.backend, steps=args.steps, faults=fault_grid,
+            progress=not args.no_progress,
         )  # fmt: skip
     except ValueError as err:  # bad values or parameters, an unreachable scheduler, --out not a sweep table
         raise UsageError(str(err)) from None
@@ -391,6 +410,22 @@ def command(args: argparse.Namespace) -> int:
         f"{time.perf_counter() - start:.1f} s; rows in {args.out}" + (f", plot in {args.plot}" if args.plot else "")
     )
     return 0
+
+
+def _grid(pairs: Sequence[str], option: str, what: str) -> dict[str, list[str]]:
+    """``NAME=V1,V2,...`` options as ``{NAME: [V1, V2, ...]}``."""
+    from dream.cli import UsageError
+
+    grid: dict[str, list[str]] = {}
+    for pair in pairs:
+        name, equals, values = pair.partition("=")
+        name = name.strip()
+        if not equals or not name:
+            raise UsageError(f"{option} takes {what}=V1,V2,..., got {pair!r}")
+        if name in grid:
+            raise UsageError(f"{option} {name} given twice: list its values once, separated by commas")
+        grid[name] = values.split(",")
+    return grid
 
 
 def parse_seeds(text: str) -> list[int]:
@@ -457,13 +492,14 @@ def _flatten(data: Mapping[str, Any], prefix: str) -> Row:
 
 
 def _ordered(columns: Iterable[str]) -> list[str]:
-    """Inputs, parameters, metrics, measures, then wall time, worker and error (first seen first in a group)."""
+    """Inputs, parameters and faults, metrics, measures, then wall time, worker and error (first seen
+    first in a group)."""
     fixed = {column: rank for rank, group in enumerate((INPUTS, (), METRICS, (), TAIL)) for column in group}
 
     def group(column: str) -> int:
         if column in fixed:
             return fixed[column]
-        return 1 if column.startswith("params.") else 3
+        return 1 if column.startswith(("params.", "faults.")) else 3
 
     unique = list(dict.fromkeys(columns))
     return sorted(unique, key=lambda column: (group(column), unique.index(column)))

@@ -171,6 +171,8 @@ def test_interrupted_sweep_keeps_the_rows_done(drift, tmp_path, monkeypatch):
         (["--param", "speed=1", "--param", "speed=2"], "--param speed given twice"),
         (["--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "workers: sizes the local cluster"),
         (["--backend", "robotarium", "-n", "51"], "n: the Robotarium backend runs at most 50 robots, got 51"),
+        (["--fault", "loss=0,2"], "--fault 'loss=2': loss is a probability in [0, 1], got 2.0"),
+        (["--fault", "teleport=1"], "unknown fault 'teleport'"),
     ],
 )
 def test_bad_input_is_one_line_before_any_cluster(drift, tmp_path, monkeypatch, capsys, extra, message):
@@ -205,6 +207,13 @@ def test_plan_is_the_cartesian_product_with_converted_values(drift):
     assert sweep_plan.swept == ["n", "params.speed"]
     assert sweep_plan.source == str(Path(drift).resolve())
     assert all(t.step_cap == 7 and t.backend == "auto" and t.experiment == "drift" for t in sweep_plan.tasks)
+
+
+def test_plan_sweeps_faults_as_input_columns(drift):
+    sweep_plan = plan(drift, seeds=[0], faults={"loss": [0, 0.3], "crash": ["0.5@3"]})
+    assert [t.inputs()["faults.loss"] for t in sweep_plan.tasks] == ["0", "0.3"]
+    assert sweep_plan.swept == ["faults.loss"]
+    assert sweep_plan.tasks[1].fault_model() == dream.Faults(loss=0.3, crash=0.5, crash_at=3)
 
 
 def test_plan_of_a_builtin_sends_its_name_and_refuses_bad_values():
