@@ -18,10 +18,10 @@ import argparse
 import sys
 
 import numpy as np
-from harness import machine, median_seconds, show, table
-from scenes import RANGE, SCENES, V_MAX, Scene
 
 from dream import kernels
+from harness import machine, median_seconds, show, table
+from scenes import RANGE, SCENES, V_MAX, Scene
 
 SAFETY = 0.24  #: DREAM's combined safety radius (m): two agents of radius SAFETY / 2
 STEP = 0.033  #: time step given to navground (s); update_dry does not move the agents
@@ -71,7 +71,9 @@ def main() -> None:
         for n in sizes:
             scene = make(n)
             p, v, pref = scene
-            dream = median_seconds(lambda: kernels.hrvo(p, v, pref, radius=RANGE, safety=SAFETY, v_max=V_MAX))
+            dream = median_seconds(
+                lambda p=p, v=v, pref=pref: kernels.hrvo(p, v, pref, radius=RANGE, safety=SAFETY, v_max=V_MAX)
+            )
             cells: list[object] = [f"{name}/n={n}", show(dream)]
             for behaviour in ("HRVO", "ORCA"):
                 world = navground_world(scene, behaviour)
