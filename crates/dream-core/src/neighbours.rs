@@ -270,31 +270,33 @@ impl Query<'_> {
     fn row(&self, i: usize, near: &mut Candidates, out: &mut Block) {
         let (x, y) = (self.xs[i], self.ys[i]);
         // No data-dependent branch in the hot loop: every candidate is written, the length only
-        // advances for those whose squared distance may be in range.
-        let kept = &mut near.kept;
-        kept.clear();
-        kept.resize(near.indices.len(), (0, 0.0));
-        let mut count = 0;
-        for k in 0..near.indices.len() {
-            let (dx, dy) = (near.xs[k] - x, near.ys[k] - y);
-            let squared = dx * dx + dy * dy;
-            kept[count] = (k, squared);
-            count += usize::from(squared <= self.radius_squared && near.indices[k] != i);
+        // advances for those whose squared distance may be in range. The buffer only grows.
+        let Candidates { indices, xs, ys, kept } = near;
+        if kept.len() < indices.len() {
+            kept.resize(indices.len(), (0, 0.0));
         }
-        kept.truncate(count);
+        let mut count = 0;
+        for (k, ((&cx, &cy), &j)) in xs.iter().zip(ys.iter()).zip(indices.iter()).enumerate() {
+            let (dx, dy) = (cx - x, cy - y);
+            let squared = dx * dx + dy * dy;
+            if let Some(slot) = kept.get_mut(count) {
+                *slot = (k, squared);
+            }
+            count += usize::from((squared <= self.radius_squared) & (j != i));
+        }
         let start = out.indices.len();
-        for &(k, squared) in kept.iter() {
+        for &(k, squared) in &kept[..count] {
             let distance = squared.sqrt();
             if distance > self.radius {
                 continue;
             }
             if let Some(v) = self.view {
-                let relative = wrap_angle((near.ys[k] - y).atan2(near.xs[k] - x) - (v.headings[i] + v.direction));
+                let relative = wrap_angle((ys[k] - y).atan2(xs[k] - x) - (v.headings[i] + v.direction));
                 if !(relative.abs() <= v.fov / 2.0 || distance == 0.0) {
                     continue;
                 }
             }
-            out.indices.push(near.indices[k] as i64);
+            out.indices.push(indices[k] as i64);
             out.distances.push(distance);
         }
         if let Some(limit) = self.max_neighbours.filter(|&limit| out.indices.len() - start > limit) {
