@@ -2,133 +2,171 @@
 
     python benches/bench_kernels.py            # all tables (a few minutes: the references are slow)
     python benches/bench_kernels.py --quick    # smaller sizes only
+    python benches/bench_kernels.py --baseline OLD/_core.so   # also time another build of the kernels
 
-The swarm is a jittered square lattice (spacing 0.56 m, jitter +-0.14 m, so robots stay
-0.28 m apart) with ~10 robots within 1 m of each: the sensing range of the experiments.
-Neighbours and HRVO query within 1 m; Voronoi cells have radius 0.5 m (clipped by the robots
-within 1 m). References that would take minutes (O(n^2) or Python loops at the largest sizes)
-are not run: their cell says so.
+The scenes (``scenes.py``) have ~10 robots within 1 m of each, the sensing range of the
+experiments: the easy jittered lattice and the hard ones (uniform random with overlaps, a dense
+antipodal crossing, a crowd whose preferred velocities are all blocked). Neighbours and HRVO
+query within 1 m (HRVO's neighbour search is included in its time); Voronoi cells have radius
+0.5 m. The NumPy reference is timed at the same size when that takes seconds, otherwise at a
+smaller size (the cell says which) and the speed-up compares the time per robot.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import math
+from collections.abc import Callable
+from types import ModuleType
 
 import numpy as np
-from harness import median_seconds, show, table
-from original_hrvo import original_style_hrvo
 
 from dream import _core, _reference, backends, kernels
 from dream.specs import RPS, ArenaSpec
+from harness import machine, median_seconds, show, table
+from original_hrvo import original_style_hrvo
+from scenes import RANGE, SCENES, lattice
 
-WHEELS = dict(
-    diameter=RPS.diameter, wheel_radius=RPS.wheel_radius, base_length=RPS.base_length, max_wheel=RPS.max_wheel
-)
-RANGE = 1.0  #: sensing range (m)
-SPACING = RANGE * math.sqrt(math.pi / 10)  #: lattice spacing for ~10 robots within RANGE
+WHEELS = {
+    "diameter": RPS.diameter,
+    "wheel_radius": RPS.wheel_radius,
+    "base_length": RPS.base_length,
+    "max_wheel": RPS.max_wheel,
+}
+#: Another build of ``dream._core`` to time beside this one (``--baseline``), or None.
+BASELINE: ModuleType | None = None
 
 
-def swarm(n: int, seed: int = 0) -> np.ndarray:
-    """Positions ``(n, 2)`` on a jittered lattice, ~10 robots within RANGE of each."""
-    columns = math.ceil(math.sqrt(n))
-    lattice = np.column_stack(np.divmod(np.arange(n), columns)).astype(np.float64) * SPACING
-    return lattice + np.random.default_rng(seed).uniform(-SPACING / 4, SPACING / 4, (n, 2))
+def load_baseline(path: str) -> ModuleType:
+    """The extension module in ``path`` (e.g. an older build), loaded beside ``dream._core``."""
+    spec = importlib.util.spec_from_file_location("_core", path)
+    if spec is None or spec.loader is None:
+        raise SystemExit(f"cannot load a baseline extension from {path}")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
-def row(name: str, fast_call, slow_call, run_slow: bool, repeat: int = 5) -> list[object]:
-    fast = median_seconds(fast_call, repeat=repeat)
-    if not run_slow:
-        return [name, show(fast), "not run", "-"]
-    slow = median_seconds(slow_call, repeat=3, min_time=0.0)
-    return [name, show(fast), show(slow), f"{slow / fast:,.0f}x"]
+def on_baseline(call: Callable[[], object]) -> Callable[[], object]:
+    """``call`` with ``dream.kernels`` dispatching to the baseline build instead of this one."""
+
+    def swapped() -> object:
+        kernels._core = BASELINE
+        try:
+            return call()
+        finally:
+            kernels._core = _core
+
+    return swapped
+
+
+def row(
+    name: str,
+    n: int,
+    fast: Callable[[int], Callable[[], object]],
+    slow: Callable[[int], Callable[[], object]],
+    limit: int,
+) -> list[object]:
+    """Timings of ``fast(n)()`` and of the reference ``slow(m)()`` with ``m = min(n, limit)``.
+
+    ``fast`` and ``slow`` build the call for a size (building is not timed); with ``m < n`` the
+    speed-up is per robot.
+    """
+    call = fast(n)
+    fast_s = median_seconds(call)
+    cells: list[object] = [name, show(fast_s), show(fast_s / n) if n else "-"]
+    if BASELINE is not None:
+        base_s = median_seconds(on_baseline(call))
+        cells += [show(base_s), f"{base_s / fast_s:.2f}x"]
+    m = min(n, limit)
+    slow_s = median_seconds(slow(m), min_time=0.0)
+    at = "" if m == n else f" (at n={m})"
+    cells += [show(slow_s) + at, f"{(slow_s / m) / (fast_s / n):,.0f}x"]
+    return cells
+
+
+def header(what: str = "Rust") -> list[str]:
+    cells = ["kernel", f"{what} (median)", "per robot"]
+    if BASELINE is not None:
+        cells += ["baseline build (median)", "baseline / this"]
+    return cells + ["NumPy reference (median)", "speed-up"]
 
 
 def dynamics_rows(sizes) -> list[list[object]]:
     """One Fast-backend tick: rps validation (grid collision search) plus the Euler step."""
-    rows = []
-    for n in sizes:
-        arena = ArenaSpec.centred(3.2 * math.sqrt(n / 10), 2.0 * math.sqrt(n / 10))
-        poses = backends.initial_poses(n, np.random.default_rng(0), arena)
-        commands = np.random.default_rng(1).uniform(-0.3, 0.3, (2, n))
 
-        def rust() -> None:
-            _core.validate(poses, commands, arena.bounds, **WHEELS)
-            _core.unicycle_step(poses, commands, RPS.time_step)
+    def tick(step: Callable, check: Callable) -> Callable[[int], Callable[[], object]]:
+        def build(n: int) -> Callable[[], object]:
+            arena = ArenaSpec.centred(3.2 * math.sqrt(n / 10), 2.0 * math.sqrt(n / 10))
+            poses = backends.initial_poses(n, np.random.default_rng(0), arena)
+            commands = np.random.default_rng(1).uniform(-0.3, 0.3, (2, n))
+            return lambda: (check(poses, commands, arena), step(poses, commands))
 
-        def numpy() -> None:
-            _reference.validate(poses, commands, arena.bounds, **WHEELS)
-            _reference.unicycle_step(poses, commands, RPS.time_step)
+        return build
 
-        rows.append(row(f"dynamics/n={n}", rust, numpy, n <= 4_000))
-    return rows
+    def reference_check(poses, commands, arena):
+        return _reference.validate(poses, commands, arena.bounds, **WHEELS)
+
+    def reference_step(poses, commands):
+        return _reference.unicycle_step(poses, commands, RPS.time_step)
+
+    return [
+        row(
+            f"dynamics/n={n}",
+            n,
+            tick(kernels.unicycle_step, kernels.validate),
+            tick(reference_step, reference_check),
+            4_000,
+        )
+        for n in sizes
+    ]
 
 
 def neighbour_rows(sizes) -> list[list[object]]:
+    """The whole swarm's neighbours within RANGE, on the lattice and on the uniform scene."""
     rows = []
-    for n in sizes:
-        p = swarm(n)
-        rows.append(
-            row(
-                f"neighbours/n={n}",
-                lambda: _core.neighbours(p, RANGE),
-                lambda: _reference.neighbours(p, RANGE),
-                n <= 10_000,
-            )
-        )
+    for name in ("lattice", "uniform"):
+        for n in sizes:
+
+            def build(m: int, find: Callable = kernels.neighbours, make: Callable = SCENES[name]) -> Callable:
+                p = make(m).positions
+                return lambda: find(p, RANGE)
+
+            slow = lambda m, build=build: build(m, _reference.neighbours)
+            rows.append(row(f"neighbours/{name}/n={n}", n, build, slow, 10_000))
     return rows
 
 
 def hrvo_rows(sizes) -> list[list[object]]:
-    """Whole-swarm HRVO with the neighbour search included; random velocities and goals."""
+    """Whole-swarm HRVO through the public API, neighbour search included, on every scene."""
     rows = []
-    grid = _reference.candidate_grid(0.2)
-    for n in sizes:
-        p = swarm(n)
-        rng = np.random.default_rng(2)
-        v = rng.uniform(-0.14, 0.14, (n, 2))
-        angle = rng.uniform(-np.pi, np.pi, n)
-        pref = 0.2 * np.column_stack((np.cos(angle), np.sin(angle)))
+    for name, make in SCENES.items():
+        for n in sizes:
 
-        def rust() -> None:
-            _core.hrvo(
-                p,
-                v,
-                pref,
-                None,
-                None,
-                radius=RANGE,
-                safety=0.24,
-                v_max=0.2,
-                bounds=None,
-                candidates=grid,
-                include_preferred=True,
-            )
+            def build(m: int, hrvo: Callable = kernels.hrvo, make: Callable = make) -> Callable[[], object]:
+                p, v, pref = make(m)
+                return lambda: hrvo(p, v, pref, radius=RANGE)
 
-        rows.append(row(f"hrvo/n={n}", rust, lambda: _reference.hrvo(p, v, pref, radius=RANGE), n <= 10_000))
+            slow = lambda m, build=build: build(m, _reference.hrvo)
+            rows.append(row(f"hrvo/{name}/n={n}", n, build, slow, 1_000))
     return rows
 
 
 def voronoi_rows(sizes) -> list[list[object]]:
     """Cells of radius 0.5 (the disc polygon has 64 vertices) in an arena that fits the swarm."""
-    rows = []
-    for n in sizes:
-        p = swarm(n)
+
+    def build(m: int, cells: Callable = kernels.voronoi_cells) -> Callable[[], object]:
+        p = lattice(m).positions
         box = (
             float(p[:, 0].min()) - 0.2,
             float(p[:, 0].max()) + 0.2,
             float(p[:, 1].min()) - 0.2,
             float(p[:, 1].max()) + 0.2,
         )
-        rows.append(
-            row(
-                f"voronoi/n={n}",
-                lambda: _core.voronoi_cells(p, radius=0.5, bounds=box),
-                lambda: _reference.voronoi_cells(p, radius=0.5, bounds=box),
-                n <= 1_000,
-            )
-        )
-    return rows
+        return lambda: cells(p, radius=0.5, bounds=box)
+
+    return [row(f"voronoi/lattice/n={n}", n, build, lambda m: build(m, _reference.voronoi_cells), 1_000) for n in sizes]
 
 
 def per_robot_rows() -> list[list[object]]:
@@ -145,15 +183,25 @@ def per_robot_rows() -> list[list[object]]:
     return [["hrvo per robot, 9 neighbours", show(fast), show(slow), f"{slow / fast:,.0f}x"]]
 
 
-HEADER = ["kernel", "Rust (median)", "NumPy reference (median)", "speed-up"]
-
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small sizes only")
-    quick = parser.parse_args().quick
-    print(f"kernels: {kernels.IMPLEMENTATION}, {_core.__version__}\n")
-    print(table(HEADER, dynamics_rows((100, 1_000) if quick else (100, 1_000, 10_000))), "\n")
-    print(table(HEADER, neighbour_rows((1_000,) if quick else (1_000, 10_000, 100_000))), "\n")
-    print(table(HEADER, hrvo_rows((100,) if quick else (100, 1_000, 10_000))), "\n")
-    print(table(HEADER, voronoi_rows((100,) if quick else (100, 1_000, 10_000))), "\n")
-    print(table(["call", "DREAM (median)", "prototype-style Python (median)", "speed-up"], per_robot_rows()))
+    parser.add_argument("--only", choices=("dynamics", "neighbours", "hrvo", "voronoi", "per-robot"), help="one table")
+    parser.add_argument("--baseline", metavar="SO", help="another build of dream._core to time beside this one")
+    args = parser.parse_args()
+    if args.baseline:
+        BASELINE = load_baseline(args.baseline)
+    print(machine())
+    print(f"kernels: {kernels.IMPLEMENTATION}, {_core.__version__}, medians of >= 7 samples\n")
+    quick = args.quick
+    tables = {
+        "dynamics": lambda: dynamics_rows((100, 1_000) if quick else (100, 1_000, 10_000)),
+        "neighbours": lambda: neighbour_rows((1_000,) if quick else (1_000, 10_000, 100_000)),
+        "hrvo": lambda: hrvo_rows((100,) if quick else (100, 1_000, 10_000)),
+        "voronoi": lambda: voronoi_rows((100,) if quick else (100, 1_000, 10_000)),
+    }
+    for name, rows in tables.items():
+        if args.only in (None, name):
+            print(table(header(), rows()), "\n")
+    if args.only in (None, "per-robot"):
+        print(table(["call", "DREAM (median)", "prototype-style Python (median)", "speed-up"], per_robot_rows()))

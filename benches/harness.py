@@ -1,17 +1,31 @@
-"""Timing helpers for the benchmarks: medians of repeated calls, printed side by side."""
+"""Timing helpers for the benchmarks: medians of repeated calls, printed side by side.
+
+Every bench starts with :func:`machine` (CPU, cores, load, date) so that its figures can be
+judged, and times with :func:`median_seconds` (at least :data:`REPEAT` samples).
+"""
 
 from __future__ import annotations
 
+import datetime
+import os
+import platform
 import statistics
 import time
 from collections.abc import Callable, Sequence
 
+#: Fewest samples a median is taken over.
+REPEAT = 7
 
-def median_seconds(call: Callable[[], object], repeat: int = 7, min_time: float = 0.05) -> float:
-    """Median wall time of one ``call()``, each sample looping until ``min_time`` has passed."""
-    call()  # warm-up
+
+def median_seconds(call: Callable[[], object], repeat: int = REPEAT, min_time: float = 0.05) -> float:
+    """Median wall time (s) of one ``call()`` over ``repeat`` samples (at least :data:`REPEAT`).
+
+    Each sample loops until ``min_time`` seconds have passed and divides by the loop count, so
+    fast calls are not lost in the timer's resolution; one warm-up call comes first.
+    """
+    call()
     samples = []
-    for _ in range(repeat):
+    for _ in range(max(repeat, REPEAT)):
         loops, start = 0, time.perf_counter()
         while True:
             call()
@@ -21,6 +35,25 @@ def median_seconds(call: Callable[[], object], repeat: int = 7, min_time: float 
                 break
         samples.append(elapsed / loops)
     return statistics.median(samples)
+
+
+def cpu_model() -> str:
+    """The CPU's model name from /proc/cpuinfo, or what :mod:`platform` knows."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as info:
+            for line in info:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def machine() -> str:
+    """One line saying where and when the figures were measured: CPU, cores, load, date."""
+    load = ", ".join(f"{x:.2f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
+    now = datetime.datetime.now().astimezone().isoformat(timespec="seconds")
+    return f"machine: {cpu_model()}, {os.cpu_count()} cores, load average {load} (1/5/15 min), {now}"
 
 
 def show(seconds: float) -> str:

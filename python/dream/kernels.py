@@ -11,6 +11,7 @@ Robotarium's layout; positions for geometry kernels ``(n, 2)``. Units: m, s, rad
 
 from __future__ import annotations
 
+import functools
 import os
 from types import ModuleType
 from typing import Any, NamedTuple
@@ -221,7 +222,15 @@ def _checked_grid(v_max: float, n_angles: int, n_speeds: int) -> FloatArray:
     check_nonnegative(v_max, "v_max")
     if n_angles < 1 or n_speeds < 1:
         raise ValueError(f"`n_angles` and `n_speeds` must be >= 1, got {n_angles} and {n_speeds}")
-    return _reference.candidate_grid(v_max, n_angles, n_speeds)
+    return _grid(float(v_max), int(n_angles), int(n_speeds))
+
+
+@functools.lru_cache(maxsize=16)
+def _grid(v_max: float, n_angles: int, n_speeds: int) -> FloatArray:
+    """The candidate grid, built once per parameter set: building it costs more than a small swarm's HRVO."""
+    grid = _reference.candidate_grid(v_max, n_angles, n_speeds)
+    grid.flags.writeable = False  # shared between calls
+    return grid
 
 
 class HrvoPlanner:

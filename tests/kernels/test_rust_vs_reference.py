@@ -251,6 +251,21 @@ def test_hrvo_matches_reference_for_candidate_grids(rng, n_angles, n_speeds, v_m
         assert_hrvo_matches(p, v, pref, include_preferred=include_preferred, **kw)
 
 
+def test_hrvo_matches_reference_when_every_preference_is_blocked(rng):
+    # A standing crowd, each robot wanting to drive into its nearest neighbour: no preferred
+    # velocity is free, so every robot searches the candidates (on rayon: n >= 256).
+    n = 300
+    p = rng.uniform(0.0, 9.0, (n, 2))
+    indptr, indices, distances = _reference.neighbours(p, 2.0)
+    pref = np.zeros((n, 2))
+    for i in range(n):
+        row = slice(indptr[i], indptr[i + 1])
+        offset = p[indices[row][np.argmin(distances[row])]] - p[i]
+        pref[i] = 0.2 * offset / np.hypot(offset[0], offset[1])
+    got = assert_hrvo_matches(p, np.zeros((n, 2)), pref, radius=1.0)
+    assert not np.any(np.all(got == pref, axis=1))
+
+
 @pytest.mark.parametrize("safety", [0.1, 0.24])
 @pytest.mark.parametrize("bounds", [None, (-1.0, 1.0, -1.0, 1.0)])
 def test_hrvo_matches_reference_in_a_dense_crowd(rng, safety, bounds):

@@ -1,4 +1,6 @@
-//! Criterion benchmarks of the core kernels on swarms with ~10 robots within 1 m of each.
+//! Criterion benchmarks of the core kernels on swarms with ~10 robots within 1 m of each: the
+//! easy jittered lattice and, for neighbours and HRVO, uniformly random positions (some robots
+//! closer than the safety radius), as in `benches/scenes.py`.
 //!
 //!     cargo bench -p dream-core
 
@@ -24,6 +26,27 @@ fn swarm(n: usize) -> (Vec<f64>, Vec<f64>, f64) {
     (xs, ys, columns as f64 * spacing)
 }
 
+/// `n` robots uniformly at random (a fixed xorshift sequence) in the square that puts ~10
+/// within 1 m of each.
+fn uniform(n: usize) -> (Vec<f64>, Vec<f64>) {
+    let side = (n as f64 * PI / 10.0).sqrt();
+    let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1_u64 << 53) as f64 * side
+    };
+    (0..n).map(|_| (next(), next())).unzip()
+}
+
+/// Both scenes by name.
+fn scenes(n: usize) -> [(&'static str, Vec<f64>, Vec<f64>); 2] {
+    let (xs, ys, _) = swarm(n);
+    let (uxs, uys) = uniform(n);
+    [("lattice", xs, ys), ("uniform", uxs, uys)]
+}
+
 fn points(xs: &[f64], ys: &[f64]) -> Vec<Vec2> {
     xs.iter().zip(ys).map(|(&x, &y)| [x, y]).collect()
 }
@@ -31,10 +54,11 @@ fn points(xs: &[f64], ys: &[f64]) -> Vec<Vec2> {
 fn bench_neighbours(c: &mut Criterion) {
     let mut group = c.benchmark_group("neighbours");
     for n in [1_000, 10_000, 100_000] {
-        let (xs, ys, _) = swarm(n);
-        group.bench_with_input(BenchmarkId::new("n", n), &n, |b, _| {
-            b.iter(|| neighbours::within(black_box(&xs), black_box(&ys), 1.0, None, None).unwrap())
-        });
+        for (scene, xs, ys) in scenes(n) {
+            group.bench_with_input(BenchmarkId::new(scene, format!("n={n}")), &n, |b, _| {
+                b.iter(|| neighbours::within(black_box(&xs), black_box(&ys), 1.0, None, None).unwrap())
+            });
+        }
     }
     group.finish();
 }
@@ -49,17 +73,18 @@ fn bench_hrvo(c: &mut Criterion) {
         include_preferred: true,
     };
     for n in [100, 1_000, 10_000] {
-        let (xs, ys, _) = swarm(n);
-        let p = points(&xs, &ys);
         let v: Vec<Vec2> = (0..n)
             .map(|i| [0.1 * (i as f64).sin(), 0.1 * (i as f64).cos()])
             .collect();
         let pref: Vec<Vec2> = (0..n)
             .map(|i| [0.2 * (3.0 * i as f64).cos(), 0.2 * (3.0 * i as f64).sin()])
             .collect();
-        group.bench_with_input(BenchmarkId::new("n", n), &n, |b, _| {
-            b.iter(|| hrvo::hrvo_batch(black_box(&p), &v, &pref, None, 1.0, &grid, &params).unwrap())
-        });
+        for (scene, xs, ys) in scenes(n) {
+            let p = points(&xs, &ys);
+            group.bench_with_input(BenchmarkId::new(scene, format!("n={n}")), &n, |b, _| {
+                b.iter(|| hrvo::hrvo_batch(black_box(&p), &v, &pref, None, 1.0, &grid, &params).unwrap())
+            });
+        }
     }
     group.finish();
 }

@@ -7,8 +7,13 @@
 //! bucketed by a counting sort into CSR order. When the occupied bounding box has few cells
 //! (robots spread over an arena: the usual case) the cell table is a dense array; otherwise
 //! (a few far-flung robots) a hash map keeps memory O(n).
+//!
+//! The coordinates are also stored in cell order, and in the dense table the cells of one
+//! column are consecutive, so the 3x3 block around a point is three contiguous runs: queries
+//! stream through memory instead of jumping to each neighbour's index.
 
 use std::collections::HashMap;
+use std::ops::Range;
 
 /// Points bucketed by cell; a cell's points are contiguous in `members`, in increasing index.
 #[derive(Debug, Clone)]
@@ -17,6 +22,9 @@ pub struct Grid {
     table: CellTable,
     starts: Vec<usize>,
     members: Vec<usize>,
+    /// `xs[members[k]]` and `ys[members[k]]`: the coordinates in cell order.
+    sorted_xs: Vec<f64>,
+    sorted_ys: Vec<f64>,
 }
 
 #[derive(Debug, Clone)]
@@ -85,11 +93,62 @@ impl Grid {
             members[fill[slot]] = point;
             fill[slot] += 1;
         }
+        let sorted_xs = members.iter().map(|&j| xs[j]).collect();
+        let sorted_ys = members.iter().map(|&j| ys[j]).collect();
         Self {
             cell,
             table,
             starts,
             members,
+            sorted_xs,
+            sorted_ys,
+        }
+    }
+
+    /// Point indices in cell order: position `k` of a run holds point `members()[k]`.
+    pub fn members(&self) -> &[usize] {
+        &self.members
+    }
+
+    /// The points' coordinates in cell order (`xs`, `ys`).
+    pub fn sorted(&self) -> (&[f64], &[f64]) {
+        (&self.sorted_xs, &self.sorted_ys)
+    }
+
+    /// Calls `visit(run)` with ranges of positions in cell order (see [`Grid::members`]) that
+    /// together cover the 3x3 block of cells around `(x, y)`, each position once: three runs
+    /// (one per column) in the dense table, one per cell in the sparse one.
+    pub fn for_each_run_near(&self, x: f64, y: f64, mut visit: impl FnMut(Range<usize>)) {
+        let (cx, cy) = cell_of(x, y, self.cell);
+        match &self.table {
+            CellTable::Dense { x0, y0, columns, rows } => {
+                // Saturated arithmetic only ever lands outside the table, which is skipped.
+                let low = cy.saturating_sub(1).saturating_sub(*y0).max(0);
+                let high = cy.saturating_add(1).saturating_sub(*y0).min(rows - 1);
+                if low > high {
+                    return;
+                }
+                for dx in -1..=1_i64 {
+                    let column = cx.saturating_add(dx).saturating_sub(*x0);
+                    if (0..*columns).contains(&column) {
+                        let first = (column * rows + low) as usize;
+                        let last = (column * rows + high) as usize;
+                        let run = self.starts[first]..self.starts[last + 1];
+                        if !run.is_empty() {
+                            visit(run);
+                        }
+                    }
+                }
+            }
+            CellTable::Sparse(index) => {
+                for dx in -1..=1_i64 {
+                    for dy in -1..=1_i64 {
+                        if let Some(&slot) = index.get(&(cx.saturating_add(dx), cy.saturating_add(dy))) {
+                            visit(self.starts[slot]..self.starts[slot + 1]);
+                        }
+                    }
+                }
+            }
         }
     }
 
@@ -134,8 +193,14 @@ impl Grid {
 }
 
 fn cell_of(x: f64, y: f64, cell: f64) -> (i64, i64) {
-    // `as` saturates for huge coordinates, which only merges far-away cells: still correct.
-    ((x / cell).floor() as i64, (y / cell).floor() as i64)
+    (floor(x / cell), floor(y / cell))
+}
+
+/// `value.floor() as i64` without the call to libm's `floor` (plain x86-64 has no rounding
+/// instruction). `as` saturates for huge coordinates, which only merges far-away cells.
+fn floor(value: f64) -> i64 {
+    let truncated = value as i64;
+    truncated.saturating_sub(i64::from((truncated as f64) > value))
 }
 
 #[cfg(test)]
@@ -175,9 +240,64 @@ mod tests {
         assert_eq!(near(&grid, 0.0, -1e-18), vec![0, 1]);
     }
 
+    fn near_by_runs(grid: &Grid, x: f64, y: f64) -> Vec<usize> {
+        let mut seen = Vec::new();
+        grid.for_each_run_near(x, y, |run| {
+            for k in run {
+                assert_eq!(grid.sorted().0[k], grid.sorted_xs[k]);
+                seen.push(grid.members()[k]);
+            }
+        });
+        seen.sort();
+        seen
+    }
+
+    #[test]
+    fn runs_cover_the_same_points_as_cells() {
+        // Dense and sparse tables, queries at points, between them, and far outside.
+        let xs: Vec<f64> = (0..500).map(|i| ((i as f64) * 0.754_877_666).fract() * 3.0).collect();
+        let ys: Vec<f64> = (0..500).map(|i| ((i as f64) * 0.569_840_290).fract() * 2.0).collect();
+        let mut far_xs = xs.clone();
+        far_xs.extend([1e12, -1e12]);
+        let mut far_ys = ys.clone();
+        far_ys.extend([1e12, 0.0]);
+        for (xs, ys) in [(&xs, &ys), (&far_xs, &far_ys)] {
+            let grid = Grid::new(xs, ys, 0.3);
+            for (x, y) in
+                xs.iter()
+                    .zip(ys.iter())
+                    .map(|(&x, &y)| (x, y))
+                    .chain([(-0.31, 1.0), (9.0, 9.0), (1e12, 1e12)])
+            {
+                assert_eq!(near_by_runs(&grid, x, y), near(&grid, x, y));
+            }
+        }
+    }
+
+    #[test]
+    fn floor_matches_the_library_floor() {
+        for value in [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            -1.0,
+            3.0,
+            -3.000_000_1,
+            2.5e15,
+            -2.5e15,
+            1e300,
+            -1e300,
+            -1e-300,
+        ] {
+            assert_eq!(floor(value), value.floor() as i64, "{value}");
+        }
+    }
+
     #[test]
     fn empty_grid_visits_nothing() {
         let grid = Grid::new(&[], &[], 1.0);
         assert!(near(&grid, 0.0, 0.0).is_empty());
+        assert!(near_by_runs(&grid, 0.0, 0.0).is_empty());
     }
 }

@@ -25,7 +25,7 @@ use rayon::prelude::*;
 
 use crate::dynamics::Arena;
 use crate::error::{check_finite, check_len, GeomError, Result};
-use crate::neighbours::{self, Csr};
+use crate::neighbours::Near;
 
 /// A 2-D vector `[x, y]`.
 pub type Vec2 = [f64; 2];
@@ -162,7 +162,11 @@ impl Cone {
         let rvo = [(velocity[0] + vo[0]) / 2.0, (velocity[1] + vo[1]) / 2.0];
         let from_rvo = [velocity[0] - rvo[0], velocity[1] - rvo[1]];
         let (to_left, to_right) = (cross(left, from_rvo).abs(), cross(right, from_rvo).abs());
-        let tie = (to_left - to_right).abs() <= TIE * from_rvo[0].hypot(from_rvo[1]);
+        let gap = (to_left - to_right).abs();
+        // hypot(a, b) < 2 max(|a|, |b|), so a gap above that bound is no tie and libm's hypot (the
+        // reference's) is only called for the rare near-tie.
+        let tie =
+            gap <= 2.0 * TIE * from_rvo[0].abs().max(from_rvo[1].abs()) && gap <= TIE * from_rvo[0].hypot(from_rvo[1]);
         let left_apex = if !tie && to_left < to_right { rvo } else { vo };
         let right_apex = if !tie && to_left > to_right { rvo } else { vo };
         Cone {
@@ -183,42 +187,69 @@ impl Cone {
     }
 }
 
+/// The candidate grid as columns, shared by every robot of a call.
+#[derive(Debug)]
+struct Columns {
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+}
+
+impl Columns {
+    fn new(grid: &[Vec2]) -> Self {
+        Self {
+            xs: grid.iter().map(|v| v[0]).collect(),
+            ys: grid.iter().map(|v| v[1]).collect(),
+        }
+    }
+}
+
 /// Scratch space reused between robots, so a batch call allocates once per thread.
 #[derive(Debug, Default)]
 struct Scratch {
+    /// The current robot's cones, filled by the caller of `choose`.
     cones: Vec<Cone>,
-    /// Candidates as columns (x, y), their squared distances to the preferred velocity, and
-    /// their indices grouped by distance band.
-    xs: Vec<f64>,
-    ys: Vec<f64>,
+    /// Squared distance of each candidate to the preferred velocity.
     distances: Vec<f64>,
-    bands: Vec<u8>,
-    order: Vec<usize>,
+    /// Bit k of word `band * words + k / 64` is set when candidate k lies in that distance band.
+    bands: Vec<u64>,
+    /// The neighbour search's buffer.
+    run: Vec<(usize, f64)>,
 }
 
-/// One robot's HRVO velocity.
+/// Whether any cone forbids `(x, y)`. The cone that does moves to the front: it usually
+/// forbids the next candidates too (the answer does not depend on the cones' order).
+fn forbidden(cones: &mut [Cone], x: f64, y: f64) -> bool {
+    match cones.iter().position(|c| c.forbids(x, y)) {
+        Some(c) => {
+            if c > 0 {
+                cones.swap(0, c);
+            }
+            true
+        }
+        None => false,
+    }
+}
+
+/// `x` rounded to the nearest integer, for `0 <= x <= BANDS`: adding 2^52 leaves it in the
+/// mantissa's low bits. A band only has to grow with the distance, and this costs two
+/// instructions where a saturating float-to-int conversion costs ten on plain x86-64.
+fn round_small(x: f64) -> usize {
+    const SHIFT: f64 = (1_u64 << 52) as f64;
+    ((x + SHIFT).to_bits() & 0xff) as usize
+}
+
+/// One robot's HRVO velocity, its cones already in `scratch.cones`.
 ///
-/// `position` is only read when `params.bounds` is set. Inputs are trusted finite: the public
-/// entry points ([`hrvo_one`], [`hrvo_batch`]) check them.
-fn choose(
-    scratch: &mut Scratch,
-    velocity: Vec2,
-    preferred: Vec2,
-    position: Vec2,
-    neighbours: impl Iterator<Item = Neighbour>,
-    grid: &[Vec2],
-    params: &HrvoParams,
-) -> Vec2 {
+/// Candidate 0 is the clamped preferred velocity when `params.include_preferred`, the grid
+/// follows. `position` is only read when `params.bounds` is set. Inputs are trusted finite:
+/// the public entry points ([`hrvo_one`], [`hrvo_batch`]) check them.
+fn choose(scratch: &mut Scratch, preferred: Vec2, position: Vec2, grid: &Columns, params: &HrvoParams) -> Vec2 {
     let Scratch {
         cones,
-        xs,
-        ys,
         distances,
         bands,
-        order,
+        ..
     } = scratch;
-    cones.clear();
-    cones.extend(neighbours.map(|b| Cone::new(velocity, &b, params.safety)));
     let inside = |vx: f64, vy: f64| {
         params.bounds.is_none_or(|b| {
             let (x, y) = (position[0] + vx, position[1] + vy);
@@ -229,76 +260,71 @@ fn choose(
     // before it, so a free way costs one test per neighbour.
     let [px, py] = preferred;
     let norm = px.hypot(py);
-    if params.include_preferred && norm <= params.v_max && inside(px, py) && !cones.iter().any(|c| c.forbids(px, py)) {
+    if params.include_preferred && norm <= params.v_max && inside(px, py) && !forbidden(cones, px, py) {
         return preferred;
     }
-    xs.clear();
-    ys.clear();
-    if params.include_preferred {
-        let scale = if norm > params.v_max { params.v_max / norm } else { 1.0 };
-        let first = if scale < 1.0 {
-            [px * scale, py * scale]
+    let first = usize::from(params.include_preferred);
+    let clamped = if norm > params.v_max {
+        let scale = params.v_max / norm;
+        [px * scale, py * scale]
+    } else {
+        preferred
+    };
+    let candidate = |k: usize| {
+        if k < first {
+            clamped
         } else {
-            preferred
-        };
-        xs.push(first[0]);
-        ys.push(first[1]);
-    }
-    xs.extend(grid.iter().map(|v| v[0]));
-    ys.extend(grid.iter().map(|v| v[1]));
-    // Candidates in rings of distance to the preferred velocity (a counting sort into BANDS
-    // bands); the nearest valid candidate of the first band that has one is the answer, since
-    // every later band is farther. Most robots stop in the first band or two.
-    distances.clear();
-    distances.extend(xs.iter().zip(ys.iter()).map(|(&x, &y)| {
+            [grid.xs[k - first], grid.ys[k - first]]
+        }
+    };
+    let squared = |x: f64, y: f64| {
         let (dx, dy) = (x - px, y - py);
         dx * dx + dy * dy
-    }));
-    let farthest = distances.iter().copied().fold(0.0, f64::max);
-    // d * scale < BANDS for every d <= farthest; the float-to-int cast saturates anyway.
+    };
+    distances.clear();
+    if first == 1 {
+        distances.push(squared(clamped[0], clamped[1]));
+    }
+    distances.extend(grid.xs.iter().zip(&grid.ys).map(|(&x, &y)| squared(x, y)));
+    // Candidates in rings of distance to the preferred velocity, as bit sets: the nearest valid
+    // candidate of the first band that has one is the answer, since every later band is
+    // farther. Most robots stop in the first bands; bits are visited in candidate order, which
+    // settles ties.
+    let farthest = distances.iter().fold(0.0, |far, &d| if d > far { d } else { far });
     let scale = if farthest > 0.0 {
-        (BANDS as f64 - 0.5) / farthest
+        (BANDS - 1) as f64 / farthest
     } else {
         0.0
     };
+    let words = distances.len().div_ceil(64);
     bands.clear();
-    bands.extend(distances.iter().map(|&d| (d * scale) as u8));
-    let mut starts = [0_usize; BANDS + 1];
-    for &b in bands.iter() {
-        starts[usize::from(b) + 1] += 1;
+    bands.resize(BANDS * words, 0);
+    for (k, &d) in distances.iter().enumerate() {
+        let band = round_small(d * scale).min(BANDS - 1);
+        bands[band * words + k / 64] |= 1 << (k % 64);
     }
-    for b in 0..BANDS {
-        starts[b + 1] += starts[b];
-    }
-    let mut fill = starts;
-    order.clear();
-    order.resize(distances.len(), 0);
-    for (k, &b) in bands.iter().enumerate() {
-        order[fill[usize::from(b)]] = k;
-        fill[usize::from(b)] += 1;
-    }
-    let mut blocker = 0;
     let mut best: Option<(f64, usize)> = None;
-    for band in 0..BANDS {
-        for &k in &order[starts[band]..starts[band + 1]] {
-            let (x, y, d) = (xs[k], ys[k], distances[k]);
-            if best.is_some_and(|(bd, _)| d >= bd) || !inside(x, y) {
-                continue;
-            }
-            // The cone that ruled out the last candidate usually rules out the next one too.
-            if cones.get(blocker).is_some_and(|c| c.forbids(x, y)) {
-                continue;
-            }
-            match cones.iter().position(|c| c.forbids(x, y)) {
-                Some(c) => blocker = c,
-                None => best = Some((d, k)),
+    for band in bands.chunks_exact(words) {
+        for (w, &word) in band.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                let k = w * 64 + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let d = distances[k];
+                if best.is_some_and(|(bd, _)| d >= bd) {
+                    continue;
+                }
+                let [x, y] = candidate(k);
+                if inside(x, y) && !forbidden(cones, x, y) {
+                    best = Some((d, k));
+                }
             }
         }
         if best.is_some() {
             break;
         }
     }
-    best.map_or([0.0, 0.0], |(_, k)| [xs[k], ys[k]])
+    best.map_or([0.0, 0.0], |(_, k)| candidate(k))
 }
 
 fn check_vec2s(arg: &'static str, values: &[Vec2]) -> Result<()> {
@@ -338,15 +364,11 @@ pub fn hrvo_one(
             });
         }
     }
-    Ok(choose(
-        &mut Scratch::default(),
-        velocity,
-        preferred,
-        position,
-        neighbours.iter().copied(),
-        grid,
-        &params,
-    ))
+    let mut scratch = Scratch::default();
+    scratch
+        .cones
+        .extend(neighbours.iter().map(|b| Cone::new(velocity, b, params.safety)));
+    Ok(choose(&mut scratch, preferred, position, &Columns::new(grid), &params))
 }
 
 /// HRVO velocities of the whole swarm.
@@ -380,35 +402,66 @@ pub fn hrvo_batch(
             got: radius,
         });
     }
-    let found;
-    let (indptr, indices) = match neighbours {
-        Some(csr) => {
-            check_csr(csr.0, csr.1, n)?;
-            csr
-        }
-        None => {
-            let xs: Vec<f64> = positions.iter().map(|p| p[0]).collect();
-            let ys: Vec<f64> = positions.iter().map(|p| p[1]).collect();
-            found = neighbours::within(&xs, &ys, radius, None, None)?;
-            let Csr { indptr, indices, .. } = &found;
-            (indptr.as_slice(), indices.as_slice())
-        }
+    let columns = Columns::new(grid);
+    let decide = |scratch: &mut Scratch, i: usize| choose(scratch, preferred[i], positions[i], &columns, &params);
+    let cone = |i: usize, j: usize, offset: Vec2| {
+        Cone::new(
+            velocities[i],
+            &Neighbour::from_offset(offset, velocities[j]),
+            params.safety,
+        )
     };
+    if let Some((indptr, indices)) = neighbours {
+        check_csr(indptr, indices, n)?;
+        let robot = |scratch: &mut Scratch, i: usize| {
+            let p = positions[i];
+            let row = &indices[indptr[i] as usize..indptr[i + 1] as usize];
+            scratch.cones.clear();
+            scratch.cones.extend(row.iter().map(|&j| {
+                let q = positions[j as usize];
+                cone(i, j as usize, [q[0] - p[0], q[1] - p[1]])
+            }));
+            decide(scratch, i)
+        };
+        return Ok(for_each_robot(n, |i| i, robot));
+    }
+    // Without lists, each robot's neighbours come straight from the grid (no CSR is built), and
+    // robots go in the grid's cell order, so that neighbouring robots share cache lines.
+    let xs: Vec<f64> = positions.iter().map(|p| p[0]).collect();
+    let ys: Vec<f64> = positions.iter().map(|p| p[1]).collect();
+    let near = Near::new(&xs, &ys, radius);
     let robot = |scratch: &mut Scratch, i: usize| {
-        let p = positions[i];
-        let row = &indices[indptr[i] as usize..indptr[i + 1] as usize];
-        let around = row.iter().map(|&j| {
-            let q = positions[j as usize];
-            Neighbour::from_offset([q[0] - p[0], q[1] - p[1]], velocities[j as usize])
-        });
-        choose(scratch, velocities[i], preferred[i], p, around, grid, &params)
+        let Scratch { cones, run, .. } = scratch;
+        cones.clear();
+        near.for_each(i, run, |j, offset, _| cones.push(cone(i, j, offset)));
+        decide(scratch, i)
     };
-    Ok(if n >= PARALLEL_ROBOTS {
-        (0..n).into_par_iter().map_init(Scratch::default, robot).collect()
+    let order = near.order();
+    let chosen = for_each_robot(n, |k| order[k], robot);
+    let mut out = vec![[0.0; 2]; n];
+    for (&i, v) in order.iter().zip(chosen) {
+        out[i] = v;
+    }
+    Ok(out)
+}
+
+/// `robot(scratch, robots(k))` for k in `0..n`, in that order; on all threads for a large
+/// swarm, on this one (no thread pool, one scratch) for a small one.
+fn for_each_robot(
+    n: usize,
+    robots: impl Fn(usize) -> usize + Sync + Send,
+    robot: impl Fn(&mut Scratch, usize) -> Vec2 + Sync + Send,
+) -> Vec<Vec2> {
+    if n >= PARALLEL_ROBOTS {
+        (0..n)
+            .into_par_iter()
+            .with_min_len(PARALLEL_ROBOTS)
+            .map_init(Scratch::default, |scratch, k| robot(scratch, robots(k)))
+            .collect()
     } else {
         let mut scratch = Scratch::default();
-        (0..n).map(|i| robot(&mut scratch, i)).collect()
-    })
+        (0..n).map(|k| robot(&mut scratch, robots(k))).collect()
+    }
 }
 
 /// Checks that `(indptr, indices)` has `n` rows of ids in `[0, n)`.
@@ -460,6 +513,13 @@ mod tests {
         assert_eq!(g[0], [0.0, 0.0]);
         assert_eq!(g[9], [0.2, 0.0]);
         assert!(g.iter().all(|v| v[0].hypot(v[1]) <= 0.2 + 1e-15));
+    }
+
+    #[test]
+    fn round_small_rounds_to_the_nearest_band() {
+        for (x, want) in [(0.0, 0), (0.49, 0), (0.51, 1), (7.0, 7), (22.6, 23), (23.0, 23)] {
+            assert_eq!(round_small(x), want, "{x}");
+        }
     }
 
     #[test]

@@ -143,6 +143,75 @@ pub fn within(
     Ok(Csr::from_blocks(blocks, n))
 }
 
+/// The range part of a neighbour query: a grid of the robots and the radius, shared by the
+/// whole-swarm queries of this module and of HRVO.
+pub(crate) struct Near<'a> {
+    grid: Grid,
+    xs: &'a [f64],
+    ys: &'a [f64],
+    radius: f64,
+    /// A hair above radius^2: beyond it a point is surely out; below it `sqrt` decides exactly.
+    radius_squared: f64,
+}
+
+impl<'a> Near<'a> {
+    /// `xs`, `ys` finite and `radius` finite and >= 0 (the callers check).
+    pub(crate) fn new(xs: &'a [f64], ys: &'a [f64], radius: f64) -> Self {
+        // Any cell >= radius finds every neighbour; radius 0 only needs identical points together.
+        let grid = Grid::new(xs, ys, if radius > 0.0 { radius } else { 1.0 });
+        Self {
+            grid,
+            xs,
+            ys,
+            radius,
+            radius_squared: radius * radius * (1.0 + 4.0 * f64::EPSILON),
+        }
+    }
+
+    /// Robot indices in cell order: robots that are near in it are near in the plane.
+    pub(crate) fn order(&self) -> &[usize] {
+        self.grid.members()
+    }
+
+    /// Calls `visit(j, offset, distance)` for every robot j != i within the radius of robot i,
+    /// in no particular order; `offset` is `p_j - p_i` and `distance` its length.
+    ///
+    /// `scratch` holds the candidates of one run between the two steps below.
+    pub(crate) fn for_each(
+        &self,
+        i: usize,
+        scratch: &mut Vec<(usize, f64)>,
+        mut visit: impl FnMut(usize, [f64; 2], f64),
+    ) {
+        let (x, y) = (self.xs[i], self.ys[i]);
+        let (sx, sy) = self.grid.sorted();
+        let members = self.grid.members();
+        self.grid.for_each_run_near(x, y, |run| {
+            // No data-dependent branch in the hot loop: every candidate is written, the length
+            // only advances for those whose squared distance may be in range. The buffer only
+            // grows, so it is neither cleared nor filled per run.
+            if scratch.len() < run.len() {
+                scratch.resize(run.len(), (0, 0.0));
+            }
+            let mut count = 0;
+            for (k, (&px, &py)) in run.clone().zip(sx[run.clone()].iter().zip(&sy[run])) {
+                let (dx, dy) = (px - x, py - y);
+                let squared = dx * dx + dy * dy;
+                if let Some(slot) = scratch.get_mut(count) {
+                    *slot = (k, squared);
+                }
+                count += usize::from(squared <= self.radius_squared);
+            }
+            for &(k, squared) in &scratch[..count] {
+                let (j, distance) = (members[k], squared.sqrt());
+                if j != i && distance <= self.radius {
+                    visit(j, [sx[k] - x, sy[k] - y], distance);
+                }
+            }
+        });
+    }
+}
+
 /// Robots per parallel task (whole cells at a time).
 const BLOCK_ROWS: usize = 1024;
 
@@ -201,31 +270,33 @@ impl Query<'_> {
     fn row(&self, i: usize, near: &mut Candidates, out: &mut Block) {
         let (x, y) = (self.xs[i], self.ys[i]);
         // No data-dependent branch in the hot loop: every candidate is written, the length only
-        // advances for those whose squared distance may be in range.
-        let kept = &mut near.kept;
-        kept.clear();
-        kept.resize(near.indices.len(), (0, 0.0));
-        let mut count = 0;
-        for k in 0..near.indices.len() {
-            let (dx, dy) = (near.xs[k] - x, near.ys[k] - y);
-            let squared = dx * dx + dy * dy;
-            kept[count] = (k, squared);
-            count += usize::from(squared <= self.radius_squared && near.indices[k] != i);
+        // advances for those whose squared distance may be in range. The buffer only grows.
+        let Candidates { indices, xs, ys, kept } = near;
+        if kept.len() < indices.len() {
+            kept.resize(indices.len(), (0, 0.0));
         }
-        kept.truncate(count);
+        let mut count = 0;
+        for (k, ((&cx, &cy), &j)) in xs.iter().zip(ys.iter()).zip(indices.iter()).enumerate() {
+            let (dx, dy) = (cx - x, cy - y);
+            let squared = dx * dx + dy * dy;
+            if let Some(slot) = kept.get_mut(count) {
+                *slot = (k, squared);
+            }
+            count += usize::from((squared <= self.radius_squared) & (j != i));
+        }
         let start = out.indices.len();
-        for &(k, squared) in kept.iter() {
+        for &(k, squared) in &kept[..count] {
             let distance = squared.sqrt();
             if distance > self.radius {
                 continue;
             }
             if let Some(v) = self.view {
-                let relative = wrap_angle((near.ys[k] - y).atan2(near.xs[k] - x) - (v.headings[i] + v.direction));
+                let relative = wrap_angle((ys[k] - y).atan2(xs[k] - x) - (v.headings[i] + v.direction));
                 if !(relative.abs() <= v.fov / 2.0 || distance == 0.0) {
                     continue;
                 }
             }
-            out.indices.push(near.indices[k] as i64);
+            out.indices.push(indices[k] as i64);
             out.distances.push(distance);
         }
         if let Some(limit) = self.max_neighbours.filter(|&limit| out.indices.len() - start > limit) {
