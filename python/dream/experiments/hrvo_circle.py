@@ -6,25 +6,35 @@ radios spread every robot's known states (element-wise max); when a robot knows 
 states equal its own, it heads for its next goal. Robots avoid each other with HRVO using a
 movement sensor. Success: every robot finishes the third circle with zero collisions.
 
-HRVO leaves a robot standing when a robot within the safety radius blocks the way to its
-goal (every free velocity points away from it); the original then waited forever, stalling
-some runs. Here robots steer with :meth:`~dream.RobotHRVO.steer`: a blocked robot keeps to
-its right for a few decisions, so that blocked robots circulate around each other.
+Robots choose their preferred velocity, step aside and count arrivals with the shared rules
+of :mod:`dream.rules` (the per-robot :class:`CircleRobot` and the swarm loop :func:`run_batch`
+call the same functions):
 
-For N > 10 the circle grows so that neighbouring goals stay at least 0.3 m apart (with 50
-robots on the original 0.85 m circle they would be 0.107 m apart, closer than a robot's
-diameter), and the arena grows with it when the circle no longer fits the Robotarium.
+- Roundabout. HRVO alone leaves the robots that cross through the centre from every side
+  circling or frozen there: each meets a wall of robots head-on, and symmetric crowds have no
+  way out. The centre is therefore an island (half the ring's size) that every robot keeps on
+  its left: a robot whose straight way passes through it aims past the island's
+  counter-clockwise tangent point, so the robots merge into one stream turning the same way.
+- Side-step. A robot that HRVO stops while it wants to move keeps to its right for a few
+  decisions (:meth:`~dream.RobotHRVO.steer`), so blocked robots circulate around each other.
+
+Up to 10 robots use the thesis's circle (radius 0.85 m) and safety radius (0.24 m). Beyond,
+the goals lie equally spaced along the ellipse that fills the arena. A Fast arena grows with
+the ring once goals would be closer than 0.3 m; the real Robotarium's cannot, so there the
+goals close up and the safety radius follows their spacing, down to a robot's diameter plus
+a margin: :func:`circle_layout` refuses more robots than that (51).
 """
 
 from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
 
-from dream import kernels
+from dream import kernels, rules
 from dream.backends import make_robotarium
 from dream.experiments.result import ExperimentResult
 from dream.frames import Frame
@@ -37,32 +47,131 @@ from dream.world import World
 
 NAME = "hrvo-circle"
 CIRCLES = 3
+THESIS_N = 10  #: up to this many robots, the thesis's circle and parameters
 RADIUS = 0.85  #: the thesis's circle (m)
-GOAL_SPACING = 0.3  #: least distance between neighbouring goals (m)
+SAFETY = 0.24  #: the thesis's combined safety radius (m)
+GOAL_SPACING = 0.3  #: goal spacing a grown arena keeps (m)
 ARRIVAL = 0.05  #: a robot within this distance of its goal has arrived (m)
+EDGE = 0.08  #: distance from the ring's ends to the walls when the ring fills the arena (m)
+CLEARANCE = 0.02  #: how much the safety radius stays below the goal spacing (m)
+MIN_SAFETY = GRITSBOT.diameter + 0.02  #: the least safety radius: a robot's diameter plus a margin (m)
+ISLAND = 0.5  #: the roundabout's island, as a fraction of the ring (see dream.rules.roundabout_aim)
+SIDESTEP_UPDATES = 10  #: decisions a blocked robot steps aside for
+
+
+@dataclass(frozen=True)
+class CircleLayout:
+    """Where the goals are and the parameters that follow from their spacing.
+
+    Attributes
+    ----------
+    goals : (n, 2) ndarray
+        Each robot's first goal (m); its second is the point reflection ``-goals``.
+    semi_axes : (float, float)
+        Semi-axes of the ring the goals lie on (m); equal for a circle.
+    spacing : float
+        Least distance between neighbouring goals (m).
+    safety : float
+        Combined safety radius of HRVO (m).
+    arena : ArenaSpec
+    """
+
+    goals: np.ndarray
+    semi_axes: tuple[float, float]
+    spacing: float
+    safety: float
+    arena: ArenaSpec
+
+
+def circle_layout(n: int, grow: bool = True) -> CircleLayout:
+    """The goals, safety radius and arena for ``n`` robots.
+
+    Up to :data:`THESIS_N` robots: the thesis's circle of radius 0.85 m in the Robotarium arena
+    with safety radius 0.24 m. Beyond, the goals lie on the ellipse that fills the arena (its
+    ends :data:`EDGE` from the walls), equally spaced along it; antipodes stay point
+    reflections through the centre. If ``grow``, the arena and the ring grow together when
+    neighbouring goals would be closer than :data:`GOAL_SPACING`; else (the real Robotarium,
+    whose arena cannot grow) the goals close up and the safety radius shrinks with them, to
+    :data:`CLEARANCE` below the spacing.
+
+    Raises
+    ------
+    ValueError
+        If ``n`` is negative, or the fixed arena cannot hold ``n`` robots on its ring (their
+        goals would be closer than :data:`MIN_SAFETY` + :data:`CLEARANCE`).
+    """
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+        raise ValueError(f"the number of robots `n` must be an integer >= 0, got {n!r}")
+    if n <= THESIS_N:
+        angles = 2 * np.pi * np.arange(n) / max(n, 1)
+        goals = RADIUS * np.column_stack((np.cos(angles), np.sin(angles)))
+        return CircleLayout(goals, (RADIUS, RADIUS), _least_gap(goals), SAFETY, ROBOTARIUM)
+    semi_axes = (ROBOTARIUM.width / 2 - EDGE, ROBOTARIUM.height / 2 - EDGE)
+    goals = _ellipse_points(n, *semi_axes)
+    spacing = _least_gap(goals)
+    scale = max(1.0, GOAL_SPACING / spacing) if grow else 1.0
+    safety = min(SAFETY, scale * spacing - CLEARANCE)
+    if safety < MIN_SAFETY:
+        most = circle_capacity()
+        raise ValueError(
+            f"n={n} robots do not fit on the ring of the {ROBOTARIUM.width} x {ROBOTARIUM.height} m arena: "
+            f"their goals would be {spacing:.3f} m apart, less than the {MIN_SAFETY + CLEARANCE:.2f} m that "
+            f"robots of diameter {GRITSBOT.diameter} m need to reach neighbouring goals without touching; "
+            f"at most {most} robots fit (or use a backend whose arena can grow)"
+        )
+    arena = ROBOTARIUM if scale == 1.0 else ArenaSpec.centred(ROBOTARIUM.width * scale, ROBOTARIUM.height * scale)
+    return CircleLayout(scale * goals, (scale * semi_axes[0], scale * semi_axes[1]), scale * spacing, safety, arena)
+
+
+def circle_capacity() -> int:
+    """The most robots the Robotarium arena's ring holds (see :func:`circle_layout`)."""
+    a, b = ROBOTARIUM.width / 2 - EDGE, ROBOTARIUM.height / 2 - EDGE
+    n = int(_ellipse_arc(a, b)[1][-1] / (MIN_SAFETY + CLEARANCE)) + 1  # chords are shorter than arcs
+    while n > THESIS_N and _least_gap(_ellipse_points(n, a, b)) < MIN_SAFETY + CLEARANCE:
+        n -= 1
+    return n
 
 
 def circle_radius(n: int, grow: bool = True) -> float:
-    """The thesis's 0.85 m, grown (unless ``grow`` is false) so that neighbouring goals are
-    >= 0.3 m apart."""
-    return RADIUS if n < 2 or not grow else max(RADIUS, GOAL_SPACING / (2 * math.sin(math.pi / n)))
+    """The ring's larger semi-axis (m): the circle's radius up to :data:`THESIS_N` robots."""
+    return circle_layout(n, grow).semi_axes[0]
 
 
 def circle_arena(n: int, grow: bool = True) -> ArenaSpec:
-    """The Robotarium arena while the circle fits in it, else a larger arena of its shape."""
-    radius = circle_radius(n, grow)
-    if radius <= RADIUS:
-        return ROBOTARIUM
-    scale = radius / RADIUS
-    return ArenaSpec.centred(ROBOTARIUM.width * scale, ROBOTARIUM.height * scale)
+    """The Robotarium arena while it holds the ring, else a larger arena of its shape."""
+    return circle_layout(n, grow).arena
 
 
 def circle_goals(n: int, grow: bool = True) -> np.ndarray:
-    """Goals ``(n, 3, 2)``: robot i's point on the circle, its antipode, then the point again."""
-    radius = circle_radius(n, grow)
-    angles = 2 * np.pi * np.arange(n) / max(n, 1)
-    here = radius * np.column_stack((np.cos(angles), np.sin(angles)))
+    """Goals ``(n, 3, 2)``: robot i's point on the ring, its antipode, then the point again."""
+    here = circle_layout(n, grow).goals
     return np.stack((here, -here, here), axis=1)
+
+
+def _least_gap(points: np.ndarray) -> float:
+    """Least distance between consecutive points of a closed ring ``(n, 2)`` (inf below 2)."""
+    if len(points) < 2:
+        return math.inf
+    return float(np.hypot(*(points - np.roll(points, 1, axis=0)).T).min())
+
+
+def _ellipse_arc(a: float, b: float) -> tuple[np.ndarray, np.ndarray]:
+    """Parameter angles ``t`` and the arc length from (a, 0) to each, finely sampled."""
+    t = np.linspace(0.0, 2 * np.pi, 8193)
+    arc = np.concatenate(([0.0], np.cumsum(np.hypot(np.diff(a * np.cos(t)), np.diff(b * np.sin(t))))))
+    return t, arc
+
+
+def _ellipse_points(n: int, a: float, b: float) -> np.ndarray:
+    """``n`` points ``(n, 2)`` equally spaced by arc length on the ellipse of semi-axes (a, b),
+    the first at (a, 0).
+
+    Equal arc length keeps the set centrally symmetric: the arc from a point to its
+    reflection is half the perimeter, whatever the point.
+    """
+    t, arc = _ellipse_arc(a, b)
+    at = np.interp(arc[-1] * np.arange(n) / n, arc, t)
+    return np.column_stack((a * np.cos(at), b * np.sin(at)))
 
 
 class CircleRobot(RobotHRVO):
@@ -70,9 +179,32 @@ class CircleRobot(RobotHRVO):
 
     Callbacks: :meth:`update_odom` (odometry), :meth:`update_sensor` (movement sensor),
     :meth:`update_radio` (range radio) and :meth:`update` (the controller, writes ``dxu``).
+
+    Parameters
+    ----------
+    goals : (3, 2) array_like
+        Its goals in order (m).
+    n : int
+        Number of robots (the length of its state vector).
+    semi_axes : (float, float), optional
+        The ring's semi-axes (m), which size the roundabout; default: :func:`circle_layout`'s.
+    island : float
+        The roundabout's island as a fraction of the ring (0: go straight).
+    **kwargs
+        Passed to :class:`~dream.RobotHRVO` (e.g. ``safety``, ``arena``).
     """
 
-    def __init__(self, robot_id: int, tag: str, goals: np.ndarray, n: int, **kwargs: Any) -> None:
+    def __init__(
+        self,
+        robot_id: int,
+        tag: str,
+        goals: np.ndarray,
+        n: int,
+        *,
+        semi_axes: tuple[float, float] | None = None,
+        island: float = ISLAND,
+        **kwargs: Any,
+    ) -> None:
         super().__init__(robot_id, tag, **kwargs)
         self.goals = np.asarray(goals, dtype=np.float64)
         self.current_goal = self.goals[0]
@@ -80,28 +212,29 @@ class CircleRobot(RobotHRVO):
         self.state = 0  # goals reached so far
         self.change_state = True  # the current goal has not been reached yet
         self.desired_velocity = np.zeros(2)
+        self.semi_axes = circle_layout(n).semi_axes if semi_axes is None else semi_axes
+        self.island = island
 
     def update_radio(self, messages: list[list[int]]) -> list[int]:
         for states in messages:
             self.robot_states = [max(mine, theirs) for mine, theirs in zip(self.robot_states, states)]
         self.robot_states[self.robot_id] = self.state
-        if self.state < len(self.goals) and all(s == self.state for s in self.robot_states):
+        level = all(s == self.state for s in self.robot_states)
+        if rules.moves_on(self.state, level, self.change_state, len(self.goals)):
             self.current_goal = self.goals[self.state]
             self.change_state = True
         return self.robot_states
 
     def update(self, dxu: np.ndarray) -> None:
         if self.has_pose:
-            offset = self.current_goal - (self.pos_x, self.pos_y)
-            distance = math.hypot(offset[0], offset[1])
-            if distance < ARRIVAL:
-                self.desired_velocity = np.zeros(2)
-                if self.change_state:
-                    self.state += 1
-                    self.change_state = False
-            else:
-                self.desired_velocity = self.v_max * offset / distance
-        self.steer(self.detections, self.desired_velocity)
+            position = np.array([self.pos_x, self.pos_y])
+            arrived, reached = rules.arrival(position, self.current_goal, self.change_state, ARRIVAL)
+            if reached:
+                self.state += 1
+                self.change_state = False
+            aim = rules.roundabout_aim(position, self.current_goal, self.semi_axes, self.island)
+            self.desired_velocity = rules.preferred_velocity(position, aim, self.v_max, arrived)
+        self.steer(self.detections, self.desired_velocity, SIDESTEP_UPDATES)
         self.command(dxu)
 
 
@@ -164,12 +297,15 @@ def run(
     # On the real Robotarium the arena cannot grow: keep the thesis's circle (beyond 17 robots
     # its goals are closer than a robot's diameter, so the robots cannot all arrive).
     grow = backend != "robotarium"
+    layout = circle_layout(n, grow)
     goals = circle_goals(n, grow)
     with World(seed):
-        sim = make_robotarium(n, backend, arena=circle_arena(n, grow), seed=seed)
+        sim = make_robotarium(n, backend, arena=layout.arena, seed=seed)
         robots = []
         for i in range(n):
-            robot = CircleRobot(i, f"robot_{i}", goals[i], n, arena=sim.arena)
+            robot = CircleRobot(
+                i, f"robot_{i}", goals[i], n, semi_axes=layout.semi_axes, safety=layout.safety, arena=sim.arena
+            )
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             movement = MovementSensor(i, f"movement_{i}", robot.update_sensor)
             radio = RangeRadio(i, f"radio_{i}", robot.update_radio)
@@ -206,7 +342,7 @@ def run(
         wall = time.perf_counter() - start
     measures = {
         "circles_completed": min((r.state for r in robots), default=CIRCLES),
-        "circle_radius": circle_radius(n, grow),
+        "circle_radius": layout.semi_axes[0],
     }
     return ExperimentResult.from_backend(NAME, seed, sim, done_at, wall, measures, np.array(poses) if trace else None)
 
@@ -231,10 +367,10 @@ def run_batch(
     velocities are their last chosen velocities.
     """
     cap = default_steps(n) if steps is None else steps
+    layout = circle_layout(n)
     goals = circle_goals(n)
-    arena = circle_arena(n)
-    bounds = arena.shrunk(GRITSBOT.radius)
-    sim = make_robotarium(n, "fast", arena=arena, seed=seed)
+    bounds = layout.arena.shrunk(GRITSBOT.radius)
+    sim = make_robotarium(n, "fast", arena=layout.arena, seed=seed)
     everyone = np.arange(n)
     state = np.zeros(n, dtype=np.int64)  # goals reached
     heading_for = np.zeros(n, dtype=np.int64)  # index of the goal being approached
@@ -250,28 +386,22 @@ def run_batch(
     for t in range(cap):
         x = sim.get_poses()
         p = x[:2].T
-        offset = goals[everyone, heading_for] - p
-        distance = np.hypot(offset[:, 0], offset[:, 1])
-        arrived = distance < ARRIVAL
-        reached = arrived & unreached
+        goal = goals[everyone, heading_for]
+        arrived, reached = rules.arrival(p, goal, unreached, ARRIVAL)
         state += reached
         unreached &= ~arrived
         known[reached] = 0  # a new level: start over from itself
         known[reached, everyone[reached] // 8] = 128 >> (everyone[reached] % 8)
         if t % radio_gap == 0:
             _merge_known(known, state, p)
-            moving_on = (known == full).all(axis=1) & (state < CIRCLES) & ~unreached
+            moving_on = rules.moves_on(state, (known == full).all(axis=1), unreached, CIRCLES)
             heading_for[moving_on] = state[moving_on]
             unreached |= moving_on
-        desired = np.where(arrived[:, None], 0.0, offset * (GRITSBOT.v_max / np.maximum(distance, 1e-12))[:, None])
-        aside = sidestep > 0
-        turned = side[:, None] * np.column_stack((desired[:, 1], -desired[:, 0]))
-        wanted = np.where(aside[:, None], turned, desired)
-        sidestep = np.maximum(sidestep - 1, 0)
-        dxi = kernels.hrvo(p, dxi, wanted, radius=1.0, bounds=bounds)
-        blocked = ~dxi.any(axis=1) & desired.any(axis=1)
-        side[blocked] = np.where(aside[blocked], -side[blocked], 1.0)  # as RobotHRVO.steer
-        sidestep[blocked] = 10
+        aim = rules.roundabout_aim(p, goal, layout.semi_axes, ISLAND)
+        desired = rules.preferred_velocity(p, aim, GRITSBOT.v_max, arrived)
+        wanted, sidestep = rules.sidestep_preference(desired, sidestep, side)
+        dxi = kernels.hrvo(p, dxi, wanted, radius=1.0, safety=layout.safety, bounds=bounds)
+        sidestep, side = rules.sidestep_update(dxi, desired, sidestep, side, SIDESTEP_UPDATES)
         sim.set_velocities(everyone, kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, x)))
         sim.step()
         if progress is not None:
@@ -280,7 +410,7 @@ def run_batch(
             done_at = t + 1
             break
     wall = time.perf_counter() - start
-    measures = {"circles_completed": int(state.min(initial=CIRCLES)), "circle_radius": circle_radius(n)}
+    measures = {"circles_completed": int(state.min(initial=CIRCLES)), "circle_radius": layout.semi_axes[0]}
     return ExperimentResult.from_backend(NAME + " (batch)", seed, sim, done_at, wall, measures)
 
 
