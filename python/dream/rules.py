@@ -97,26 +97,33 @@ def roundabout_aim(positions: Any, goals: Any, semi_axes: tuple[float, float], i
     return np.where(crosses[..., None], edge, g) * scale
 
 
-def preferred_velocity(positions: Any, aims: Any, v_max: float, arrived: Any) -> FloatArray:
-    """Full speed towards ``aims``, zero for robots that have ``arrived``.
+def preferred_velocity(positions: Any, aims: Any, goals: Any, v_max: float, gain: float) -> FloatArray:
+    """Towards ``aims``, at a speed that falls in proportion to the distance left to ``goals``.
+
+    Slowing down near the goal lets a robot settle on it instead of stopping anywhere within
+    the arrival tolerance, where, off towards a neighbour's goal, it could keep that neighbour
+    from arriving.
 
     Parameters
     ----------
-    positions, aims : (n, 2) or (2,) array_like
-        Positions and the points the robots head for (m).
+    positions, aims, goals : (n, 2) or (2,) array_like
+        Positions, the points the robots head for now, and their goals (m).
     v_max : float
-        Speed (m/s).
-    arrived : (n,) or () bool array_like
+        Top speed (m/s).
+    gain : float
+        Speed per metre left to the goal (1/s) below ``v_max``.
 
     Returns
     -------
     (n, 2) or (2,) ndarray
-        Preferred single-integrator velocities (m/s).
+        Preferred single-integrator velocities (m/s); zero at the goal.
     """
-    offset = np.asarray(aims, dtype=np.float64) - np.asarray(positions, dtype=np.float64)
+    p = np.asarray(positions, dtype=np.float64)
+    offset = np.asarray(aims, dtype=np.float64) - p
+    left = np.asarray(goals, dtype=np.float64) - p
     distance = np.hypot(offset[..., 0], offset[..., 1])
-    speed = np.where(np.asarray(arrived, dtype=bool) | (distance == 0.0), 0.0, v_max / np.maximum(distance, 1e-300))
-    return offset * speed[..., None]
+    speed = np.minimum(v_max, gain * np.hypot(left[..., 0], left[..., 1]))
+    return offset * np.where(distance > 0.0, speed / np.maximum(distance, 1e-300), 0.0)[..., None]
 
 
 def sidestep_preference(desired: Any, sidestep: Any, side: Any) -> tuple[FloatArray, np.ndarray]:

@@ -17,12 +17,18 @@ call the same functions):
   counter-clockwise tangent point, so the robots merge into one stream turning the same way.
 - Side-step. A robot that HRVO stops while it wants to move keeps to its right for a few
   decisions (:meth:`~dream.RobotHRVO.steer`), so blocked robots circulate around each other.
+- Settling. Near its goal a robot slows down in proportion to the distance left, so that it
+  settles on the goal rather than anywhere within the tolerance.
 
 Up to 10 robots use the thesis's circle (radius 0.85 m) and safety radius (0.24 m). Beyond,
 the goals lie equally spaced along the ellipse that fills the arena. A Fast arena grows with
 the ring once goals would be closer than 0.3 m; the real Robotarium's cannot, so there the
-goals close up and the safety radius follows their spacing, down to a robot's diameter plus
-a margin: :func:`circle_layout` refuses more robots than that (51).
+goals close up and the safety radius shrinks with them. Robots within the arrival tolerance
+of neighbouring goals must not block each other, so the safety radius is at most the
+spacing less twice the tolerance; it must stay a robot's diameter plus a margin, so
+:func:`circle_layout` refuses more robots than the Robotarium's ring holds that way (33).
+With goals closer than that (the thesis's 0.85 m circle beyond 17 robots, or 50 robots on
+the largest ellipse, 0.155 m apart) the robots that park first wall in the others.
 """
 
 from __future__ import annotations
@@ -53,9 +59,9 @@ SAFETY = 0.24  #: the thesis's combined safety radius (m)
 GOAL_SPACING = 0.3  #: goal spacing a grown arena keeps (m)
 ARRIVAL = 0.05  #: a robot within this distance of its goal has arrived (m)
 EDGE = 0.08  #: distance from the ring's ends to the walls when the ring fills the arena (m)
-CLEARANCE = 0.02  #: how much the safety radius stays below the goal spacing (m)
 MIN_SAFETY = GRITSBOT.diameter + 0.02  #: the least safety radius: a robot's diameter plus a margin (m)
 ISLAND = 0.5  #: the roundabout's island, as a fraction of the ring (see dream.rules.roundabout_aim)
+APPROACH_GAIN = 1.0  #: preferred speed per metre left to the goal near it (1/s)
 SIDESTEP_UPDATES = 10  #: decisions a blocked robot steps aside for
 
 
@@ -91,14 +97,15 @@ def circle_layout(n: int, grow: bool = True) -> CircleLayout:
     ends :data:`EDGE` from the walls), equally spaced along it; antipodes stay point
     reflections through the centre. If ``grow``, the arena and the ring grow together when
     neighbouring goals would be closer than :data:`GOAL_SPACING`; else (the real Robotarium,
-    whose arena cannot grow) the goals close up and the safety radius shrinks with them, to
-    :data:`CLEARANCE` below the spacing.
+    whose arena cannot grow) the goals close up. The safety radius is the thesis's, or the
+    spacing less twice the arrival tolerance if smaller (so that robots anywhere within the
+    tolerance of neighbouring goals do not block each other).
 
     Raises
     ------
     ValueError
         If ``n`` is negative, or the fixed arena cannot hold ``n`` robots on its ring (their
-        goals would be closer than :data:`MIN_SAFETY` + :data:`CLEARANCE`).
+        safety radius would fall below :data:`MIN_SAFETY`).
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
         raise ValueError(f"the number of robots `n` must be an integer >= 0, got {n!r}")
@@ -110,24 +117,28 @@ def circle_layout(n: int, grow: bool = True) -> CircleLayout:
     goals = _ellipse_points(n, *semi_axes)
     spacing = _least_gap(goals)
     scale = max(1.0, GOAL_SPACING / spacing) if grow else 1.0
-    safety = min(SAFETY, scale * spacing - CLEARANCE)
+    # Two robots anywhere within the arrival tolerance of neighbouring goals must not block
+    # each other: HRVO keeps them a safety radius apart.
+    safety = min(SAFETY, scale * spacing - 2 * ARRIVAL)
     if safety < MIN_SAFETY:
         most = circle_capacity()
         raise ValueError(
             f"n={n} robots do not fit on the ring of the {ROBOTARIUM.width} x {ROBOTARIUM.height} m arena: "
-            f"their goals would be {spacing:.3f} m apart, less than the {MIN_SAFETY + CLEARANCE:.2f} m that "
-            f"robots of diameter {GRITSBOT.diameter} m need to reach neighbouring goals without touching; "
+            f"their goals would be {spacing:.3f} m apart, less than the {MIN_SAFETY + 2 * ARRIVAL:.2f} m "
+            f"that robots of diameter {GRITSBOT.diameter} m need to reach neighbouring goals (within "
+            f"{ARRIVAL} m) keeping a safety radius of {MIN_SAFETY:.2f} m; "
             f"at most {most} robots fit (or use a backend whose arena can grow)"
         )
     arena = ROBOTARIUM if scale == 1.0 else ArenaSpec.centred(ROBOTARIUM.width * scale, ROBOTARIUM.height * scale)
-    return CircleLayout(scale * goals, (scale * semi_axes[0], scale * semi_axes[1]), scale * spacing, safety, arena)
+    ring = (scale * semi_axes[0], scale * semi_axes[1])
+    return CircleLayout(scale * goals, ring, scale * spacing, safety, arena)
 
 
 def circle_capacity() -> int:
     """The most robots the Robotarium arena's ring holds (see :func:`circle_layout`)."""
     a, b = ROBOTARIUM.width / 2 - EDGE, ROBOTARIUM.height / 2 - EDGE
-    n = int(_ellipse_arc(a, b)[1][-1] / (MIN_SAFETY + CLEARANCE)) + 1  # chords are shorter than arcs
-    while n > THESIS_N and _least_gap(_ellipse_points(n, a, b)) < MIN_SAFETY + CLEARANCE:
+    n = int(_ellipse_arc(a, b)[1][-1] / (MIN_SAFETY + 2 * ARRIVAL)) + 1  # chords are shorter than arcs
+    while n > THESIS_N and _least_gap(_ellipse_points(n, a, b)) < MIN_SAFETY + 2 * ARRIVAL:
         n -= 1
     return n
 
@@ -228,12 +239,14 @@ class CircleRobot(RobotHRVO):
     def update(self, dxu: np.ndarray) -> None:
         if self.has_pose:
             position = np.array([self.pos_x, self.pos_y])
-            arrived, reached = rules.arrival(position, self.current_goal, self.change_state, ARRIVAL)
+            _, reached = rules.arrival(position, self.current_goal, self.change_state, ARRIVAL)
             if reached:
                 self.state += 1
                 self.change_state = False
             aim = rules.roundabout_aim(position, self.current_goal, self.semi_axes, self.island)
-            self.desired_velocity = rules.preferred_velocity(position, aim, self.v_max, arrived)
+            self.desired_velocity = rules.preferred_velocity(
+                position, aim, self.current_goal, self.v_max, APPROACH_GAIN
+            )
         self.steer(self.detections, self.desired_velocity, SIDESTEP_UPDATES)
         self.command(dxu)
 
@@ -304,7 +317,13 @@ def run(
         robots = []
         for i in range(n):
             robot = CircleRobot(
-                i, f"robot_{i}", goals[i], n, semi_axes=layout.semi_axes, safety=layout.safety, arena=sim.arena
+                i,
+                f"robot_{i}",
+                goals[i],
+                n,
+                semi_axes=layout.semi_axes,
+                safety=layout.safety,
+                arena=sim.arena,
             )
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             movement = MovementSensor(i, f"movement_{i}", robot.update_sensor)
@@ -397,8 +416,9 @@ def run_batch(
             moving_on = rules.moves_on(state, (known == full).all(axis=1), unreached, CIRCLES)
             heading_for[moving_on] = state[moving_on]
             unreached |= moving_on
+            goal = goals[everyone, heading_for]
         aim = rules.roundabout_aim(p, goal, layout.semi_axes, ISLAND)
-        desired = rules.preferred_velocity(p, aim, GRITSBOT.v_max, arrived)
+        desired = rules.preferred_velocity(p, aim, goal, GRITSBOT.v_max, APPROACH_GAIN)
         wanted, sidestep = rules.sidestep_preference(desired, sidestep, side)
         dxi = kernels.hrvo(p, dxi, wanted, radius=1.0, safety=layout.safety, bounds=bounds)
         sidestep, side = rules.sidestep_update(dxi, desired, sidestep, side, SIDESTEP_UPDATES)
