@@ -26,7 +26,7 @@ the ring once goals would be closer than 0.3 m; the real Robotarium's cannot, so
 goals close up and the safety radius shrinks with them. Robots within the arrival tolerance
 of neighbouring goals must not block each other, so the safety radius is at most the
 spacing less twice the tolerance; it must stay a robot's diameter plus a margin, so
-:func:`circle_layout` refuses more robots than the Robotarium's ring holds that way (33).
+:func:`circle_layout` refuses more robots than the Robotarium's ring holds that way (30).
 With goals closer than that (the thesis's 0.85 m circle beyond 17 robots, or 50 robots on
 the largest ellipse, 0.155 m apart) the robots that park first wall in the others.
 """
@@ -59,7 +59,7 @@ SAFETY = 0.24  #: the thesis's combined safety radius (m)
 GOAL_SPACING = 0.3  #: goal spacing a grown arena keeps (m)
 ARRIVAL = 0.05  #: a robot within this distance of its goal has arrived (m)
 EDGE = 0.08  #: distance from the ring's ends to the walls when the ring fills the arena (m)
-MIN_SAFETY = GRITSBOT.diameter + 0.02  #: the least safety radius: a robot's diameter plus a margin (m)
+MIN_SAFETY = GRITSBOT.diameter + 0.04  #: the least safety radius: a robot's diameter plus a margin (m)
 ISLAND = 0.5  #: the roundabout's island, as a fraction of the ring (see dream.rules.roundabout_aim)
 APPROACH_GAIN = 1.0  #: preferred speed per metre left to the goal near it (1/s)
 SIDESTEP_UPDATES = 10  #: decisions a blocked robot steps aside for
