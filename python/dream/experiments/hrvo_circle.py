@@ -269,8 +269,14 @@ def circle_frame(step: int, sim: Any, robots: list[CircleRobot], radio_range: fl
 
 
 def default_steps(n: int) -> int:
-    """An iteration cap that every seed finishes well within (the run stops when done)."""
-    return 4000 + 40 * n
+    """An iteration cap that every seed finishes well within (the run stops when done).
+
+    Three crossings of the ring take about ``520 (a + b)`` steps at full speed (``a``, ``b``
+    its semi-axes in m, roundabout included); the cap allows three times that, plus the
+    start and the radio rounds.
+    """
+    a, b = circle_layout(n).semi_axes
+    return 4000 + int(1500 * (a + b))
 
 
 def run(
