@@ -55,7 +55,11 @@ def measure(n: int, mode: str, seeds: range, steps: int | None) -> list[object]:
         )
         if result.completed_step is not None:
             done.append(result.completed_step)
-        print(f"  n={n} {mode} seed={seed}: completed at {result.completed_step}", flush=True)
+        print(
+            f"  n={n} {mode} seed={seed}: completed at {result.completed_step}, violations "
+            f"{result.collisions}/{result.boundary}/{result.actuator}",
+            flush=True,
+        )
     spread = f"{min(done)} / {statistics.median(done):.0f} / {max(done)}" if done else "-"
     cap = hrvo_circle.default_steps(n) if steps is None else steps
     seed_text = f"{seeds.start}-{seeds.stop - 1}"

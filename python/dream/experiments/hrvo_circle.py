@@ -22,7 +22,7 @@ call the same functions):
 
 Up to 10 robots use the thesis's circle (radius 0.85 m) and safety radius (0.24 m). Beyond,
 the goals lie equally spaced along the ellipse that fills the arena. A Fast arena grows with
-the ring once goals would be closer than 0.3 m; the real Robotarium's cannot, so there the
+the ring once goals would be closer than 0.3 m (and then leaves a corridor around the ring); the real Robotarium's cannot, so there the
 goals close up and the safety radius shrinks with them. Robots within the arrival tolerance
 of neighbouring goals must not block each other, so the safety radius is at most the
 spacing less twice the tolerance; it must stay a robot's diameter plus a margin, so
@@ -60,6 +60,7 @@ GOAL_SPACING = 0.3  #: goal spacing a grown arena keeps (m)
 ARRIVAL = 0.05  #: a robot within this distance of its goal has arrived (m)
 EDGE = 0.08  #: distance from the ring's ends to the walls when the ring fills the arena (m)
 MIN_SAFETY = GRITSBOT.diameter + 0.04  #: the least safety radius: a robot's diameter plus a margin (m)
+CORRIDOR = 2 * SAFETY  #: free width between the ring and the walls of a grown arena (m)
 ISLAND = 0.5  #: the roundabout's island, as a fraction of the ring (see dream.rules.roundabout_aim)
 APPROACH_GAIN = 1.0  #: preferred speed per metre left to the goal near it (1/s)
 SIDESTEP_UPDATES = 10  #: decisions a blocked robot steps aside for
@@ -129,7 +130,10 @@ def circle_layout(n: int, grow: bool = True) -> CircleLayout:
             f"{ARRIVAL} m) keeping a safety radius of {MIN_SAFETY:.2f} m; "
             f"at most {most} robots fit (or use a backend whose arena can grow)"
         )
-    arena = ROBOTARIUM if scale == 1.0 else ArenaSpec.centred(ROBOTARIUM.width * scale, ROBOTARIUM.height * scale)
+    # A grown arena leaves a corridor around the ring, so that robots starting outside it can
+    # reach any goal without passing between robots already parked at theirs.
+    extra = 0.0 if scale == 1.0 else 2 * CORRIDOR
+    arena = ArenaSpec.centred(ROBOTARIUM.width * scale + extra, ROBOTARIUM.height * scale + extra)
     ring = (scale * semi_axes[0], scale * semi_axes[1])
     return CircleLayout(scale * goals, ring, scale * spacing, safety, arena)
 
@@ -382,8 +386,9 @@ def run_batch(
 ) -> ExperimentResult:
     """The circle experiment for very large swarms: whole-swarm kernel calls every step.
 
-    The same behaviour as :func:`run` (goals, arrival, HRVO with the same parameters, stepping
-    aside when blocked, progress spread by range radio every ``radio_gap`` steps), on the Fast
+    The same behaviour as :func:`run` (the same layout and HRVO parameters, and the decision
+    rules of :mod:`dream.rules` that :class:`CircleRobot` calls: arrival, roundabout, settling,
+    stepping aside; progress spread by range radio every ``radio_gap`` steps), on the Fast
     backend, but every robot decides every step through one :func:`dream.kernels.hrvo` call.
     Each robot's progress vector becomes a bitset: the robots it knows to have reached at
     least its own number of goals (n^2 / 8 bytes in all, merged by bitwise OR over radio
