@@ -18,9 +18,8 @@ import platform
 import statistics
 import time
 
-from harness import table
-
 from dream.experiments import hrvo_circle
+from harness import table
 
 DEFAULT_CASES = ["10:robotarium:0-29", "20:robotarium:0-29", "30:robotarium:0-9", "50:robotarium:0-9", "100:fast:0-9"]
 

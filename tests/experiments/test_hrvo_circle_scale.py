@@ -24,6 +24,7 @@ def test_hrvo_circle_twenty_robots_complete_on_rps(seed):
     assert_clean_completion(result)
 
 
+@pytest.mark.skipif(os.environ.get("DREAM_PURE_PYTHON") == "1", reason="the largest case: too slow with NumPy HRVO")
 def test_hrvo_circle_hundred_robots_complete_on_fast():
     result = hrvo_circle.run(n=100, seed=0, backend="fast")
     assert result.backend == "fast"
