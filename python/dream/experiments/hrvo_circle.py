@@ -314,11 +314,11 @@ def run(
     Returns
     -------
     ExperimentResult
-        ``measures``: ``circles_completed`` (by every robot) and the circle radius.
+        ``measures``: ``circles_completed`` (by every robot) and ``circle_radius``, the ring's
+        larger semi-axis (m).
     """
     cap = default_steps(n) if steps is None else steps
-    # On the real Robotarium the arena cannot grow: keep the thesis's circle (beyond 17 robots
-    # its goals are closer than a robot's diameter, so the robots cannot all arrive).
+    # On the real Robotarium the arena cannot grow: the goals close up instead (circle_layout).
     grow = backend != "robotarium"
     layout = circle_layout(n, grow)
     goals = circle_goals(n, grow)
