@@ -22,8 +22,9 @@ call the same functions):
 
 Up to 10 robots use the thesis's circle (radius 0.85 m) and safety radius (0.24 m). Beyond,
 the goals lie equally spaced along the ellipse that fills the arena. A Fast arena grows with
-the ring once goals would be closer than 0.3 m (and then leaves a corridor around the ring); the real Robotarium's cannot, so there the
-goals close up and the safety radius shrinks with them. Robots within the arrival tolerance
+the ring once goals would be closer than 0.34 m, keeping the thesis's safety radius (and
+then leaves a corridor around the ring); the real Robotarium's cannot, so there the goals
+close up and the safety radius shrinks with them. Robots within the arrival tolerance
 of neighbouring goals must not block each other, so the safety radius is at most the
 spacing less twice the tolerance; it must stay a robot's diameter plus a margin, so
 :func:`circle_layout` refuses more robots than the Robotarium's ring holds that way (30).
@@ -56,8 +57,8 @@ CIRCLES = 3
 THESIS_N = 10  #: up to this many robots, the thesis's circle and parameters
 RADIUS = 0.85  #: the thesis's circle (m)
 SAFETY = 0.24  #: the thesis's combined safety radius (m)
-GOAL_SPACING = 0.3  #: goal spacing a grown arena keeps (m)
 ARRIVAL = 0.05  #: a robot within this distance of its goal has arrived (m)
+GOAL_SPACING = SAFETY + 2 * ARRIVAL  #: goal spacing a grown arena keeps (m)
 EDGE = 0.08  #: distance from the ring's ends to the walls when the ring fills the arena (m)
 MIN_SAFETY = GRITSBOT.diameter + 0.04  #: the least safety radius: a robot's diameter plus a margin (m)
 CORRIDOR = 2 * SAFETY  #: free width between the ring and the walls of a grown arena (m)
