@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from dream import kernels
+from dream import kernels, rules
 from dream._checks import FloatArray, as_array
 from dream.kernels import Bounds
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec, RobotSpec
@@ -255,19 +255,13 @@ class RobotHRVO(Robot):
     def steer(self, detections: Any, desired_velocity: Any, sidestep_updates: int = 10) -> FloatArray:
         """:meth:`HRVO`, for a robot that must not wait forever.
 
-        HRVO stops a robot whose way is blocked by a robot within the safety radius (every free
-        velocity points away from its goal). Once that happens, the robot keeps to its right
-        (prefers its desired velocity turned by -90 degrees) for the next ``sidestep_updates``
-        decisions: robots that all turn the same way circulate around each other instead of
-        facing off. A robot blocked again while stepping aside (by a wall, say) turns the other
-        way.
+        A robot that HRVO stops while it wants to move steps aside for the next
+        ``sidestep_updates`` decisions (the rule is :func:`dream.rules.sidestep_update`, shared
+        with the swarm loops).
         """
-        wanted = np.asarray(desired_velocity, dtype=np.float64)
-        if self.sidestep > 0:
-            wanted = self.side * np.array([wanted[1], -wanted[0]])
-            self.sidestep -= 1
+        desired = as_array(desired_velocity, "desired_velocity", (2,))
+        wanted, sidestep = rules.sidestep_preference(desired, self.sidestep, self.side)
         chosen = self.HRVO(detections, wanted)
-        if not chosen.any() and np.any(desired_velocity):
-            self.side = -self.side if self.sidestep > 0 else 1.0
-            self.sidestep = sidestep_updates
+        sidestep, side = rules.sidestep_update(chosen, desired, sidestep, self.side, sidestep_updates)
+        self.sidestep, self.side = int(sidestep), float(side)
         return chosen

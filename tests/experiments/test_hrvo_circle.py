@@ -81,9 +81,10 @@ def test_hrvo_circle_batch_mode_runs_large_swarms_without_collision():
     assert result.collisions == 0
 
 
-def test_hrvo_circle_fifty_robots_on_rps_do_not_collide():
-    # rps's arena cannot grow: the thesis's circle, goals closer than a diameter, no collision.
-    result = hrvo_circle.run(n=50, seed=0, backend="robotarium", steps=600)
-    assert result.backend == "robotarium" and result.n == 50
-    assert result.measures["circle_radius"] == hrvo_circle.RADIUS
+def test_hrvo_circle_full_ring_on_rps_does_not_collide():
+    # rps's arena cannot grow: as many robots as its ring holds, goals on the ellipse filling it.
+    n = hrvo_circle.circle_capacity()
+    result = hrvo_circle.run(n=n, seed=0, backend="robotarium", steps=600)
+    assert result.backend == "robotarium" and result.n == n
+    assert result.measures["circle_radius"] == hrvo_circle.ROBOTARIUM.width / 2 - hrvo_circle.EDGE
     assert result.collisions == 0 and result.boundary == 0

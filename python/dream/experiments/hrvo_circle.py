@@ -6,25 +6,42 @@ radios spread every robot's known states (element-wise max); when a robot knows 
 states equal its own, it heads for its next goal. Robots avoid each other with HRVO using a
 movement sensor. Success: every robot finishes the third circle with zero collisions.
 
-HRVO leaves a robot standing when a robot within the safety radius blocks the way to its
-goal (every free velocity points away from it); the original then waited forever, stalling
-some runs. Here robots steer with :meth:`~dream.RobotHRVO.steer`: a blocked robot keeps to
-its right for a few decisions, so that blocked robots circulate around each other.
+Robots choose their preferred velocity, step aside and count arrivals with the shared rules
+of :mod:`dream.rules` (the per-robot :class:`CircleRobot` and the swarm loop :func:`run_batch`
+call the same functions):
 
-For N > 10 the circle grows so that neighbouring goals stay at least 0.3 m apart (with 50
-robots on the original 0.85 m circle they would be 0.107 m apart, closer than a robot's
-diameter), and the arena grows with it when the circle no longer fits the Robotarium.
+- Roundabout. HRVO alone leaves the robots that cross through the centre from every side
+  circling or frozen there: each meets a wall of robots head-on, and symmetric crowds have no
+  way out. The centre is therefore an island (half the ring's size) that every robot keeps on
+  its left: a robot whose straight way passes through it aims past the island's
+  counter-clockwise tangent point, so the robots merge into one stream turning the same way.
+- Side-step. A robot that HRVO stops while it wants to move keeps to its right for a few
+  decisions (:meth:`~dream.RobotHRVO.steer`), so blocked robots circulate around each other.
+- Settling. Near its goal a robot slows down in proportion to the distance left, so that it
+  settles on the goal rather than anywhere within the tolerance.
+
+Up to 10 robots use the thesis's circle (radius 0.85 m) and safety radius (0.24 m). Beyond,
+the goals lie equally spaced along the ellipse that fills the arena. A Fast arena grows with
+the ring once goals would be closer than 0.34 m, keeping the thesis's safety radius (and
+then leaves a corridor around the ring); the real Robotarium's cannot, so there the goals
+close up and the safety radius shrinks with them. Robots within the arrival tolerance
+of neighbouring goals must not block each other, so the safety radius is at most the
+spacing less twice the tolerance; it must stay a robot's diameter plus a margin, so
+:func:`circle_layout` refuses more robots than the Robotarium's ring holds that way (30).
+With goals closer than that (the thesis's 0.85 m circle beyond 17 robots, or 50 robots on
+the largest ellipse, 0.155 m apart) the robots that park first wall in the others.
 """
 
 from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from dream import kernels
+from dream import kernels, rules
 from dream.backends import make_robotarium
 from dream.experiments.result import ExperimentResult
 from dream.experiments.spec import Experiment
@@ -37,32 +54,140 @@ from dream.timers import create_timer
 
 NAME = "hrvo-circle"
 CIRCLES = 3
+THESIS_N = 10  #: up to this many robots, the thesis's circle and parameters
 RADIUS = 0.85  #: the thesis's circle (m)
-GOAL_SPACING = 0.3  #: least distance between neighbouring goals (m)
+SAFETY = 0.24  #: the thesis's combined safety radius (m)
 ARRIVAL = 0.05  #: a robot within this distance of its goal has arrived (m)
+GOAL_SPACING = SAFETY + 2 * ARRIVAL  #: goal spacing a grown arena keeps (m)
+EDGE = 0.08  #: distance from the ring's ends to the walls when the ring fills the arena (m)
+MIN_SAFETY = GRITSBOT.diameter + 0.04  #: the least safety radius: a robot's diameter plus a margin (m)
+CORRIDOR = 2 * SAFETY  #: free width between the ring and the walls of a grown arena (m)
+ISLAND = 0.5  #: the roundabout's island, as a fraction of the ring (see dream.rules.roundabout_aim)
+APPROACH_GAIN = 1.0  #: preferred speed per metre left to the goal near it (1/s)
+SIDESTEP_UPDATES = 10  #: decisions a blocked robot steps aside for
+
+
+@dataclass(frozen=True)
+class CircleLayout:
+    """Where the goals are and the parameters that follow from their spacing.
+
+    Attributes
+    ----------
+    goals : (n, 2) ndarray
+        Each robot's first goal (m); its second is the point reflection ``-goals``.
+    semi_axes : (float, float)
+        Semi-axes of the ring the goals lie on (m); equal for a circle.
+    spacing : float
+        Least distance between neighbouring goals (m).
+    safety : float
+        Combined safety radius of HRVO (m).
+    arena : ArenaSpec
+    """
+
+    goals: np.ndarray
+    semi_axes: tuple[float, float]
+    spacing: float
+    safety: float
+    arena: ArenaSpec
+
+
+def circle_layout(n: int, grow: bool = True) -> CircleLayout:
+    """The goals, safety radius and arena for ``n`` robots.
+
+    Up to :data:`THESIS_N` robots: the thesis's circle of radius 0.85 m in the Robotarium arena
+    with safety radius 0.24 m. Beyond, the goals lie on the ellipse that fills the arena (its
+    ends :data:`EDGE` from the walls), equally spaced along it; antipodes stay point
+    reflections through the centre. If ``grow``, the arena and the ring grow together when
+    neighbouring goals would be closer than :data:`GOAL_SPACING`; else (the real Robotarium,
+    whose arena cannot grow) the goals close up. The safety radius is the thesis's, or the
+    spacing less twice the arrival tolerance if smaller (so that robots anywhere within the
+    tolerance of neighbouring goals do not block each other).
+
+    Raises
+    ------
+    ValueError
+        If ``n`` is negative, or the fixed arena cannot hold ``n`` robots on its ring (their
+        safety radius would fall below :data:`MIN_SAFETY`).
+    """
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+        raise ValueError(f"the number of robots `n` must be an integer >= 0, got {n!r}")
+    if n <= THESIS_N:
+        angles = 2 * np.pi * np.arange(n) / max(n, 1)
+        goals = RADIUS * np.column_stack((np.cos(angles), np.sin(angles)))
+        return CircleLayout(goals, (RADIUS, RADIUS), _least_gap(goals), SAFETY, ROBOTARIUM)
+    semi_axes = (ROBOTARIUM.width / 2 - EDGE, ROBOTARIUM.height / 2 - EDGE)
+    goals = _ellipse_points(n, *semi_axes)
+    spacing = _least_gap(goals)
+    scale = max(1.0, GOAL_SPACING / spacing) if grow else 1.0
+    # Two robots anywhere within the arrival tolerance of neighbouring goals must not block
+    # each other: HRVO keeps them a safety radius apart.
+    safety = min(SAFETY, scale * spacing - 2 * ARRIVAL)
+    if safety < MIN_SAFETY:
+        most = circle_capacity()
+        raise ValueError(
+            f"n={n} robots do not fit on the ring of the {ROBOTARIUM.width} x {ROBOTARIUM.height} m arena: "
+            f"their goals would be {spacing:.3f} m apart, less than the {MIN_SAFETY + 2 * ARRIVAL:.2f} m "
+            f"that robots of diameter {GRITSBOT.diameter} m need to reach neighbouring goals (within "
+            f"{ARRIVAL} m) keeping a safety radius of {MIN_SAFETY:.2f} m; "
+            f"at most {most} robots fit (or use a backend whose arena can grow)"
+        )
+    # A grown arena leaves a corridor around the ring, so that robots starting outside it can
+    # reach any goal without passing between robots already parked at theirs.
+    extra = 0.0 if scale == 1.0 else 2 * CORRIDOR
+    arena = ArenaSpec.centred(ROBOTARIUM.width * scale + extra, ROBOTARIUM.height * scale + extra)
+    ring = (scale * semi_axes[0], scale * semi_axes[1])
+    return CircleLayout(scale * goals, ring, scale * spacing, safety, arena)
+
+
+def circle_capacity() -> int:
+    """The most robots the Robotarium arena's ring holds (see :func:`circle_layout`)."""
+    a, b = ROBOTARIUM.width / 2 - EDGE, ROBOTARIUM.height / 2 - EDGE
+    n = int(_ellipse_arc(a, b)[1][-1] / (MIN_SAFETY + 2 * ARRIVAL)) + 1  # chords are shorter than arcs
+    while n > THESIS_N and _least_gap(_ellipse_points(n, a, b)) < MIN_SAFETY + 2 * ARRIVAL:
+        n -= 1
+    return n
 
 
 def circle_radius(n: int, grow: bool = True) -> float:
-    """The thesis's 0.85 m, grown (unless ``grow`` is false) so that neighbouring goals are
-    >= 0.3 m apart."""
-    return RADIUS if n < 2 or not grow else max(RADIUS, GOAL_SPACING / (2 * math.sin(math.pi / n)))
+    """The ring's larger semi-axis (m): the circle's radius up to :data:`THESIS_N` robots."""
+    return circle_layout(n, grow).semi_axes[0]
 
 
 def circle_arena(n: int, grow: bool = True) -> ArenaSpec:
-    """The Robotarium arena while the circle fits in it, else a larger arena of its shape."""
-    radius = circle_radius(n, grow)
-    if radius <= RADIUS:
-        return ROBOTARIUM
-    scale = radius / RADIUS
-    return ArenaSpec.centred(ROBOTARIUM.width * scale, ROBOTARIUM.height * scale)
+    """The Robotarium arena while it holds the ring, else a larger arena of its shape."""
+    return circle_layout(n, grow).arena
 
 
 def circle_goals(n: int, grow: bool = True) -> np.ndarray:
-    """Goals ``(n, 3, 2)``: robot i's point on the circle, its antipode, then the point again."""
-    radius = circle_radius(n, grow)
-    angles = 2 * np.pi * np.arange(n) / max(n, 1)
-    here = radius * np.column_stack((np.cos(angles), np.sin(angles)))
+    """Goals ``(n, 3, 2)``: robot i's point on the ring, its antipode, then the point again."""
+    here = circle_layout(n, grow).goals
     return np.stack((here, -here, here), axis=1)
+
+
+def _least_gap(points: np.ndarray) -> float:
+    """Least distance between consecutive points of a closed ring ``(n, 2)`` (inf below 2)."""
+    if len(points) < 2:
+        return math.inf
+    return float(np.hypot(*(points - np.roll(points, 1, axis=0)).T).min())
+
+
+def _ellipse_arc(a: float, b: float) -> tuple[np.ndarray, np.ndarray]:
+    """Parameter angles ``t`` and the arc length from (a, 0) to each, finely sampled."""
+    t = np.linspace(0.0, 2 * np.pi, 8193)
+    arc = np.concatenate(([0.0], np.cumsum(np.hypot(np.diff(a * np.cos(t)), np.diff(b * np.sin(t))))))
+    return t, arc
+
+
+def _ellipse_points(n: int, a: float, b: float) -> np.ndarray:
+    """``n`` points ``(n, 2)`` equally spaced by arc length on the ellipse of semi-axes (a, b),
+    the first at (a, 0).
+
+    Equal arc length keeps the set centrally symmetric: the arc from a point to its
+    reflection is half the perimeter, whatever the point.
+    """
+    t, arc = _ellipse_arc(a, b)
+    at = np.interp(arc[-1] * np.arange(n) / n, arc, t)
+    return np.column_stack((a * np.cos(at), b * np.sin(at)))
 
 
 class CircleRobot(RobotHRVO):
@@ -70,9 +195,32 @@ class CircleRobot(RobotHRVO):
 
     Callbacks: :meth:`update_odom` (odometry), :meth:`update_sensor` (movement sensor),
     :meth:`update_radio` (range radio) and :meth:`update` (the controller, writes ``dxu``).
+
+    Parameters
+    ----------
+    goals : (3, 2) array_like
+        Its goals in order (m).
+    n : int
+        Number of robots (the length of its state vector).
+    semi_axes : (float, float), optional
+        The ring's semi-axes (m), which size the roundabout; default: :func:`circle_layout`'s.
+    island : float
+        The roundabout's island as a fraction of the ring (0: go straight).
+    **kwargs
+        Passed to :class:`~dream.RobotHRVO` (e.g. ``safety``, ``arena``).
     """
 
-    def __init__(self, robot_id: int, tag: str, goals: np.ndarray, n: int, **kwargs: Any) -> None:
+    def __init__(
+        self,
+        robot_id: int,
+        tag: str,
+        goals: np.ndarray,
+        n: int,
+        *,
+        semi_axes: tuple[float, float] | None = None,
+        island: float = ISLAND,
+        **kwargs: Any,
+    ) -> None:
         super().__init__(robot_id, tag, **kwargs)
         self.goals = np.asarray(goals, dtype=np.float64)
         self.current_goal = self.goals[0]
@@ -80,28 +228,31 @@ class CircleRobot(RobotHRVO):
         self.state = 0  # goals reached so far
         self.change_state = True  # the current goal has not been reached yet
         self.desired_velocity = np.zeros(2)
+        self.semi_axes = circle_layout(n).semi_axes if semi_axes is None else semi_axes
+        self.island = island
 
     def update_radio(self, messages: list[list[int]]) -> list[int]:
         for states in messages:
             self.robot_states = [max(mine, theirs) for mine, theirs in zip(self.robot_states, states)]
         self.robot_states[self.robot_id] = self.state
-        if self.state < len(self.goals) and all(s == self.state for s in self.robot_states):
+        level = all(s == self.state for s in self.robot_states)
+        if rules.moves_on(self.state, level, self.change_state, len(self.goals)):
             self.current_goal = self.goals[self.state]
             self.change_state = True
         return self.robot_states
 
     def update(self, dxu: np.ndarray) -> None:
         if self.has_pose:
-            offset = self.current_goal - (self.pos_x, self.pos_y)
-            distance = math.hypot(offset[0], offset[1])
-            if distance < ARRIVAL:
-                self.desired_velocity = np.zeros(2)
-                if self.change_state:
-                    self.state += 1
-                    self.change_state = False
-            else:
-                self.desired_velocity = self.v_max * offset / distance
-        self.steer(self.detections, self.desired_velocity)
+            position = np.array([self.pos_x, self.pos_y])
+            _, reached = rules.arrival(position, self.current_goal, self.change_state, ARRIVAL)
+            if reached:
+                self.state += 1
+                self.change_state = False
+            aim = rules.roundabout_aim(position, self.current_goal, self.semi_axes, self.island)
+            self.desired_velocity = rules.preferred_velocity(
+                position, aim, self.current_goal, self.v_max, APPROACH_GAIN
+            )
+        self.steer(self.detections, self.desired_velocity, SIDESTEP_UPDATES)
         self.command(dxu)
 
 
@@ -123,8 +274,14 @@ def circle_frame(step: int, sim: Any, robots: list[CircleRobot], radio_range: fl
 
 
 def default_steps(n: int) -> int:
-    """An iteration cap that every seed finishes well within (the run stops when done)."""
-    return 4000 + 40 * n
+    """An iteration cap that every seed finishes well within (the run stops when done).
+
+    Three crossings of the ring take about ``520 (a + b)`` steps at full speed (``a``, ``b``
+    its semi-axes in m, roundabout included); the cap allows three times that, plus the
+    start and the radio rounds.
+    """
+    a, b = circle_layout(n).semi_axes
+    return 4000 + int(1500 * (a + b))
 
 
 class HrvoCircle(Experiment):
@@ -135,17 +292,26 @@ class HrvoCircle(Experiment):
     success = "every robot finishes the third circle with zero collisions, boundary and actuator violations"
 
     def check(self, n: int, backend: str) -> None:
-        # On the real Robotarium the arena cannot grow: keep the thesis's circle (beyond 17
-        # robots its goals are closer than a robot's diameter, so the robots cannot all arrive).
+        # On the real Robotarium the arena cannot grow: the goals close up instead (circle_layout,
+        # which refuses more robots than the ring holds).
         self.grow = backend != "robotarium"
+        self.layout = circle_layout(n, self.grow)
 
     def arena_for(self, n: int) -> ArenaSpec:
-        return circle_arena(n, self.grow)
+        return self.layout.arena
 
     def build(self, n: int) -> None:
         goals = circle_goals(n, self.grow)
         for i in range(n):
-            robot = CircleRobot(i, f"robot_{i}", goals[i], n, arena=self.arena)
+            robot = CircleRobot(
+                i,
+                f"robot_{i}",
+                goals[i],
+                n,
+                semi_axes=self.layout.semi_axes,
+                safety=self.layout.safety,
+                arena=self.arena,
+            )
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             movement = MovementSensor(i, f"movement_{i}", robot.update_sensor)
             radio = RangeRadio(i, f"radio_{i}", robot.update_radio)
@@ -168,9 +334,9 @@ class HrvoCircle(Experiment):
         return all(robot.state >= CIRCLES for robot in self.robots)
 
     def measures(self) -> dict[str, Any]:
-        """``circles_completed`` (by every robot) and the circle radius (m)."""
+        """``circles_completed`` (by every robot) and ``circle_radius``, the ring's larger semi-axis (m)."""
         circles = min((r.state for r in self.robots), default=CIRCLES)
-        return {"circles_completed": circles, "circle_radius": circle_radius(self.n, self.grow)}
+        return {"circles_completed": circles, "circle_radius": self.layout.semi_axes[0]}
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
         return circle_frame(step, self.sim, self.robots)
@@ -189,8 +355,9 @@ def run_batch(
 ) -> ExperimentResult:
     """The circle experiment for very large swarms: whole-swarm kernel calls every step.
 
-    The same behaviour as :func:`run` (goals, arrival, HRVO with the same parameters, stepping
-    aside when blocked, progress spread by range radio every ``radio_gap`` steps), on the Fast
+    The same behaviour as :func:`run` (the same layout and HRVO parameters, and the decision
+    rules of :mod:`dream.rules` that :class:`CircleRobot` calls: arrival, roundabout, settling,
+    stepping aside; progress spread by range radio every ``radio_gap`` steps), on the Fast
     backend, but every robot decides every step through one :func:`dream.kernels.hrvo` call.
     Each robot's progress vector becomes a bitset: the robots it knows to have reached at
     least its own number of goals (n^2 / 8 bytes in all, merged by bitwise OR over radio
@@ -199,10 +366,10 @@ def run_batch(
     velocities are their last chosen velocities.
     """
     cap = default_steps(n) if steps is None else steps
+    layout = circle_layout(n)
     goals = circle_goals(n)
-    arena = circle_arena(n)
-    bounds = arena.shrunk(GRITSBOT.radius)
-    sim = make_robotarium(n, "fast", arena=arena, seed=seed)
+    bounds = layout.arena.shrunk(GRITSBOT.radius)
+    sim = make_robotarium(n, "fast", arena=layout.arena, seed=seed)
     everyone = np.arange(n)
     state = np.zeros(n, dtype=np.int64)  # goals reached
     heading_for = np.zeros(n, dtype=np.int64)  # index of the goal being approached
@@ -218,28 +385,23 @@ def run_batch(
     for t in range(cap):
         x = sim.get_poses()
         p = x[:2].T
-        offset = goals[everyone, heading_for] - p
-        distance = np.hypot(offset[:, 0], offset[:, 1])
-        arrived = distance < ARRIVAL
-        reached = arrived & unreached
+        goal = goals[everyone, heading_for]
+        arrived, reached = rules.arrival(p, goal, unreached, ARRIVAL)
         state += reached
         unreached &= ~arrived
         known[reached] = 0  # a new level: start over from itself
         known[reached, everyone[reached] // 8] = 128 >> (everyone[reached] % 8)
         if t % radio_gap == 0:
             _merge_known(known, state, p)
-            moving_on = (known == full).all(axis=1) & (state < CIRCLES) & ~unreached
+            moving_on = rules.moves_on(state, (known == full).all(axis=1), unreached, CIRCLES)
             heading_for[moving_on] = state[moving_on]
             unreached |= moving_on
-        desired = np.where(arrived[:, None], 0.0, offset * (GRITSBOT.v_max / np.maximum(distance, 1e-12))[:, None])
-        aside = sidestep > 0
-        turned = side[:, None] * np.column_stack((desired[:, 1], -desired[:, 0]))
-        wanted = np.where(aside[:, None], turned, desired)
-        sidestep = np.maximum(sidestep - 1, 0)
-        dxi = kernels.hrvo(p, dxi, wanted, radius=1.0, bounds=bounds)
-        blocked = ~dxi.any(axis=1) & desired.any(axis=1)
-        side[blocked] = np.where(aside[blocked], -side[blocked], 1.0)  # as RobotHRVO.steer
-        sidestep[blocked] = 10
+            goal = goals[everyone, heading_for]
+        aim = rules.roundabout_aim(p, goal, layout.semi_axes, ISLAND)
+        desired = rules.preferred_velocity(p, aim, goal, GRITSBOT.v_max, APPROACH_GAIN)
+        wanted, sidestep = rules.sidestep_preference(desired, sidestep, side)
+        dxi = kernels.hrvo(p, dxi, wanted, radius=1.0, safety=layout.safety, bounds=bounds)
+        sidestep, side = rules.sidestep_update(dxi, desired, sidestep, side, SIDESTEP_UPDATES)
         sim.set_velocities(everyone, kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, x)))
         sim.step()
         if progress is not None:
@@ -248,7 +410,7 @@ def run_batch(
             done_at = t + 1
             break
     wall = time.perf_counter() - start
-    measures = {"circles_completed": int(state.min(initial=CIRCLES)), "circle_radius": circle_radius(n)}
+    measures = {"circles_completed": int(state.min(initial=CIRCLES)), "circle_radius": layout.semi_axes[0]}
     return ExperimentResult.from_backend(NAME + " (batch)", seed, sim, done_at, wall, measures)
 
 

@@ -1,0 +1,185 @@
+"""Decision rules shared by the per-robot classes and the whole-swarm (batch) loops.
+
+Each rule is a small vectorised function: the same code decides for one robot (arrays of
+shape ``(2,)`` or ``(1, 2)``, scalars for its counters) and for a whole swarm (``(n, 2)``,
+``(n,)``). A per-robot controller calls a rule with its own values; a swarm loop calls it once
+with every robot's; so the two modes cannot drift apart. Every rule is distributed: it uses
+only what one robot knows (its position, its goal, its counters) and fixed, shared parameters.
+
+Units: metres, metres per second.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from dream._checks import FloatArray
+
+#: Angle (rad) the roundabout aims ahead of the island's tangent point, so that a robot on
+#: the island's edge still has somewhere to go.
+ROUNDABOUT_LEAD = np.pi / 6
+
+
+def arrival(positions: Any, goals: Any, unreached: Any, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
+    """Which robots are at their goal, and which of them reached it just now.
+
+    Parameters
+    ----------
+    positions, goals : (n, 2) or (2,) array_like
+        Where the robots are and where they are heading (m).
+    unreached : (n,) or () bool array_like
+        Whether each robot's current goal has not been counted as reached yet.
+    tolerance : float
+        A robot closer than this to its goal has arrived (m).
+
+    Returns
+    -------
+    arrived, reached : (n,) or () bool ndarray
+        ``arrived``: within ``tolerance``; ``reached``: arrived and not counted before (the
+        robot raises its state once, then clears ``unreached``).
+    """
+    offset = np.asarray(goals, dtype=np.float64) - np.asarray(positions, dtype=np.float64)
+    arrived = np.hypot(offset[..., 0], offset[..., 1]) < tolerance
+    return arrived, arrived & np.asarray(unreached, dtype=bool)
+
+
+def moves_on(state: Any, everyone_level: Any, unreached: Any, n_goals: int) -> np.ndarray:
+    """Whether a robot heads for its next goal: it has reached its current one, it knows that
+    every robot has reached as many goals as itself (``everyone_level``), and goals remain."""
+    state = np.asarray(state)
+    return np.asarray(everyone_level, dtype=bool) & (state < n_goals) & ~np.asarray(unreached, dtype=bool)
+
+
+def roundabout_aim(positions: Any, goals: Any, semi_axes: tuple[float, float], island: float) -> FloatArray:
+    """The point a robot aims at so that every robot turns the same way around the centre.
+
+    HRVO alone lets robots that cross through the centre from all sides meet head-on and
+    freeze or circle there. Here the centre is an island, an ellipse of ``island`` times
+    ``semi_axes`` about the origin, that every robot keeps on its left (counter-clockwise
+    traffic): a robot whose straight way to its goal passes through the island aims instead
+    at the island's edge just past its counter-clockwise tangent point. Robots then merge into
+    one stream around the centre, leaving it when the goal comes into view, instead of facing
+    each other. A robot inside the island that heads outwards goes straight to its goal.
+
+    The tangents are computed after scaling the ellipse to a circle: a linear map keeps lines,
+    tangency and the sense of rotation.
+
+    Parameters
+    ----------
+    positions, goals : (n, 2) or (2,) array_like
+        Positions and goals (m), relative to the arena's centre at the origin.
+    semi_axes : (float, float)
+        Semi-axes ``(a, b)`` of the goals' ring (m); the island is ``island * (a, b)``.
+    island : float
+        The island's size as a fraction of the ring, in [0, 1); 0 turns the rule off.
+
+    Returns
+    -------
+    (n, 2) or (2,) ndarray
+        The point to head for (m): the goal, or a point on the island's edge.
+    """
+    scale = np.asarray(semi_axes, dtype=np.float64)
+    q = np.asarray(positions, dtype=np.float64) / scale
+    g = np.asarray(goals, dtype=np.float64) / scale
+    way = g - q
+    length2 = np.maximum(np.sum(way * way, axis=-1), 1e-300)
+    # Closest approach to the centre along the way, only if it lies ahead of the robot.
+    t = -np.sum(q * way, axis=-1) / length2
+    closest = q + np.clip(t, 0.0, 1.0)[..., None] * way
+    crosses = (t > 0.0) & (np.hypot(closest[..., 0], closest[..., 1]) < island)
+    r = np.hypot(q[..., 0], q[..., 1])
+    # The counter-clockwise tangent point from q is acos(island / r) past q's own angle.
+    turn = np.arccos(np.minimum(island / np.maximum(r, 1e-300), 1.0)) + ROUNDABOUT_LEAD
+    angle = np.arctan2(q[..., 1], q[..., 0]) + turn
+    edge = island * np.stack((np.cos(angle), np.sin(angle)), axis=-1)
+    return np.where(crosses[..., None], edge, g) * scale
+
+
+def preferred_velocity(positions: Any, aims: Any, goals: Any, v_max: float, gain: float) -> FloatArray:
+    """Towards ``aims``, at a speed that falls in proportion to the distance left to ``goals``.
+
+    Slowing down near the goal lets a robot settle on it instead of stopping anywhere within
+    the arrival tolerance, where, off towards a neighbour's goal, it could keep that neighbour
+    from arriving.
+
+    Parameters
+    ----------
+    positions, aims, goals : (n, 2) or (2,) array_like
+        Positions, the points the robots head for now, and their goals (m).
+    v_max : float
+        Top speed (m/s).
+    gain : float
+        Speed per metre left to the goal (1/s) below ``v_max``.
+
+    Returns
+    -------
+    (n, 2) or (2,) ndarray
+        Preferred single-integrator velocities (m/s); zero at the goal.
+    """
+    p = np.asarray(positions, dtype=np.float64)
+    offset = np.asarray(aims, dtype=np.float64) - p
+    left = np.asarray(goals, dtype=np.float64) - p
+    distance = np.hypot(offset[..., 0], offset[..., 1])
+    speed = np.minimum(v_max, gain * np.hypot(left[..., 0], left[..., 1]))
+    return offset * np.where(distance > 0.0, speed / np.maximum(distance, 1e-300), 0.0)[..., None]
+
+
+def sidestep_preference(desired: Any, sidestep: Any, side: Any) -> tuple[FloatArray, np.ndarray]:
+    """The velocity a robot asks HRVO for, and its side-step counter after this decision.
+
+    A robot with ``sidestep`` decisions left stepping aside asks for its desired velocity
+    turned by -90 degrees times ``side`` (1: to its right, -1: to its left).
+
+    Parameters
+    ----------
+    desired : (n, 2) or (2,) array_like
+        Velocity towards the goal (m/s).
+    sidestep : (n,) or () int array_like
+        Decisions left stepping aside.
+    side : (n,) or () float array_like
+        1.0 or -1.0.
+
+    Returns
+    -------
+    wanted : (n, 2) or (2,) ndarray
+        Velocity to ask HRVO for (m/s).
+    sidestep : (n,) or () int ndarray
+        The counter, one decision fewer.
+    """
+    desired = np.asarray(desired, dtype=np.float64)
+    sidestep = np.asarray(sidestep)
+    right = np.stack((desired[..., 1], -desired[..., 0]), axis=-1)
+    aside = (sidestep > 0)[..., None]
+    wanted = np.where(aside, np.asarray(side, dtype=np.float64)[..., None] * right, desired)
+    return wanted, np.maximum(sidestep - 1, 0)
+
+
+def sidestep_update(chosen: Any, desired: Any, sidestep: Any, side: Any, updates: int) -> tuple[np.ndarray, np.ndarray]:
+    """The side-step counter and side after HRVO chose ``chosen``.
+
+    HRVO stops a robot whose way is blocked by a robot within the safety radius (every free
+    velocity points away from its goal). A robot that wants to move but got the zero velocity
+    steps aside to its right for the next ``updates`` decisions; blocked again while still
+    stepping aside (by a wall, say), it turns to the other side. Robots that all turn the same
+    way circulate around each other instead of facing off.
+
+    Parameters
+    ----------
+    chosen, desired : (n, 2) or (2,) array_like
+        HRVO's velocity and the velocity towards the goal (m/s).
+    sidestep, side : (n,) or () array_like
+        The counter after :func:`sidestep_preference`, and the side (1.0 or -1.0).
+    updates : int
+        Decisions to step aside for.
+
+    Returns
+    -------
+    sidestep, side : (n,) or () ndarray
+    """
+    blocked = ~np.any(chosen, axis=-1) & np.any(desired, axis=-1)
+    sidestep = np.asarray(sidestep)
+    side = np.asarray(side, dtype=np.float64)
+    new_side = np.where(blocked, np.where(sidestep > 0, -side, 1.0), side)
+    return np.where(blocked, updates, sidestep), new_side

@@ -1,0 +1,131 @@
+"""hrvo-circle beyond the thesis's ten robots: completion, refusal, and the shared rules."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+from dream import rules
+from dream.experiments import hrvo_circle
+
+
+def assert_clean_completion(result):
+    assert result.measures["circles_completed"] == hrvo_circle.CIRCLES
+    assert result.completed_step is not None and result.steps == result.completed_step
+    assert result.collisions == 0 and result.boundary == 0 and result.actuator == 0
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_hrvo_circle_twenty_robots_complete_on_rps(seed):
+    result = hrvo_circle.run(n=20, seed=seed, backend="robotarium")
+    assert result.backend == "robotarium"
+    assert_clean_completion(result)
+
+
+@pytest.mark.skipif(os.environ.get("DREAM_PURE_PYTHON") == "1", reason="the largest case: too slow with NumPy HRVO")
+def test_hrvo_circle_hundred_robots_complete_on_fast():
+    result = hrvo_circle.run(n=100, seed=0, backend="fast")
+    assert result.backend == "fast"
+    assert_clean_completion(result)
+
+
+def test_hrvo_circle_batch_mode_completes_a_large_swarm():
+    assert_clean_completion(hrvo_circle.run_batch(n=40, seed=0))
+
+
+def test_hrvo_circle_refuses_more_robots_than_the_robotarium_ring_holds():
+    most = hrvo_circle.circle_capacity()
+    assert 20 < most < 50  # rps's own limit is 50 robots
+    assert hrvo_circle.circle_layout(most, grow=False).safety >= hrvo_circle.MIN_SAFETY  # the limit is accepted
+    with pytest.raises(ValueError, match=rf"n={most + 1} robots do not fit .* at most {most} robots"):
+        hrvo_circle.run(n=most + 1, backend="robotarium")
+    with pytest.raises(ValueError, match="n=50 robots do not fit"):
+        hrvo_circle.run(n=50, backend="robotarium")
+    assert hrvo_circle.circle_layout(most + 1, grow=True).arena.width > 3.2  # Fast grows instead
+    with pytest.raises(ValueError, match="`n` must be an integer >= 0"):
+        hrvo_circle.circle_layout(-1)
+
+
+@pytest.mark.parametrize(("n", "grow"), [(10, False), (20, False), (30, False), (120, True)])
+def test_hrvo_circle_layout_keeps_goals_reachable(n, grow):
+    layout = hrvo_circle.circle_layout(n, grow)
+    goals = layout.goals
+    gaps = np.hypot(*(goals - np.roll(goals, 1, axis=0)).T)
+    assert gaps.min() == pytest.approx(layout.spacing)
+    assert hrvo_circle.MIN_SAFETY <= layout.safety <= min(hrvo_circle.SAFETY, layout.spacing - 2 * hrvo_circle.ARRIVAL)
+    a, b = layout.semi_axes
+    np.testing.assert_allclose((goals[:, 0] / a) ** 2 + (goals[:, 1] / b) ** 2, 1.0, atol=1e-9)
+    xmin, xmax, ymin, ymax = layout.arena.shrunk(hrvo_circle.EDGE * 0.99)
+    assert np.all((goals[:, 0] > xmin) & (goals[:, 0] < xmax) & (goals[:, 1] > ymin) & (goals[:, 1] < ymax))
+    if n % 2 == 0:  # antipodes are other robots' goals: the point set is centrally symmetric
+        np.testing.assert_allclose(np.roll(goals, n // 2, axis=0), -goals, atol=1e-6)
+
+
+def test_roundabout_keeps_the_centre_on_the_left():
+    semi_axes = (1.5, 0.9)
+    start = np.array([[1.5, 0.0], [-1.5, 0.0], [0.0, 0.9], [1.2, 0.0]])
+    goal = np.array([[-1.5, 0.0], [1.5, 0.0], [0.0, -0.9], [1.5, 0.0]])
+    aim = rules.roundabout_aim(start, goal, semi_axes, 0.5)
+    way = aim - start
+    cross = start[:, 0] * way[:, 1] - start[:, 1] * way[:, 0]  # > 0: counter-clockwise about the centre
+    assert np.all(cross[:3] > 0)
+    np.testing.assert_array_equal(aim[3], goal[3])  # a clear way goes straight
+    np.testing.assert_array_equal(rules.roundabout_aim(start, goal, semi_axes, 0.0), goal)  # no island
+
+
+def test_rules_decide_the_same_for_one_robot_and_for_the_swarm(rng):
+    n = 40
+    positions = rng.uniform(-1.5, 1.5, (n, 2))
+    goals = rng.uniform(-1.5, 1.5, (n, 2))
+    goals[:3] = positions[:3]  # some robots at their goal
+    unreached = rng.random(n) < 0.5
+    sidestep = rng.integers(0, 3, n)
+    side = rng.choice([-1.0, 1.0], n)
+    chosen = np.where((rng.random(n) < 0.5)[:, None], 0.0, rng.normal(size=(n, 2)))
+
+    arrived, reached = rules.arrival(positions, goals, unreached, 0.05)
+    aim = rules.roundabout_aim(positions, goals, (1.5, 0.9), 0.5)
+    desired = rules.preferred_velocity(positions, aim, goals, 0.2, 1.0)
+    wanted, counter = rules.sidestep_preference(desired, sidestep, side)
+    after, new_side = rules.sidestep_update(chosen, desired, counter, side, 10)
+    for i in range(n):
+        one_arrived, one_reached = rules.arrival(positions[i], goals[i], unreached[i], 0.05)
+        assert (one_arrived, one_reached) == (arrived[i], reached[i])
+        one_aim = rules.roundabout_aim(positions[i], goals[i], (1.5, 0.9), 0.5)
+        np.testing.assert_allclose(one_aim, aim[i], rtol=0, atol=1e-15)
+        one_desired = rules.preferred_velocity(positions[i], one_aim, goals[i], 0.2, 1.0)
+        np.testing.assert_allclose(one_desired, desired[i], rtol=0, atol=1e-15)
+        one_wanted, one_counter = rules.sidestep_preference(one_desired, sidestep[i], side[i])
+        np.testing.assert_allclose(one_wanted, wanted[i], rtol=0, atol=1e-15)
+        one_after, one_side = rules.sidestep_update(chosen[i], one_desired, one_counter, side[i], 10)
+        assert (one_counter, one_after, one_side) == (counter[i], after[i], new_side[i])
+    speed = np.hypot(*desired.T)
+    assert np.all(speed <= 0.2 + 1e-12) and np.all(speed[:3] == 0)
+    assert np.all(after[~chosen.any(axis=1) & desired.any(axis=1)] == 10)  # blocked robots step aside
+
+
+def test_circle_robot_decides_as_the_swarm_rules_do(rng):
+    # The per-robot and batch modes differ by design in timing (robots decide on their own
+    # timers; the batch decides every step) and in what a robot knows of its neighbours'
+    # velocities, so their trajectories part. What they share is every decision rule: given the
+    # same pose, goal and counters, a CircleRobot asks HRVO for what the swarm rules give.
+    n = 6
+    layout = hrvo_circle.circle_layout(n)
+    goals = hrvo_circle.circle_goals(n)
+    poses = np.vstack((rng.uniform(-1.2, 1.2, (2, n)), rng.uniform(-np.pi, np.pi, n)))
+    sidestep = np.array([0, 3, 0, 1, 0, 2])
+    side = np.array([1.0, -1.0, 1.0, 1.0, -1.0, 1.0])
+    asked = np.zeros((n, 2))
+    for i in range(n):
+        robot = hrvo_circle.CircleRobot(i, f"r{i}", goals[i], n, semi_axes=layout.semi_axes, safety=layout.safety)
+        robot.update_odom(poses[:, i])
+        robot.sidestep, robot.side = int(sidestep[i]), float(side[i])
+        robot.HRVO = lambda detections, wanted, i=i: asked.__setitem__(i, wanted) or np.zeros(2)  # record the ask
+        robot.update(np.zeros((2, n)))
+    p = poses[:2].T
+    aim = rules.roundabout_aim(p, goals[:, 0], layout.semi_axes, hrvo_circle.ISLAND)
+    desired = rules.preferred_velocity(p, aim, goals[:, 0], 0.2, hrvo_circle.APPROACH_GAIN)
+    wanted, _ = rules.sidestep_preference(desired, sidestep, side)
+    np.testing.assert_allclose(asked, wanted, rtol=0, atol=1e-15)
