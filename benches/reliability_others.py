@@ -22,9 +22,8 @@ import sys
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
-from harness import table
-
 import dream
+from harness import table
 
 #: name -> (experiment, its parameters)
 CASES: dict[str, tuple[str, dict[str, Any]]] = {
