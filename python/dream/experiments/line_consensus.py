@@ -207,7 +207,7 @@ class LineConsensus(Experiment):
     def steps(self, n: int) -> int:
         """3000 in the Robotarium; beyond, 3000 plus twice the time the robot farthest from its
         place needs at full speed (half the line plus half the start block away)."""
-        if self.arena == ROBOTARIUM:
+        if self.arena_for(n) == ROBOTARIUM:
             return 3000
         travel = (n - 1) * self.spacing / 2 + start_grid(n)[0] * START_SPACING / 2
         return 3000 + math.ceil(2 * travel / (CRUISE * RPS.time_step))
