@@ -157,27 +157,27 @@ class LineRobot(RobotHRVO):
         y = self.target[1] if self.travelling and self.target is not None else self.pos_y
         return (self.robot_id, self.pos_x, y)
 
-    def goal(self) -> np.ndarray:
-        """Where the robot heads now: its target, or, while its place is more than two spacings
-        away along x (until it is within one), its target's x in its own row, at least ``lane``
-        off the line (above it when heading right, below when heading left, if closer)."""
-        assert self.target is not None
-        dx = self.target[0] - self.pos_x
+    def goal(self, target: np.ndarray) -> np.ndarray:
+        """Where the robot heads now, for its consensus ``target`` ``(2,)``: the target itself, or,
+        while its place is more than two spacings away along x (until it is within one), the
+        target's x in its own row, at least ``lane`` off the line (above it when heading right,
+        below when heading left, if closer)."""
+        dx = target[0] - self.pos_x
         if self.lane > 0 and abs(dx) > 2 * self.spacing:
             self.travelling = True
         elif abs(dx) < self.spacing:
             self.travelling = False
         if not self.travelling:
-            return self.target
-        off_line = self.pos_y - self.target[1]
+            return target
+        off_line = self.pos_y - target[1]
         if abs(off_line) < self.lane:
             off_line = math.copysign(self.lane, dx)
-        return np.array([self.target[0], self.target[1] + off_line])
+        return np.array([target[0], target[1] + off_line])
 
     def update(self, dxu: np.ndarray) -> None:
         desired = np.zeros(2)
         if self.has_pose and self.target is not None:
-            desired = GAIN * (self.goal() - (self.pos_x, self.pos_y))
+            desired = GAIN * (self.goal(self.target) - (self.pos_x, self.pos_y))
             speed = math.hypot(desired[0], desired[1])
             if speed > self.v_max:
                 desired *= self.v_max / speed
