@@ -87,8 +87,8 @@ def main(argv: list[str] | None = None) -> None:
     work = [
         (case, size_for(case, n), seed)
         for n in args.sizes
-        for case in args.experiments
         for seed in range(args.large_seeds if n >= LARGE else args.seeds)
+        for case in args.experiments
     ]
     done: dict[tuple[str, int], list[Any]] = {}
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from dream.experiments.line_consensus import settle_or_steer
 from dream.experiments.spec import Experiment
 from dream.frames import Frame
 from dream.obstacles import Obstacle, touching
@@ -175,12 +176,9 @@ class Follower(RobotHRVO):
             speed = math.hypot(desired[0], desired[1])
             if speed > self.v_max:
                 desired *= self.v_max / speed
-        if math.hypot(desired[0], desired[1]) < FINE:
-            # Close to its place: the formation keeps robots >= 0.3 m apart, and velocity
-            # obstacles (no time horizon) would forbid the last centimetres towards a neighbour.
-            self.dxi = desired
-        else:
-            self.steer(self.detections, desired)
+        # Close to its place (the formation keeps robots >= 0.25 m apart) HRVO would forbid the
+        # last centimetres towards a neighbour. The thesis's followers check no clearance.
+        settle_or_steer(self, desired, FINE, clearance=0.0)
         self.command(dxu)
 
 
