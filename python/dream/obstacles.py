@@ -49,19 +49,30 @@ class Obstacle:
         corners = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]) * half
         return self.center + corners @ self._axes().T
 
+    def _local(self, points: Any) -> FloatArray:
+        """``points`` ``(..., 2)`` in the obstacle's frame (centre at the origin, sides along the axes)."""
+        return (np.asarray(points, dtype=np.float64) - self.center) @ self._axes()
+
     def closest_point(self, point: Any) -> FloatArray | None:
         """The point of the obstacle closest to ``point`` ``(2,)``; ``None`` if ``point`` is inside."""
-        axes = self._axes()
-        local = (np.asarray(point, dtype=np.float64) - self.center) @ axes
+        local = self._local(point)
         half = self.size / 2
         if np.all(np.abs(local) < half):
             return None
-        return self.center + axes @ np.clip(local, -half, half)
+        return self.center + self._axes() @ np.clip(local, -half, half)
+
+    def contains(self, points: Any) -> np.ndarray:
+        """Which of ``points`` ``(m, 2)`` lie strictly inside the obstacle, ``(m,)`` bool."""
+        return np.all(np.abs(self._local(points)) < self.size / 2, axis=-1)
+
+    def distances(self, points: Any) -> FloatArray:
+        """Distances ``(m,)`` (m) from ``points`` ``(m, 2)`` to the obstacle (0 inside)."""
+        outside = np.maximum(np.abs(self._local(points)) - self.size / 2, 0.0)
+        return np.hypot(outside[..., 0], outside[..., 1])
 
     def distance(self, point: Any) -> float:
-        """Distance from ``point`` to the obstacle (0 inside)."""
-        closest = self.closest_point(point)
-        return 0.0 if closest is None else float(np.hypot(*(closest - np.asarray(point, dtype=np.float64))))
+        """Distance from ``point`` ``(2,)`` to the obstacle (0 inside)."""
+        return float(self.distances(point))
 
     def step(self, dt: float, arena: ArenaSpec | None = None) -> None:
         """Move by ``velocity * dt``, bouncing off the walls of ``arena`` if one is given."""
@@ -82,6 +93,16 @@ class Obstacle:
 
     def __repr__(self) -> str:
         return f"Obstacle(center={self.center.tolist()}, size={self.size.tolist()}, angle={self.angle}, velocity={self.velocity.tolist()})"
+
+
+def touching(obstacles: list[Obstacle], positions: Any, radius: float) -> np.ndarray:
+    """Which robots ``(n,)`` touch an obstacle: their centre, at ``positions`` ``(n, 2)``, is closer
+    than ``radius`` (m) to one of ``obstacles`` (or inside it)."""
+    points = as_array(positions, "positions", (None, 2))
+    touch = np.zeros(len(points), dtype=bool)
+    for obstacle in obstacles:
+        touch |= obstacle.distances(points) < radius
+    return touch
 
 
 def as_csr(obstacles: list[Obstacle]) -> tuple[FloatArray, np.ndarray]:

@@ -24,9 +24,10 @@ from typing import Any
 
 import numpy as np
 
+from dream.experiments.line_consensus import settle_or_steer
 from dream.experiments.spec import Experiment
 from dream.frames import Frame
-from dream.obstacles import Obstacle
+from dream.obstacles import Obstacle, touching
 from dream.radios import GraphRadio
 from dream.robot import RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
@@ -105,15 +106,19 @@ def tiled_arena(groups: int) -> ArenaSpec:
     return ArenaSpec.centred(columns * ROBOTARIUM.width, math.ceil(groups / columns) * ROBOTARIUM.height)
 
 
-def corner_starts(rng: np.random.Generator, centres: np.ndarray = np.zeros((1, 2))) -> np.ndarray:
-    """Initial poses ``(3, 7 g)``: in each tile, leaders in their triangle and followers in the four corners."""
+def corner_starts(rng: np.random.Generator, centres: np.ndarray | None = None) -> np.ndarray:
+    """Initial poses ``(3, 7 g)``: in each tile (centred at ``centres`` ``(g, 2)``, default one tile
+    at the origin), leaders in their triangle and followers in the four corners."""
+    centres = np.zeros((1, 2)) if centres is None else centres
     tile = np.vstack((formation("nominal")[:LEADERS], [[1.35, 0.75], [1.35, -0.75], [-1.35, 0.75], [-1.35, -0.75]]))
     positions = np.vstack([tile + centre for centre in centres])
     return np.vstack((positions.T, rng.uniform(-math.pi, math.pi, len(positions))))
 
 
-def bars(gap: float, x: float, centre: np.ndarray = np.zeros(2)) -> list[Obstacle]:
-    """A pair of bars at ``x`` (relative to the tile ``centre``) leaving a gap of ``gap`` in the middle."""
+def bars(gap: float, x: float, centre: np.ndarray | None = None) -> list[Obstacle]:
+    """A pair of bars at ``x`` (relative to the tile ``centre``, default the origin) leaving a gap
+    of ``gap`` in the middle."""
+    centre = np.zeros(2) if centre is None else centre
     height = ROBOTARIUM.ymax - gap / 2
     return [
         Obstacle(centre + (x, gap / 2 + height / 2), (BAR_WIDTH, height), velocity=(-BAR_SPEED, 0.0)),
@@ -126,16 +131,6 @@ def follower_positions(positions: np.ndarray, leader: np.ndarray) -> np.ndarray:
     groups = len(positions) // 7
     blocks = positions.reshape(groups, 7, 2)
     return np.vstack([follower_targets(block[:LEADERS]) for block in blocks])
-
-
-def _touching(obstacles: list[Obstacle], positions: np.ndarray) -> np.ndarray:
-    """Which robots ``(n,)`` touch an (axis-aligned) bar: centre closer than the robot radius."""
-    touching = np.zeros(len(positions), dtype=bool)
-    for bar in obstacles:
-        low, high = bar.center - bar.size / 2, bar.center + bar.size / 2
-        gap = np.maximum(np.maximum(low - positions, positions - high), 0.0)
-        touching |= np.hypot(gap[:, 0], gap[:, 1]) < GRITSBOT.radius
-    return touching
 
 
 class Leader(RobotHRVO):
@@ -181,12 +176,9 @@ class Follower(RobotHRVO):
             speed = math.hypot(desired[0], desired[1])
             if speed > self.v_max:
                 desired *= self.v_max / speed
-        if math.hypot(desired[0], desired[1]) < FINE:
-            # Close to its place: the formation keeps robots >= 0.3 m apart, and velocity
-            # obstacles (no time horizon) would forbid the last centimetres towards a neighbour.
-            self.dxi = desired
-        else:
-            self.steer(self.detections, desired)
+        # Close to its place (the formation keeps robots >= 0.25 m apart) HRVO would forbid the
+        # last centimetres towards a neighbour. The thesis's followers check no clearance.
+        settle_or_steer(self, desired, FINE, clearance=0.0)
         self.command(dxu)
 
 
@@ -282,7 +274,7 @@ class AffineFormation(Experiment):
             self.settled_error = self.error
         if self.bars:
             self.deformed_error = max(self.deformed_error, self.error)
-            self.contacts += bool(_touching(self.bars, poses[:2].T).any())
+            self.contacts += bool(touching(self.bars, poses[:2].T, GRITSBOT.radius).any())
 
     def done(self, step: int, poses: np.ndarray) -> bool:
         return step >= self.steps(self.n) and self.contacts == 0 and self.settled_error < TOLERANCE

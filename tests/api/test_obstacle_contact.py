@@ -1,0 +1,39 @@
+"""The vectorised obstacle queries (contains, distances, touching) against the per-point ones."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from dream.obstacles import Obstacle, touching
+
+
+@pytest.mark.parametrize("angle", [0.0, 0.7])
+def test_distances_and_contains_match_closest_point(angle):
+    rng = np.random.default_rng(1)
+    obstacle = Obstacle((0.3, -0.2), (0.5, 0.2), angle=angle)
+    points = rng.uniform(-1.0, 1.0, size=(400, 2))
+    distances = obstacle.distances(points)
+    inside = obstacle.contains(points)
+    assert inside.any() and (~inside).any()
+    for point, distance, is_inside in zip(points, distances, inside):
+        closest = obstacle.closest_point(point)
+        assert is_inside == (closest is None)
+        assert distance == pytest.approx(0.0 if closest is None else math.dist(closest, point), abs=1e-12)
+
+
+def test_touching_is_strictly_closer_than_the_radius():
+    # A turned bar; points straight out from the middle of its long side at known distances.
+    obstacle = Obstacle((1.0, 1.0), (0.4, 0.2), angle=math.pi / 2)  # long side vertical, faces +x
+    gaps = np.array([-0.05, 0.0, 0.04, 0.12, 0.3])
+    positions = np.column_stack((1.0 + 0.1 + gaps, np.full(5, 1.0)))
+    assert touching([obstacle], positions, 0.1).tolist() == [True, True, True, False, False]
+    assert touching([], positions, 0.1).tolist() == [False] * 5
+    assert touching([obstacle], np.zeros((0, 2)), 0.1).shape == (0,)
+
+
+def test_touching_names_a_bad_positions_array():
+    with pytest.raises(ValueError, match=r"`positions` must have shape \(n, 2\)"):
+        touching([Obstacle((0.0, 0.0), (1.0, 1.0))], np.zeros((3, 3)), 0.1)
