@@ -1,0 +1,120 @@
+"""Reliability and resilience: how many seeds succeed, with what violations and steps, per experiment.
+
+    python benches/reliability.py                      # every experiment at every size (hours)
+    python benches/reliability.py --quick              # fewer seeds, no N = 1,000 (minutes)
+    python benches/reliability.py --resilience         # N = 10 and 100 under each fault (Fast)
+    python benches/reliability.py --case hrvo-circle:20:robotarium:0-29 --case line-consensus:100:fast:0-9
+    python benches/reliability.py --case hrvo-circle:10000:batch:0 --workers 2
+
+A case is ``EXPERIMENT:N:BACKEND:SEEDS[:FAULTS]``: BACKEND is ``robotarium``, ``fast`` or
+``batch`` (hrvo-circle's whole-swarm mode), SEEDS ``a-b`` (inclusive) or one seed, FAULTS
+``--fault`` settings joined by ``+`` (``loss=0.3+latency=5``). Runs go to each experiment's own
+step cap and, but for ``batch``, through :func:`dream.sweep` on a local Dask cluster of
+``--workers`` processes. Every table is printed with the machine, its load and the date.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+import dream
+from dream.experiments import hrvo_circle
+from harness import machine, table
+
+#: The table of issue "every experiment does its job at every size".
+SIZES = [
+    "hrvo-circle:10:robotarium:0-99",
+    "hrvo-circle:20:robotarium:0-29",
+    "hrvo-circle:30:robotarium:0-9",
+    "hrvo-circle:100:fast:0-9",
+    "hrvo-circle:1000:fast:0-2",
+    "hrvo-circle:10000:batch:0",
+    *(f"{name}:{n}:fast:{seeds}" for name in ("line-consensus", "voronoi-coverage") for n, seeds in ((100, "0-9"), (1000, "0-2"))),
+    "affine-formation:98:fast:0-9",
+    "affine-formation:1001:fast:0-2",
+]
+QUICK = [
+    "hrvo-circle:10:robotarium:0-9",
+    "hrvo-circle:20:robotarium:0-2",
+    "hrvo-circle:100:fast:0",
+    "line-consensus:100:fast:0-2",
+    "voronoi-coverage:100:fast:0-2",
+    "affine-formation:98:fast:0-2",
+]
+#: The faults of the resilience table.
+FAULTS = {
+    "none": "",
+    "loss 0.3": "loss=0.3",
+    "bursty loss": "burst=0.05:0.3",
+    "latency 5 +- 2": "latency=5+jitter=2",
+    "10 % crash at 300": "crash=0.1@300",
+    "clock drift 5 %": "drift=0.05",
+    "1 Byzantine": "byzantine=1",
+}
+
+
+def parse_case(text: str) -> tuple[str, int, str, range, str]:
+    """``"EXPERIMENT:N:BACKEND:a-b[:FAULTS]"`` -> its parts."""
+    try:
+        name, n, backend, seeds, *faults = text.split(":", 4)
+        first, _, last = seeds.partition("-")
+        span = range(int(first), int(last or first) + 1)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a case is EXPERIMENT:N:BACKEND:SEEDS[:FAULTS], got {text!r}") from None
+    if backend not in ("robotarium", "fast", "batch") or (backend == "batch" and name != "hrvo-circle"):
+        raise argparse.ArgumentTypeError(f"BACKEND is robotarium, fast, or batch for hrvo-circle, got {text!r}")
+    return name, int(n), backend, span, faults[0] if faults else ""
+
+
+def measure(name: str, n: int, backend: str, seeds: range, faults: str, workers: int) -> list[object]:
+    """One row: successes, summed violations, and min/median/max steps of the successful runs."""
+    start = time.perf_counter()
+    if backend == "batch":
+        results = [hrvo_circle.run_batch(n=n, seed=seed).to_dict() for seed in seeds]
+    else:
+        grid = {kind: [value] for kind, _, value in (option.partition("=") for option in faults.split("+") if option)}
+        results = dream.sweep(name, seeds, [n], backend=backend, faults=grid, workers=workers, progress=False)
+    done = [row["completed_step"] for row in results if row["success"]]
+    failed = [row["seed"] for row in results if not row["success"]]
+    steps = f"{min(done)} / {statistics.median(done):.0f} / {max(done)}" if done else "-"
+    summed = [sum(row[key] or 0 for row in results) for key in ("collisions", "boundary", "actuator")]
+    seed_text = f"{seeds.start}-{seeds.stop - 1}" if len(seeds) > 1 else str(seeds.start)
+    wall = f"{time.perf_counter() - start:.0f}"
+    return [name, n, backend, faults or "-", seed_text, f"{len(done)}/{len(seeds)}", *summed, steps, failed or "-", wall]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--case", action="append", type=parse_case, help="EXPERIMENT:N:BACKEND:SEEDS[:FAULTS]")
+    parser.add_argument("--quick", action="store_true", help="fewer seeds and sizes")
+    parser.add_argument("--resilience", action="store_true", help="every experiment under each fault")
+    parser.add_argument("--seeds", default="0-9", help="seeds of the resilience table (default 0-9)")
+    parser.add_argument("--workers", type=int, default=2, help="local Dask worker processes")
+    args = parser.parse_args()
+    if args.case:
+        cases = args.case
+    elif args.resilience:
+        sizes = {"hrvo-circle": (10, 100), "line-consensus": (10, 100), "voronoi-coverage": (10, 100)}
+        sizes["affine-formation"] = (7, 98)
+        cases = [
+            parse_case(f"{name}:{n}:fast:{args.seeds}:{faults}")
+            for name, counts in sizes.items()
+            for n in counts
+            for faults in FAULTS.values()
+        ]
+    else:
+        cases = [parse_case(text) for text in (QUICK if args.quick else SIZES)]
+    print(machine())
+    rows = []
+    for case in cases:
+        rows.append(measure(*case, workers=args.workers))
+        print("  " + " | ".join(map(str, rows[-1])), flush=True)
+    header = ["experiment", "N", "backend", "faults", "seeds", "successes", "collisions", "boundary", "actuator"]
+    print(machine())
+    print(table([*header, "steps min/median/max", "failed seeds", "wall s"], rows))
+
+
+if __name__ == "__main__":
+    main()
