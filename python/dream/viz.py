@@ -29,13 +29,16 @@ Units: metres in the world (the axes are in metres), pixels in images. Images ar
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 import os
+import signal
+import threading
 import time
 import warnings
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -417,7 +420,8 @@ class Renderer:
         roles = _labels(frame.roles, n, "roles")
         status = _labels(frame.status, n, "status")
         if status is not None and not np.isin(status, STATUSES).all():
-            raise ValueError(f"frame.status has {sorted(set(status) - set(STATUSES))}; expected {', '.join(STATUSES)}")
+            unknown = sorted(set(status.tolist()) - set(STATUSES))
+            raise ValueError(f"frame.status has {unknown}; expected {', '.join(STATUSES)}")
         moving = np.zeros(len(frame.obstacles), dtype=bool)
         if frame.obstacle_moving is not None:
             moving = np.asarray(frame.obstacle_moving, dtype=bool).reshape(-1)
@@ -639,6 +643,10 @@ class Renderer:
     def render(self) -> None:
         """Draw the current frame into the canvas: the frame's artists over the cached rest."""
         canvas = self.figure.canvas
+        if not hasattr(canvas, "copy_from_bbox"):  # a closed window leaves a bare canvas: draw headless
+            from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+            canvas = FigureCanvasAgg(self.figure)
         # Axes, ticks, legend and labels are most of a redraw: redraw them only when stale (an
         # animated artist's change does not make the figure stale, anything else does).
         size = canvas.get_width_height(physical=True)
@@ -784,10 +792,11 @@ class VideoWriter:
             )
         elif channels != self._channels:
             raise ValueError(f"image has {channels} channels, but this video's frames have {self._channels}")
-        if self.format == ".gif":
-            self._add_gif(image)
-        else:
-            self._add_mp4(image)
+        with _signals_deferred():  # Ctrl-C in the middle of a frame's bytes would break the file
+            if self.format == ".gif":
+                self._add_gif(image)
+            else:
+                self._add_mp4(image)
         self.frames_written += 1
 
     def _add_gif(self, image: np.ndarray) -> None:
@@ -858,6 +867,34 @@ class VideoWriter:
 
     def __exit__(self, kind: type[BaseException] | None, error: BaseException | None, tb: TracebackType | None) -> None:
         self.close()
+
+
+@contextlib.contextmanager
+def _signals_deferred() -> Iterator[None]:
+    """SIGINT and SIGTERM caught in the block are acted on when it ends: a frame is written whole.
+
+    Blocking the signals is not enough: one that arrived just before is raised by the first check
+    for signals, which may be inside the pipe's write. So the block records them instead.
+    """
+    if threading.current_thread() is not threading.main_thread():  # only it can set handlers
+        yield
+        return
+    received: list[int] = []
+    previous = {
+        signum: signal.signal(signum, lambda number, _frame: received.append(number))
+        for signum in (signal.SIGINT, signal.SIGTERM)
+    }
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        for signum in received[:1]:  # e.g. KeyboardInterrupt from Python's SIGINT handler
+            handler = previous[signum]
+            if callable(handler):
+                handler(signum, None)
+            elif handler == signal.SIG_DFL:
+                signal.raise_signal(signum)
 
 
 _FAST_OCTREE = 2  #: ``PIL.Image.Quantize.FASTOCTREE``: 4x faster than median cut, as good on plots
