@@ -575,7 +575,7 @@ class Renderer:
         self._heard.set_segments([np.stack((here, positions[j])) for j in heard])
         legend.append((f"robot {i} (focus)", ("focus",)))
         for k, (name, r) in enumerate(ranges.items()):
-            label = f"{name} {r:g} m" if name else f"range {r:g} m (default: the experiment gives none)"
+            label = f"{name} {r:g} m" if name else f"range {r:g} m (default: none given)"
             legend.append((label, ("range", k)))
         legend.append((f"heard by robot {i} ({how})", ("heard",)))
 
@@ -680,6 +680,15 @@ class Renderer:
             )
             self._title_text, self._title_pixels = text, np.asarray(image)
         buffer[:strip] = self._title_pixels
+
+    def changing(self) -> list[Any]:
+        """The regions (display-space ``Bbox``) a new frame changes without a full redraw: the
+        axes and the title's strip. The legend and tick labels change only with a full redraw."""
+        from matplotlib.transforms import Bbox
+
+        figure = self.figure.bbox
+        strip = Bbox.from_extents(0, figure.y1 * (AXES_RECT[1] + AXES_RECT[3]), figure.x1, figure.y1)
+        return [self.axes.bbox, strip]
 
     def _drawn(self, artist: Any) -> bool:
         """Whether ``artist`` has anything to draw (an empty collection still costs a draw)."""
@@ -1019,7 +1028,8 @@ class Recorder:
             if self.writer is None:  # else to_rgb has rendered already
                 self.renderer.render()
             canvas = self.renderer.figure.canvas
-            canvas.blit(self.renderer.figure.bbox)  # copy the rendered image to the window
+            for region in self.renderer.changing():  # copy what changes to the window
+                canvas.blit(region)
             canvas.flush_events()  # let the window repaint and handle input
         self.frames_rendered += 1
 

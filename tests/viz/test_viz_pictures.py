@@ -189,7 +189,7 @@ def test_focus_without_ranges_draws_a_default_metre_and_says_so():
     frame = row(n=4)  # robots 0.8 m apart: robot 1 is within 1 m of robot 0, the others are not
     image = drawn(renderer, frame)
     assert renderer._ranges.get_offsets().shape == (1, 2)
-    assert "range 1 m (default: the experiment gives none)" in renderer.legend_labels
+    assert "range 1 m (default: none given)" in renderer.legend_labels
     assert "heard by robot 0 (in range)" in renderer.legend_labels
     assert len(renderer._heard.get_segments()) == 1
     assert (pixel(renderer, image, frame.poses[0, 0] + 1.0, 0.0) < 250).any() or (
@@ -270,7 +270,7 @@ def test_live_window_is_blitted_every_frame_and_closes_at_the_end(window):
         for step in range(3):
             recorder(row(step=step))
         assert recorder.live and plt.fignum_exists(recorder.renderer.figure.number)
-    assert window.count("blit") == 3 and window.count("flush") >= 3
+    assert window.count("blit") == 6 and window.count("flush") >= 3
     assert window[0] == "show block=False"  # the window opens before the first frame
     assert not recorder.live and not plt.fignum_exists(recorder.renderer.figure.number)
     recorder.hold()  # no window: returns at once
@@ -295,7 +295,7 @@ def test_window_closed_by_the_user_stops_the_live_view_not_the_video(window, tmp
         recorder(row(step=0))
         plt.close(recorder.renderer.figure)
         recorder(row(step=1))
-    assert window.count("blit") == 1 and recorder.writer.frames_written == 2
+    assert window.count("blit") == 2 and recorder.writer.frames_written == 2
 
 
 def test_realtime_paces_rendered_frames_to_simulated_time():
@@ -398,9 +398,8 @@ def test_a_signal_during_a_frame_write_waits_until_the_frame_is_written():
     import signal
 
     steps = []
-    with pytest.raises(KeyboardInterrupt):
-        with viz._signals_deferred():
-            os.kill(os.getpid(), signal.SIGINT)
-            steps.append("after the signal")  # the block goes on
+    with pytest.raises(KeyboardInterrupt), viz._signals_deferred():
+        os.kill(os.getpid(), signal.SIGINT)
+        steps.append("after the signal")  # the block goes on
     assert steps == ["after the signal"]
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored
