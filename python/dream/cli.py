@@ -50,6 +50,15 @@ def _whole(least: int) -> Callable[[str], int]:
     return parse
 
 
+def _size(text: str) -> tuple[int, int]:
+    from dream.viz import parse_size  # no matplotlib import
+
+    try:
+        return parse_size(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
+
+
 def _parser() -> argparse.ArgumentParser:
     from dream import __version__
 
@@ -81,6 +90,10 @@ def _parser() -> argparse.ArgumentParser:
     runner.add_argument(
         "--every", metavar="K", type=_whole(1), default=1, help="draw one step in K into the video/window"
     )
+    runner.add_argument("--size", metavar="WxH", type=_size, default=(1280, 800), help="image size (default: 1280x800)")
+    runner.add_argument("--focus", metavar="ID", type=_whole(0), help="draw this robot's ranges and who it hears")
+    runner.add_argument("--realtime", action="store_true", help="pace the run to wall time (30 steps/s)")
+    runner.add_argument("--hold", action="store_true", help="keep the live window open at the end until closed")
     runner.add_argument("--check", action="store_true", help="exit with 1 when the run fails its success test")
     new = commands.add_parser("new", help="write a starter experiment file that runs as is")
     new.add_argument("name", help="the experiment's name; the file is NAME.py")
@@ -238,12 +251,15 @@ def _run(args: argparse.Namespace) -> int:
         raise UsageError(f"-n {n}: the Robotarium backend runs at most {MAX_ROBOTS} robots; use --backend fast")
     if args.json:
         _writable(args.json, "--json")
+    if args.focus is not None and args.focus >= n:
+        raise UsageError(f"--focus {args.focus}: no such robot; the run has {n} (ids 0 to {n - 1})")
     recorder = None
     if args.video is not None or args.show:
         from dream.viz import Recorder  # matplotlib only when drawing
 
         try:  # a bad video path fails here, before the run
-            recorder = Recorder(video=args.video, show=args.show, every=args.every)
+            recorder = Recorder(video=args.video, show=args.show, every=args.every, size=args.size, focus=args.focus,
+                                realtime=args.realtime, hold=args.hold)  # fmt: skip
         except (ValueError, OSError) as err:
             raise UsageError(str(err)) from None
     progress = _progress(not args.no_progress)

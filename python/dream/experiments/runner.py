@@ -14,7 +14,7 @@ from dream.backends import BACKENDS, make_robotarium
 from dream.experiments.result import ExperimentResult
 from dream.experiments.spec import Experiment
 from dream.faults import Faults
-from dream.frames import Frame
+from dream.frames import Frame, fault_status
 from dream.world import World
 
 Progress = Callable[[int, int], None]
@@ -98,7 +98,11 @@ def run(
                 if progress is not None:
                     progress(t + 1, cap)
                 if record is not None:
-                    record(exp.frame(t + 1, now))
+                    frame = exp.frame(t + 1, now)
+                    frame.time = (t + 1) * sim.time_step if frame.time is None else frame.time
+                    if state is not None and frame.status is None:  # who has crashed, is stuck or lies
+                        frame.status = fault_status(state.crashed, state.stuck, state.byzantine)
+                    record(frame)
                 if exp.done(t + 1, now):
                     done_at = t + 1
                     break

@@ -68,7 +68,7 @@ def test_renderer_draws_every_overlay():
     frame = make_frame(n=4, step=7)
     renderer.draw(frame)
     image = renderer.to_rgb()
-    assert image.shape == (400, 640, 3) and image.dtype == np.uint8
+    assert image.shape == (800, 1280, 3) and image.dtype == np.uint8
     colours = robot_colours(4)
     for i in range(4):  # robot bodies in their colours
         assert np.abs(pixel(renderer, image, frame.poses[0, i] - 0.03, 0.6 + 0.03) - rgb(colours[i])).max() <= 2
@@ -147,12 +147,12 @@ def test_renderer_skips_nan_goals_and_keeps_goal_colours():
 def test_renderer_draws_an_empty_swarm_and_a_new_arena():
     renderer = Renderer(ROBOTARIUM)
     renderer.draw(make_frame(n=0, obstacles=[], cells=[]))
-    assert renderer.to_rgb().shape == (400, 640, 3)
+    assert renderer.to_rgb().shape == (800, 1280, 3)
     big = ArenaSpec.centred(6.4, 4.0)
-    renderer.draw(make_frame(n=2, arena=big))
+    renderer.draw(make_frame(n=4, arena=big, poses=np.array([[-3.0, 3.0, 0.0, 0.0], [-1.8, 1.8, 0, 0], [0, 0, 0, 0]])))
     renderer.to_rgb()
     xmin, xmax = renderer.axes.get_xlim()
-    assert xmin < -3.2 and xmax > 3.2
+    assert xmin < -3.2 and xmax > 3.2 and renderer.following == "arena"
 
 
 def images(count: int, size: tuple[int, int] = (64, 48)) -> list[np.ndarray]:
@@ -211,7 +211,7 @@ def test_video_writer_rejects_missing_directory_and_other_sizes(tmp_path):
     writer.add(images(1)[0])
     with pytest.raises(ValueError, match="64x48"):
         writer.add(images(1, size=(32, 32))[0])
-    with pytest.raises(ValueError, match=r"\(H, W, 3\) uint8"):
+    with pytest.raises(ValueError, match=r"\(H, W, 3\) or \(H, W, 4\) uint8"):
         writer.add(np.zeros((48, 64, 3)))
     writer.close()
     assert Image.open(tmp_path / "run.gif").n_frames == 1
@@ -247,7 +247,7 @@ def test_recorder_takes_its_arena_from_the_first_frame():
     big = ArenaSpec.centred(10.0, 6.0)
     recorder = Recorder()
     recorder(make_frame(arena=big))
-    assert recorder.renderer.arena == big and recorder.renderer.axes.get_xlim()[1] > 5.0
+    assert recorder.renderer.arena == big and recorder.renderer.following == "swarm"  # a row 2.4 m long
     assert recorder.frames_rendered == 1 and recorder.video is None
 
 
