@@ -302,6 +302,8 @@ class AffineFormation(Experiment):
             velocities=np.array([r.dxi for r in self.robots]),
             links=np.argwhere(np.triu(self.weights) != 0),
             obstacles=[bar.polygon for bar in self.bars],
+            obstacle_moving=[True] * len(self.bars),
+            roles=np.where(self.leader, "leader", "follower"),
             title=f"{NAME}: follower error {self.error:.3f} m, bar contacts {self.contacts}",
         )
 

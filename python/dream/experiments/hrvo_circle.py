@@ -269,6 +269,7 @@ def circle_frame(step: int, sim: Any, robots: list[CircleRobot], radio_range: fl
         goals=np.array([r.current_goal for r in robots]).reshape(-1, 2),
         velocities=np.array([r.dxi for r in robots]).reshape(-1, 2),
         links=links[links[:, 0] < links[:, 1]],
+        ranges={"sensing": 1.0, "radio": radio_range},
         title=f"{NAME}: circles {circles}/{CIRCLES}, collisions {sim.violations.collision}",
     )
 

@@ -199,15 +199,17 @@ class VoronoiCoverage(Experiment):
 
     def before_step(self, step: int) -> None:
         if step == 0:
-            self.cost_start = self.cost(self.sim.poses)
+            self.cost_start = self.last_cost = self.cost(self.sim.poses)
 
     def after_step(self, step: int, poses: np.ndarray) -> None:
         for obstacle in self.obstacles:
             obstacle.step(self.sim.time_step, self.arena)
         self.contacts += bool(touching(self.static, poses[:2].T, GRITSBOT.radius).any())
         self.still = self.still + 1 if step > 21 + self.n % 5 and not self.dxu.any() else 0
+        if step % COST_EVERY == 0:
+            self.last_cost = self.cost(poses)
         if self.moving_obstacles and step % COST_EVERY == 0:
-            covered = self.cost(poses) < COVERED * self.cost_start
+            covered = self.last_cost < COVERED * self.cost_start
             self.covered_since = (step if self.covered_since is None else self.covered_since) if covered else None
 
     def done(self, step: int, poses: np.ndarray) -> bool:
@@ -234,8 +236,10 @@ class VoronoiCoverage(Experiment):
             poses,
             goals=np.array([np.full(2, np.nan) if r.centroid is None else r.centroid for r in self.robots]),
             obstacles=[o.polygon for o in self.obstacles],
+            obstacle_moving=[o.moving for o in self.obstacles],
             cells=[r.cell for r in self.robots],
-            title=f"{NAME}: static contacts {self.contacts}, collisions {self.sim.violations.collision}",
+            ranges={"obstacle sensing": CELL_RADIUS, "radio": 2 * CELL_RADIUS},
+            title=f"{NAME}: cost {self.last_cost / self.cost_start:.0%} of its start, static contacts {self.contacts}",
         )
 
 
