@@ -183,3 +183,19 @@ def sidestep_update(chosen: Any, desired: Any, sidestep: Any, side: Any, updates
     side = np.asarray(side, dtype=np.float64)
     new_side = np.where(blocked, np.where(sidestep > 0, -side, 1.0), side)
     return np.where(blocked, updates, sidestep), new_side
+
+
+def wmsr_keep(values: Any, own: float, trimmed: int) -> np.ndarray:
+    """W-MSR's filter: ``values`` ``(k,)`` without the ``trimmed`` largest of those above ``own``
+    and the ``trimmed`` smallest of those below it (all of them when there are fewer).
+
+    With at most ``trimmed`` lying neighbours in a robust enough graph, the correct robots still
+    reach consensus within the range of their own values (LeBlanc et al., 2013): a liar's value
+    outside that range is among the dropped ones.
+    """
+    values = np.asarray(values, dtype=np.float64)
+    if trimmed <= 0:
+        return values
+    above, below = values[values > own], values[values < own]
+    kept = [np.sort(above)[: max(len(above) - trimmed, 0)], values[values == own], np.sort(below)[trimmed:]]
+    return np.concatenate(kept)

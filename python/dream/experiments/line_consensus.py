@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from dream import rules
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
 from dream.radios import GraphRadio
@@ -109,11 +110,13 @@ def block_poses(n: int, rng: np.random.Generator, arena: ArenaSpec) -> np.ndarra
     return np.vstack((x, y, rng.uniform(-math.pi, math.pi, n)))
 
 
-def line_errors(poses: np.ndarray, spacing: float = SPACING) -> tuple[float, float]:
-    """``(y spread, spacing error)`` of the team: robot i should be ``spacing`` right of robot i + 1."""
-    x, y = poses[0], poses[1]
-    gaps = x[:-1] - x[1:]
-    return float(y.max() - y.min()), float(np.abs(gaps - spacing).max()) if len(gaps) else 0.0
+def line_errors(poses: np.ndarray, spacing: float = SPACING, correct: np.ndarray | None = None) -> tuple[float, float]:
+    """``(y spread, spacing error)`` of the team (of its ``correct`` robots, if given): robot i
+    should be ``spacing`` right of robot i + 1, so ``(j - i) spacing`` right of robot j."""
+    ids = np.arange(poses.shape[1]) if correct is None else np.flatnonzero(correct)
+    x, y = poses[0, ids], poses[1, ids]
+    gaps = x[:-1] - x[1:] - (ids[1:] - ids[:-1]) * spacing
+    return float(np.ptp(y)) if len(y) else 0.0, float(np.abs(gaps).max()) if len(gaps) else 0.0
 
 
 def settle_or_steer(robot: RobotHRVO, desired: np.ndarray, fine: float = FINE, clearance: float = CLEARANCE) -> None:
@@ -147,17 +150,24 @@ class LineRobot(RobotHRVO):
     straight for its target through HRVO.
     """
 
-    def __init__(self, robot_id: int, tag: str, spacing: float = SPACING, lane: float = 0.0, **kwargs: Any) -> None:
+    def __init__(
+        self, robot_id: int, tag: str, spacing: float = SPACING, lane: float = 0.0, resilient: int = 0, **kwargs: Any
+    ) -> None:
         super().__init__(robot_id, tag, **kwargs)
         self.spacing = spacing
         self.lane = lane
+        self.resilient = resilient
         self.target: np.ndarray | None = None
         self.travelling = False
 
     def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
         if messages:
             xs = [x + (j - self.robot_id) * self.spacing for j, x, _ in messages]
-            self.target = np.array([np.mean(xs), np.mean([y for _, _, y in messages])])
+            ys = [y for _, _, y in messages]
+            if self.resilient and self.has_pose:  # W-MSR: ignore the extreme values a liar could send
+                xs = [*rules.wmsr_keep(xs, self.pos_x, self.resilient), self.pos_x]
+                ys = [*rules.wmsr_keep(ys, self.pos_y, self.resilient), self.pos_y]
+            self.target = np.array([np.mean(xs), np.mean(ys)])
         if not self.has_pose:
             return None
         y = self.target[1] if self.travelling and self.target is not None else self.pos_y
@@ -202,6 +212,7 @@ class LineConsensus(Experiment):
     success = "y spread and spacing error below 0.02 m (the line has formed), zero violations"
     spacing: float = param(SPACING, "distance between neighbours on the line (m)")
     radio_gap: int = param(10, "steps between radio exchanges")
+    resilient: int = param(0, "W-MSR: ignore this many of the largest and smallest neighbour values (liars tolerated)")
 
     def arena_for(self, n: int) -> ArenaSpec:
         return line_arena(n, self.spacing)
@@ -223,7 +234,7 @@ class LineConsensus(Experiment):
         self.adjacency = graph(n, self.world.rng)
         lane = 0.0 if self.arena == ROBOTARIUM else LANE
         for i in range(n):
-            robot = LineRobot(i, f"robot_{i}", self.spacing, lane, arena=self.arena)
+            robot = LineRobot(i, f"robot_{i}", self.spacing, lane, self.resilient, arena=self.arena)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             movement = MovementSensor(i, f"movement_{i}", robot.update_sensor)
             radio = GraphRadio(i, f"radio_{i}", robot.update_radio, self.adjacency)
@@ -240,18 +251,18 @@ class LineConsensus(Experiment):
             self.robots.append(robot)
 
     def done(self, step: int, poses: np.ndarray) -> bool:
-        self.errors = line_errors(poses, self.spacing)
+        self.errors = line_errors(poses, self.spacing, self.correct)
         self.done_at = step if max(self.errors) < TOLERANCE else None
         return self.done_at is not None
 
     def measures(self) -> dict[str, Any]:
         """The final ``y_spread`` and ``spacing_error`` (m) and the convergence time (s)."""
-        spread, error = line_errors(self.sim.poses, self.spacing)
+        spread, error = line_errors(self.sim.poses, self.spacing, self.correct)
         time = None if self.done_at is None else self.done_at * self.sim.time_step
         return {"y_spread": spread, "spacing_error": error, "convergence_time_s": time}
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
-        spread, error = line_errors(poses, self.spacing)
+        spread, error = line_errors(poses, self.spacing, self.correct)
         return Frame(
             step,
             self.arena,

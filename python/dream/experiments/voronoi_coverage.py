@@ -28,7 +28,7 @@ from dream.frames import Frame
 from dream.obstacles import Obstacle, touching
 from dream.radios import RangeRadio
 from dream.robot import Robot
-from dream.sensors import ObstacleSensor, OdometrySensor
+from dream.sensors import MovementSensor, ObstacleSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec
 from dream.timers import create_timer
 
@@ -37,6 +37,8 @@ CELL_RADIUS = 1.0  #: radius of the disc a robot's cell starts from (m)
 ARRIVAL = 0.05  #: a robot this close to its centroid stops (m; 0.02 on the real lab)
 MARGIN = 0.02  #: extra clearance kept from obstacles beyond the robot's radius (m)
 GAIN = 1.0  #: proportional gain towards the centroid (1/s)
+SEEN = 0.5  #: range of the movement sensor that finds robots close by (m)
+SAME_ROBOT = 0.08  #: a robot seen this close to where a message put a robot is that robot (m)
 REST_STEPS = 60  #: steps without any command after which the team is at rest
 COVERED = 0.2  #: with moving obstacles, success is the cost staying below this fraction of its start...
 HOLD_STEPS = 300  #: ...for this many steps (10 s)
@@ -110,7 +112,11 @@ class CoverageRobot(Robot):
     """A robot that moves to the centroid of its obstacle-aware Voronoi cell.
 
     Callbacks: :meth:`update_odom`, :meth:`update_radio` (``(id, x, y)`` messages in, its own
-    out), :meth:`update_obstacles` (closest points from the obstacle sensor) and :meth:`update`.
+    out), :meth:`update_obstacles` (closest points from the obstacle sensor),
+    :meth:`update_sensor` (robots close by, from the movement sensor) and :meth:`update`.
+
+    A robot it sees but does not hear (a crashed robot, say) bounds its cell too: otherwise the
+    cell would stretch over that robot and lead straight into it.
     """
 
     def __init__(self, robot_id: int, tag: str, arena: ArenaSpec = ROBOTARIUM, **kwargs: Any) -> None:
@@ -120,6 +126,7 @@ class CoverageRobot(Robot):
         self.obstacle_points = np.zeros((0, 2))
         self.centroid: np.ndarray | None = None
         self.cell = np.zeros((0, 2))  # the last cell computed, for drawing
+        self.seen = np.zeros((0, 2))  # positions of the robots the movement sensor detects
 
     def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
         self.others = np.array([(x, y) for _, x, y in messages]).reshape(-1, 2)
@@ -128,13 +135,29 @@ class CoverageRobot(Robot):
     def update_obstacles(self, closest_points: np.ndarray) -> None:
         self.obstacle_points = closest_points
 
+    def update_sensor(self, detections: np.ndarray) -> None:
+        # `angle` points from the detected robot to this one.
+        d, angle = detections[:, 0], detections[:, 1]
+        self.seen = np.column_stack((self.pos_x - d * np.cos(angle), self.pos_y - d * np.sin(angle)))
+
+    def silent(self) -> np.ndarray:
+        """Positions ``(k, 2)`` of the robots seen that no message accounts for."""
+        if not len(self.others):
+            return self.seen
+        gaps = np.hypot(*(self.seen[:, None, :] - self.others[None, :, :]).transpose(2, 0, 1))
+        return self.seen[gaps.min(axis=1, initial=np.inf) > SAME_ROBOT]
+
     def update(self, dxu: np.ndarray) -> None:
         self.dxi = np.zeros(2)
         if self.has_pose:
             here = np.array([self.pos_x, self.pos_y])
             agents = kernels.obstacle_agents(here, self.obstacle_points, robot_radius=self.spec.radius, margin=MARGIN)
             self.centroid, _, self.cell = kernels.voronoi_cell(
-                here, self.others, radius=CELL_RADIUS, bounds=self.arena.bounds, virtual=agents
+                here,
+                np.vstack((self.others, self.silent())),
+                radius=CELL_RADIUS,
+                bounds=self.arena.bounds,
+                virtual=agents,
             )
             offset = self.centroid - here
             distance = math.hypot(offset[0], offset[1])
@@ -165,6 +188,7 @@ class VoronoiCoverage(Experiment):
             self.robots.append(robot)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             sensor = ObstacleSensor(i, f"obstacles_{i}", robot.update_obstacles, self.obstacles, range=CELL_RADIUS)
+            movement = MovementSensor(i, f"movement_{i}", robot.update_sensor, range=SEEN)
             radio = RangeRadio(i, f"radio_{i}", robot.update_radio, range=2 * CELL_RADIUS)
             create_timer(
                 i,
@@ -172,6 +196,7 @@ class VoronoiCoverage(Experiment):
                 [
                     {"delay": 2, "tag": "odom", "call": odometry.update},
                     {"delay": 3, "tag": "obstacles", "call": sensor.update},
+                    {"delay": 3, "tag": "movement", "call": movement.update},
                     {"delay": 5, "tag": "radio", "call": radio.update},
                     {"delay": 5, "tag": "robot", "call": robot.update},
                 ],
@@ -191,7 +216,7 @@ class VoronoiCoverage(Experiment):
         return 1500 if scale == 1.0 else math.ceil(2000 * scale)
 
     def timer_params(self, x: np.ndarray, dxu: np.ndarray) -> dict[str, tuple[Any, ...]]:
-        return {"odom": (x,), "obstacles": (x,), "radio": (x,), "robot": (dxu,)}
+        return {"odom": (x,), "obstacles": (x,), "movement": (x, dxu), "radio": (x,), "robot": (dxu,)}
 
     def cost(self, poses: np.ndarray) -> float:
         """The coverage cost of the team at ``poses`` ``(3, n)`` (m^4)."""
