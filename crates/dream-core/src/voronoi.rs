@@ -5,6 +5,10 @@
 //! half-plane of every other robot within `2 radius` (increasing index) and of each of its
 //! virtual agents (given order). A robot whose cell is empty gets area 0 and its own position
 //! as centroid. The arithmetic matches the NumPy reference operation by operation.
+//!
+//! A disc far larger than the arena clips nothing but ruins the clipping's precision (at a
+//! radius of 1e20 the intersections with the walls lose every digit), so each robot's disc is
+//! first shrunk to [`covering_radius`], which still contains the whole arena.
 
 use std::f64::consts::TAU;
 
@@ -65,7 +69,23 @@ pub fn area_centroid(polygon: &[Vec2], fallback: Vec2) -> (f64, Vec2) {
     }
 }
 
+/// A disc radius around `p` whose polygon (of any resolution >= 3) contains the whole arena.
+///
+/// The arena lies in the disc of `|p - centre| + half diagonal` around `p`, and a regular
+/// polygon of at least 3 vertices contains the disc of half its radius. Only `+ - * sqrt`, so
+/// that the NumPy reference gets the same bits; it is infinite only for coordinates beyond
+/// ~1e154, where it leaves the radius as given.
+pub fn covering_radius(p: Vec2, arena: &Arena) -> f64 {
+    let (dx, dy) = (
+        p[0] - (0.5 * arena.xmin + 0.5 * arena.xmax),
+        p[1] - (0.5 * arena.ymin + 0.5 * arena.ymax),
+    );
+    let (width, height) = (arena.xmax - arena.xmin, arena.ymax - arena.ymin);
+    2.0 * ((dx * dx + dy * dy).sqrt() + 0.5 * (width * width + height * height).sqrt())
+}
+
 fn cell(p: Vec2, radius: f64, arena: &Arena, agents: impl Iterator<Item = Vec2>, resolution: usize) -> Vec<Vec2> {
+    let radius = radius.min(covering_radius(p, arena));
     let mut polygon: Vec<Vec2> = (0..resolution)
         .map(|k| {
             let angle = TAU * k as f64 / resolution as f64;
@@ -163,7 +183,12 @@ pub fn voronoi_cells(
         }
     }
     let (xs, ys): (Vec<f64>, Vec<f64>) = positions.iter().map(|p| (p[0], p[1])).unzip();
-    let near = neighbours::within(&xs, &ys, 2.0 * radius, None, None)?;
+    // Robots beyond twice a robot's (shrunk) disc radius cannot clip its cell.
+    let reach = positions
+        .iter()
+        .map(|&p| radius.min(covering_radius(p, arena)))
+        .fold(0.0, f64::max);
+    let near = neighbours::within(&xs, &ys, (2.0 * reach).min(f64::MAX), None, None)?;
     let robot = |i: usize| {
         let others = near.indices[near.indptr[i] as usize..near.indptr[i + 1] as usize]
             .iter()
