@@ -22,6 +22,10 @@ use crate::neighbours;
 /// Largest number of vertices of a cell's disc (far beyond any use; keeps memory bounded).
 pub const MAX_RESOLUTION: usize = 1 << 20;
 
+/// Largest coordinate magnitude (m) of robots, agents and bounds: the centroid sums products of
+/// three coordinates, which overflow beyond ~1e102.
+pub const MAX_COORDINATE: f64 = 1e100;
+
 /// Rows below this count run on one thread.
 const PARALLEL_ROBOTS: usize = 256;
 
@@ -119,7 +123,8 @@ fn cell(p: Vec2, radius: f64, arena: &Arena, agents: impl Iterator<Item = Vec2>,
 /// nothing is left.
 ///
 /// # Errors
-/// Non-finite input, a non-positive radius or a resolution outside 3..=2^20.
+/// Non-finite input or coordinates beyond [`MAX_COORDINATE`], a non-positive radius or a
+/// resolution outside 3..=2^20.
 pub fn voronoi_cell(
     p: Vec2,
     others: &[Vec2],
@@ -128,14 +133,28 @@ pub fn voronoi_cell(
     arena: &Arena,
     resolution: usize,
 ) -> Result<Vec<Vec2>> {
-    check_finite("position", &p)?;
-    check_finite("others", others.as_flattened())?;
-    check_finite("virtual", agents.as_flattened())?;
-    check_cell_parameters(radius, resolution)?;
+    check_coordinates("position", &p)?;
+    check_coordinates("others", others.as_flattened())?;
+    check_coordinates("virtual", agents.as_flattened())?;
+    check_cell_parameters(radius, arena, resolution)?;
     Ok(cell(p, radius, arena, others.iter().chain(agents).copied(), resolution))
 }
 
-fn check_cell_parameters(radius: f64, resolution: usize) -> Result<()> {
+/// Finite values of magnitude at most [`MAX_COORDINATE`].
+fn check_coordinates(arg: &'static str, values: &[f64]) -> Result<()> {
+    check_finite(arg, values)?;
+    match values.iter().find(|v| v.abs() > MAX_COORDINATE) {
+        Some(&got) => Err(GeomError::InvalidParameter {
+            arg,
+            rule: "at most 1e100 in magnitude",
+            got,
+        }),
+        None => Ok(()),
+    }
+}
+
+fn check_cell_parameters(radius: f64, arena: &Arena, resolution: usize) -> Result<()> {
+    check_coordinates("bounds", &[arena.xmin, arena.xmax, arena.ymin, arena.ymax])?;
     if !(radius.is_finite() && radius > 0.0) {
         return Err(GeomError::InvalidParameter {
             arg: "radius",
@@ -157,8 +176,8 @@ fn check_cell_parameters(radius: f64, resolution: usize) -> Result<()> {
 /// are `points[indptr[i]..indptr[i + 1]]`.
 ///
 /// # Errors
-/// Non-finite input, a non-positive radius, fewer than 3 vertices per disc, or an invalid
-/// virtual-agent CSR.
+/// Non-finite input or coordinates beyond [`MAX_COORDINATE`], a non-positive radius, a
+/// resolution outside 3..=2^20, or an invalid virtual-agent CSR.
 pub fn voronoi_cells(
     positions: &[Vec2],
     radius: f64,
@@ -167,11 +186,11 @@ pub fn voronoi_cells(
     resolution: usize,
 ) -> Result<Cells> {
     let n = positions.len();
-    check_finite("positions", positions.as_flattened())?;
-    check_cell_parameters(radius, resolution)?;
+    check_coordinates("positions", positions.as_flattened())?;
+    check_cell_parameters(radius, arena, resolution)?;
     if let Some((indptr, points)) = virtual_agents {
         check_len("virtual indptr", n + 1, indptr.len())?;
-        check_finite("virtual", points.as_flattened())?;
+        check_coordinates("virtual", points.as_flattened())?;
         let ok = indptr[0] == 0 && indptr[n] == points.len() as i64 && indptr.windows(2).all(|w| w[0] <= w[1]);
         if !ok {
             let reason = "its offsets must rise from 0 to the number of points".into();

@@ -18,6 +18,10 @@ import numpy as np
 from dream._checks import FloatArray
 from dream._reference.neighbours import neighbours_of
 
+#: Largest coordinate magnitude (m) of robots, agents and bounds (the public API rejects more):
+#: the centroid sums products of three coordinates, which overflow beyond ~1e102.
+MAX_COORDINATE = 1e100
+
 
 def clip(
     polygon: list[tuple[float, float]], point: tuple[float, float], normal: tuple[float, float]
