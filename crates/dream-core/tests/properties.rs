@@ -32,7 +32,8 @@ fn arena(scale: f64) -> Arena {
 }
 
 /// Robots on the lattice (coincident, on the edges) or anywhere in BOX widened by half its size
-/// each way, times a scale of 1e-6 to 1e6; returns the positions and the scale.
+/// each way, times a scale of 1e-100 to 1e99 (the Voronoi limit is 1e100); returns the
+/// positions and the scale.
 fn swarm(max_n: usize) -> impl Strategy<Value = (Vec<Vec2>, f64)> {
     let lattice = prop::collection::vec((-10..=10_i32, -6..=6_i32), 0..=max_n).prop_map(|cells| {
         cells
@@ -42,7 +43,7 @@ fn swarm(max_n: usize) -> impl Strategy<Value = (Vec<Vec2>, f64)> {
     });
     let anywhere = prop::collection::vec((-4.0..=4.0_f64, -2.5..=2.5_f64), 0..=max_n)
         .prop_map(|points| points.into_iter().map(|(x, y)| [x, y]).collect());
-    let scale = prop::sample::select(vec![1e-6, 1e-3, 1.0, 1e3, 1e6]);
+    let scale = prop::sample::select(vec![1e-100, 1e-6, 1e-3, 1.0, 1e3, 1e6, 1e99]);
     (prop_oneof![lattice, anywhere], scale).prop_map(|(points, scale): (Vec<Vec2>, f64)| {
         (
             points.into_iter().map(|p| [p[0] * scale, p[1] * scale]).collect(),
@@ -302,6 +303,39 @@ proptest! {
         prop_assert!(named(neighbours::within(&xs, &ys, 1.0, None, None).map(|_| ()), "positions"));
         prop_assert!(named(obstacles::virtual_agents(&points(spoiled(2 * n)), &Obstacles::new(&[], &[0]).unwrap(), 1.0, 0.0).map(|_| ()), "positions"));
     }
+}
+
+/// Coordinates beyond 1e100 would overflow the centroid sums: an error naming the argument.
+#[test]
+fn voronoi_coordinates_beyond_the_limit_are_errors() {
+    let beyond = |result: Result<(), GeomError>, name: &str| matches!(result, Err(GeomError::InvalidParameter { arg, got, .. }) if arg == name && got.abs() > 1e100);
+    let (near, far) = ([[0.0, 0.0]], [[2e100, 0.0]]);
+    let bounds = arena(1.0);
+    let wide = Arena::new(-2e100, 1.0, -1.0, 1.0).unwrap();
+    assert!(beyond(
+        voronoi::voronoi_cells(&far, 1.0, &bounds, None, 16).map(|_| ()),
+        "positions"
+    ));
+    assert!(beyond(
+        voronoi::voronoi_cells(&near, 1.0, &wide, None, 16).map(|_| ()),
+        "bounds"
+    ));
+    assert!(beyond(
+        voronoi::voronoi_cells(&near, 1.0, &bounds, Some((&[0, 1], &far)), 16).map(|_| ()),
+        "virtual"
+    ));
+    assert!(beyond(
+        voronoi::voronoi_cell(far[0], &near, &[], 1.0, &bounds, 16).map(|_| ()),
+        "position"
+    ));
+    assert!(beyond(
+        voronoi::voronoi_cell(near[0], &far, &[], 1.0, &bounds, 16).map(|_| ()),
+        "others"
+    ));
+    assert!(beyond(
+        voronoi::voronoi_cell(near[0], &[], &far, 1.0, &bounds, 16).map(|_| ()),
+        "virtual"
+    ));
 }
 
 /// Negative or non-finite radii and limits are errors naming the parameter.
