@@ -52,6 +52,11 @@ fn swarm(max_n: usize) -> impl Strategy<Value = (Vec<Vec2>, f64)> {
     })
 }
 
+/// The lattice or box points of [`swarm`] at unit scale, for kernels whose parameters are metres.
+fn unscaled(points: &[Vec2], scale: f64) -> Vec<Vec2> {
+    points.iter().map(|p| [p[0] / scale, p[1] / scale]).collect()
+}
+
 fn distance(a: Vec2, b: Vec2) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
 }
@@ -153,7 +158,7 @@ proptest! {
     /// `position + v` strictly inside the bounds, and never exceeds v_max.
     #[test]
     fn hrvo_batch_stays_within_v_max_and_picks_a_candidate(
-        (points, _) in swarm(10),
+        (points, scale) in swarm(10),
         seeds in prop::collection::vec((-0.3..0.3_f64, -0.3..0.3_f64, -1e6..1e6_f64, -1e6..1e6_f64), 10),
         v_max in prop::sample::select(vec![0.0, 0.05, 0.2, 1.0]),
         with_bounds in any::<bool>(),
@@ -164,8 +169,8 @@ proptest! {
         let bounds = with_bounds.then(|| arena(1.0));
         let params = HrvoParams { safety: 0.24, v_max, bounds, include_preferred: true };
         let grid = hrvo::candidate_grid(v_max, 20, 10);
-        // scale 1: HRVO's safety radius and speeds are in metres
-        let positions: Vec<Vec2> = points.iter().map(|&p| p).collect();
+        // unit scale: HRVO's safety radius and speeds are in metres
+        let positions = unscaled(&points, scale);
         let chosen = hrvo::hrvo_batch(&positions, &velocities, &preferred, None, 1.0, &grid, &params).unwrap();
         for ((v, pref), p) in chosen.iter().zip(&preferred).zip(&positions) {
             let speed = v[0].hypot(v[1]);
@@ -222,11 +227,12 @@ proptest! {
     /// Ray readings are a distance within range or -1.
     #[test]
     fn distance_rays_read_within_range_or_minus_one(
-        (points, _) in swarm(8),
+        (points, scale) in swarm(8),
         headings in prop::collection::vec(-10.0..10.0_f64, 8),
         walls in prop::collection::vec((-2.0..2.0_f64, -2.0..2.0_f64, -2.0..2.0_f64, -2.0..2.0_f64), 0..4),
         range in prop::sample::select(vec![0.1, 1.2, 5.0]),
     ) {
+        let points = unscaled(&points, scale); // the sensor head is in metres
         let n = points.len();
         let poses: Vec<f64> = points.iter().map(|p| p[0]).chain(points.iter().map(|p| p[1])).chain(headings[..n].iter().copied()).collect();
         let walls: Vec<Wall> = walls.iter().map(|w| Wall { a: [w.0, w.1], b: [w.2, w.3] }).collect();
@@ -241,11 +247,12 @@ proptest! {
     /// obstacle's closest point; a robot gets at most one agent per obstacle.
     #[test]
     fn virtual_agents_put_each_bisector_offset_before_the_obstacle(
-        (points, _) in swarm(10),
+        (points, scale) in swarm(10),
         corners in prop::collection::vec((-2.0..1.5_f64, -1.25..0.75_f64, 0.01..0.5_f64, 0.01..0.5_f64), 0..3),
         range in prop::sample::select(vec![0.0, 0.3, 1.0, 1e300]),
         offset in prop::sample::select(vec![0.0, 0.055, 0.2]),
     ) {
+        let points = unscaled(&points, scale); // obstacles and offsets are in metres
         let vertices: Vec<Vec2> = corners.iter().flat_map(|&(x, y, w, h)| [[x, y], [x + w, y], [x + w, y + h], [x, y + h]]).collect();
         let offsets: Vec<i64> = (0..=corners.len() as i64).map(|k| 4 * k).collect();
         let obstacles = Obstacles::new(&vertices, &offsets).unwrap();
