@@ -20,6 +20,7 @@ import numpy as np
 
 from dream import _reference
 from dream._checks import FloatArray, as_array, as_poses, check_nonnegative, check_robot_id
+from dream._reference.voronoi import MAX_COORDINATE
 from dream.errors import GeometryError
 from dream.specs import GRITSBOT, ONBOARD, ROBOTARIUM, RPS, ArenaSpec, OnboardSpec, RobotSpec, SimulatorSpec
 
@@ -375,6 +376,13 @@ def _checked_csr(csr: tuple[Any, Any], n: int) -> tuple[np.ndarray, np.ndarray]:
     return indptr, indices
 
 
+def _within_reach(array: FloatArray, name: str) -> FloatArray:
+    """``array`` unless a coordinate exceeds what the Voronoi kernels compute without overflow."""
+    if array.size and np.abs(array).max() > MAX_COORDINATE:
+        raise ValueError(f"`{name}` must be finite and at most 1e100 in magnitude, got {np.abs(array).max()}")
+    return array
+
+
 class VoronoiCells(NamedTuple):
     """Cells of :func:`voronoi_cells`; ``vertices``/``offsets`` are ``None`` unless requested."""
 
@@ -398,7 +406,9 @@ def voronoi_cells(
     Robot i's cell is the disc of ``radius`` (a regular polygon of ``resolution`` vertices)
     intersected with the arena ``bounds``, clipped by the perpendicular bisector of every other
     robot within ``2 radius`` and of each of its virtual agents (exact polygon clipping). An
-    empty cell (robot outside the arena) has area 0 and the robot's position as centroid.
+    empty cell (robot outside the arena) has area 0 and the robot's position as centroid. A
+    radius beyond the arena's reach is shrunk to one that still covers it (same cells, no loss
+    of precision), so any finite radius works; coordinates are limited to 1e100 in magnitude.
 
     Parameters
     ----------
@@ -408,7 +418,7 @@ def voronoi_cells(
     polygons : bool
         Also return the cells' vertices (counter-clockwise) as CSR.
     """
-    p = as_array(positions, "positions", (None, 2))
+    p = _within_reach(as_array(positions, "positions", (None, 2)), "positions")
     n = p.shape[0]
     if not (np.isfinite(radius) and radius > 0):
         raise ValueError(f"`radius` must be finite and > 0, got {radius}")
@@ -416,10 +426,11 @@ def voronoi_cells(
         raise ValueError(f"`resolution` must be >= 3, got {resolution}")
     box = _checked_bounds(bounds)
     assert box is not None
+    _within_reach(np.array(box), "bounds")
     agents = None
     if virtual is not None:
         indptr = np.ascontiguousarray(virtual[0], dtype=np.int64)
-        points = as_array(virtual[1], "virtual points", (None, 2))
+        points = _within_reach(as_array(virtual[1], "virtual points", (None, 2)), "virtual points")
         if indptr.shape != (n + 1,) or indptr[0] != 0 or np.any(np.diff(indptr) < 0) or indptr[-1] != len(points):
             raise ValueError(f"`virtual` indptr must be non-decreasing of shape ({n + 1},) from 0 to len(points)")
         agents = (indptr, points)
@@ -459,15 +470,16 @@ def voronoi_cell(
     centroid : (2,), area : float, vertices : (m, 2)
         The centroid is ``position`` when the cell is empty.
     """
-    p = as_array(position, "position", (2,))
-    q = as_array(others, "others", (None, 2))
-    v = np.zeros((0, 2)) if virtual is None else as_array(virtual, "virtual", (None, 2))
+    p = _within_reach(as_array(position, "position", (2,)), "position")
+    q = _within_reach(as_array(others, "others", (None, 2)), "others")
+    v = np.zeros((0, 2)) if virtual is None else _within_reach(as_array(virtual, "virtual", (None, 2)), "virtual")
     if not (np.isfinite(radius) and radius > 0):
         raise ValueError(f"`radius` must be finite and > 0, got {radius}")
     if not 3 <= resolution <= 2**20:
         raise ValueError(f"`resolution` must be between 3 and 2^20, got {resolution}")
     box = _checked_bounds(bounds)
     assert box is not None
+    _within_reach(np.array(box), "bounds")
     if _core is None:
         return _reference.voronoi_cell(p, q, v, radius=radius, bounds=box, resolution=resolution)
     return _core.voronoi_cell(p, q, v, radius=radius, bounds=box, resolution=resolution)

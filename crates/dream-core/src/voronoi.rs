@@ -5,6 +5,10 @@
 //! half-plane of every other robot within `2 radius` (increasing index) and of each of its
 //! virtual agents (given order). A robot whose cell is empty gets area 0 and its own position
 //! as centroid. The arithmetic matches the NumPy reference operation by operation.
+//!
+//! A disc far larger than the arena clips nothing but ruins the clipping's precision (at a
+//! radius of 1e20 the intersections with the walls lose every digit), so each robot's disc is
+//! first shrunk to [`covering_radius`], which still contains the whole arena.
 
 use std::f64::consts::TAU;
 
@@ -17,6 +21,10 @@ use crate::neighbours;
 
 /// Largest number of vertices of a cell's disc (far beyond any use; keeps memory bounded).
 pub const MAX_RESOLUTION: usize = 1 << 20;
+
+/// Largest coordinate magnitude (m) of robots, agents and bounds: the centroid sums products of
+/// three coordinates, which overflow beyond ~1e102.
+pub const MAX_COORDINATE: f64 = 1e100;
 
 /// Rows below this count run on one thread.
 const PARALLEL_ROBOTS: usize = 256;
@@ -65,7 +73,23 @@ pub fn area_centroid(polygon: &[Vec2], fallback: Vec2) -> (f64, Vec2) {
     }
 }
 
+/// A disc radius around `p` whose polygon (of any resolution >= 3) contains the whole arena.
+///
+/// The arena lies in the disc of `|p - centre| + half diagonal` around `p`, and a regular
+/// polygon of at least 3 vertices contains the disc of half its radius. Only `+ - * sqrt`, so
+/// that the NumPy reference gets the same bits; it is infinite only for coordinates beyond
+/// ~1e154, where it leaves the radius as given.
+pub fn covering_radius(p: Vec2, arena: &Arena) -> f64 {
+    let (dx, dy) = (
+        p[0] - (0.5 * arena.xmin + 0.5 * arena.xmax),
+        p[1] - (0.5 * arena.ymin + 0.5 * arena.ymax),
+    );
+    let (width, height) = (arena.xmax - arena.xmin, arena.ymax - arena.ymin);
+    2.0 * ((dx * dx + dy * dy).sqrt() + 0.5 * (width * width + height * height).sqrt())
+}
+
 fn cell(p: Vec2, radius: f64, arena: &Arena, agents: impl Iterator<Item = Vec2>, resolution: usize) -> Vec<Vec2> {
+    let radius = radius.min(covering_radius(p, arena));
     let mut polygon: Vec<Vec2> = (0..resolution)
         .map(|k| {
             let angle = TAU * k as f64 / resolution as f64;
@@ -99,7 +123,8 @@ fn cell(p: Vec2, radius: f64, arena: &Arena, agents: impl Iterator<Item = Vec2>,
 /// nothing is left.
 ///
 /// # Errors
-/// Non-finite input, a non-positive radius or a resolution outside 3..=2^20.
+/// Non-finite input or coordinates beyond [`MAX_COORDINATE`], a non-positive radius or a
+/// resolution outside 3..=2^20.
 pub fn voronoi_cell(
     p: Vec2,
     others: &[Vec2],
@@ -108,14 +133,28 @@ pub fn voronoi_cell(
     arena: &Arena,
     resolution: usize,
 ) -> Result<Vec<Vec2>> {
-    check_finite("position", &p)?;
-    check_finite("others", others.as_flattened())?;
-    check_finite("virtual", agents.as_flattened())?;
-    check_cell_parameters(radius, resolution)?;
+    check_coordinates("position", &p)?;
+    check_coordinates("others", others.as_flattened())?;
+    check_coordinates("virtual", agents.as_flattened())?;
+    check_cell_parameters(radius, arena, resolution)?;
     Ok(cell(p, radius, arena, others.iter().chain(agents).copied(), resolution))
 }
 
-fn check_cell_parameters(radius: f64, resolution: usize) -> Result<()> {
+/// Finite values of magnitude at most [`MAX_COORDINATE`].
+fn check_coordinates(arg: &'static str, values: &[f64]) -> Result<()> {
+    check_finite(arg, values)?;
+    match values.iter().find(|v| v.abs() > MAX_COORDINATE) {
+        Some(&got) => Err(GeomError::InvalidParameter {
+            arg,
+            rule: "at most 1e100 in magnitude",
+            got,
+        }),
+        None => Ok(()),
+    }
+}
+
+fn check_cell_parameters(radius: f64, arena: &Arena, resolution: usize) -> Result<()> {
+    check_coordinates("bounds", &[arena.xmin, arena.xmax, arena.ymin, arena.ymax])?;
     if !(radius.is_finite() && radius > 0.0) {
         return Err(GeomError::InvalidParameter {
             arg: "radius",
@@ -137,8 +176,8 @@ fn check_cell_parameters(radius: f64, resolution: usize) -> Result<()> {
 /// are `points[indptr[i]..indptr[i + 1]]`.
 ///
 /// # Errors
-/// Non-finite input, a non-positive radius, fewer than 3 vertices per disc, or an invalid
-/// virtual-agent CSR.
+/// Non-finite input or coordinates beyond [`MAX_COORDINATE`], a non-positive radius, a
+/// resolution outside 3..=2^20, or an invalid virtual-agent CSR.
 pub fn voronoi_cells(
     positions: &[Vec2],
     radius: f64,
@@ -147,11 +186,11 @@ pub fn voronoi_cells(
     resolution: usize,
 ) -> Result<Cells> {
     let n = positions.len();
-    check_finite("positions", positions.as_flattened())?;
-    check_cell_parameters(radius, resolution)?;
+    check_coordinates("positions", positions.as_flattened())?;
+    check_cell_parameters(radius, arena, resolution)?;
     if let Some((indptr, points)) = virtual_agents {
         check_len("virtual indptr", n + 1, indptr.len())?;
-        check_finite("virtual", points.as_flattened())?;
+        check_coordinates("virtual", points.as_flattened())?;
         let ok = indptr[0] == 0 && indptr[n] == points.len() as i64 && indptr.windows(2).all(|w| w[0] <= w[1]);
         if !ok {
             let reason = "its offsets must rise from 0 to the number of points".into();
@@ -163,7 +202,12 @@ pub fn voronoi_cells(
         }
     }
     let (xs, ys): (Vec<f64>, Vec<f64>) = positions.iter().map(|p| (p[0], p[1])).unzip();
-    let near = neighbours::within(&xs, &ys, 2.0 * radius, None, None)?;
+    // Robots beyond twice a robot's (shrunk) disc radius cannot clip its cell.
+    let reach = positions
+        .iter()
+        .map(|&p| radius.min(covering_radius(p, arena)))
+        .fold(0.0, f64::max);
+    let near = neighbours::within(&xs, &ys, (2.0 * reach).min(f64::MAX), None, None)?;
     let robot = |i: usize| {
         let others = near.indices[near.indptr[i] as usize..near.indptr[i + 1] as usize]
             .iter()

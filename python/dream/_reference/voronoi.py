@@ -5,6 +5,10 @@ vertices, the first at angle 0), clipped by the arena and then by the perpendicu
 half-plane of every other robot within ``2 radius`` (in increasing index order) and of each
 of robot i's virtual agents (in the given order). A robot whose cell is empty (outside the
 arena) gets area 0 and its own position as centroid.
+
+A disc far larger than the arena clips nothing but ruins the clipping's precision (at a radius
+of 1e20 the intersections with the walls lose every digit), so each robot's disc is first
+shrunk to :func:`covering_radius`, which still contains the whole arena.
 """
 
 from __future__ import annotations
@@ -13,6 +17,10 @@ import numpy as np
 
 from dream._checks import FloatArray
 from dream._reference.neighbours import neighbours_of
+
+#: Largest coordinate magnitude (m) of robots, agents and bounds (the public API rejects more):
+#: the centroid sums products of three coordinates, which overflow beyond ~1e102.
+MAX_COORDINATE = 1e100
 
 
 def clip(
@@ -50,6 +58,19 @@ def area_centroid(
     return twice / 2, (cx / (3 * twice), cy / (3 * twice))
 
 
+def covering_radius(position: tuple[float, float], bounds: tuple[float, float, float, float]) -> float:
+    """A disc radius (m) around ``position`` whose polygon (any resolution >= 3) contains ``bounds``.
+
+    The bounds lie in the disc of ``|position - centre| + half diagonal``, and a regular polygon
+    of at least 3 vertices contains the disc of half its radius. Only ``+ - * sqrt``, in the Rust
+    core's order, so that both get the same bits; infinite only for coordinates beyond ~1e154.
+    """
+    xmin, xmax, ymin, ymax = bounds
+    dx, dy = position[0] - (0.5 * xmin + 0.5 * xmax), position[1] - (0.5 * ymin + 0.5 * ymax)
+    width, height = xmax - xmin, ymax - ymin
+    return 2.0 * (float(np.sqrt(dx * dx + dy * dy)) + 0.5 * float(np.sqrt(width * width + height * height)))
+
+
 def cell(
     position: tuple[float, float],
     agents: list[tuple[float, float]],
@@ -60,6 +81,7 @@ def cell(
     """The cell of a robot at ``position`` clipped by ``agents`` (robots, then virtual agents), in
     order: a counter-clockwise vertex list (empty if nothing is left)."""
     px, py = position
+    radius = min(radius, covering_radius(position, bounds))
     angles = 2 * np.pi * np.arange(resolution) / resolution
     polygon = [(px + radius * float(np.cos(a)), py + radius * float(np.sin(a))) for a in angles]
     xmin, xmax, ymin, ymax = bounds
@@ -107,18 +129,20 @@ def voronoi_cells(
     ``points[indptr[i]:indptr[i + 1]]``.
     """
     n = len(positions)
+    # Robots beyond twice a robot's (shrunk) disc radius cannot clip its cell.
+    points = [(float(x), float(y)) for x, y in positions]
+    reach = max((min(radius, covering_radius(p, bounds)) for p in points), default=0.0)
+    search = min(2 * reach, np.finfo(np.float64).max)
     centroids = np.zeros((n, 2))
     areas = np.zeros(n)
     offsets = np.zeros(n + 1, dtype=np.int64)
     vertices: list[tuple[float, float]] = []
     for i in range(n):
         mine = np.zeros((0, 2)) if virtual is None else virtual[1][virtual[0][i] : virtual[0][i + 1]]
-        others, _ = neighbours_of(positions, i, 2 * radius)
-        agents = [(float(positions[j, 0]), float(positions[j, 1])) for j in others] + [
-            (float(x), float(y)) for x, y in mine
-        ]
-        polygon = cell((float(positions[i, 0]), float(positions[i, 1])), agents, radius, bounds, resolution)
-        areas[i], centroids[i] = area_centroid(polygon, (float(positions[i, 0]), float(positions[i, 1])))
+        others, _ = neighbours_of(positions, i, search)
+        agents = [points[j] for j in others] + [(float(x), float(y)) for x, y in mine]
+        polygon = cell(points[i], agents, radius, bounds, resolution)
+        areas[i], centroids[i] = area_centroid(polygon, points[i])
         vertices.extend(polygon)
         offsets[i + 1] = len(vertices)
     return centroids, areas, np.array(vertices, dtype=np.float64).reshape(-1, 2), offsets
