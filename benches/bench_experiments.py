@@ -7,10 +7,9 @@ from __future__ import annotations
 
 import statistics
 
-from harness import table
-
 from dream.experiments import hrvo_circle
 from dream.specs import RPS
+from harness import table
 
 #: (label, call): each call runs one seeded experiment and returns its result.
 CASES = [

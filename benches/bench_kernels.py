@@ -133,7 +133,9 @@ def neighbour_rows(sizes) -> list[list[object]]:
                 p = make(m).positions
                 return lambda: find(p, RANGE)
 
-            slow = lambda m, build=build: build(m, _reference.neighbours)
+            def slow(m, build=build):
+                return build(m, _reference.neighbours)
+
             rows.append(row(f"neighbours/{name}/n={n}", n, build, slow, 10_000))
     return rows
 
@@ -148,7 +150,9 @@ def hrvo_rows(sizes) -> list[list[object]]:
                 p, v, pref = make(m)
                 return lambda: hrvo(p, v, pref, radius=RANGE)
 
-            slow = lambda m, build=build: build(m, _reference.hrvo)
+            def slow(m, build=build):  # noqa: F811 (one reference per table)
+                return build(m, _reference.hrvo)
+
             rows.append(row(f"hrvo/{name}/n={n}", n, build, slow, 1_000))
     return rows
 

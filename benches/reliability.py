@@ -23,6 +23,7 @@ import dream
 from dream.experiments import hrvo_circle
 from harness import machine, table
 
+LARGE = ((100, "0-9"), (1000, "0-2"))  #: sizes and seeds of the experiments whose arena grows
 #: The table of issue "every experiment does its job at every size".
 SIZES = [
     "hrvo-circle:10:robotarium:0-99",
@@ -31,7 +32,7 @@ SIZES = [
     "hrvo-circle:100:fast:0-9",
     "hrvo-circle:1000:fast:0-2",
     "hrvo-circle:10000:batch:0",
-    *(f"{name}:{n}:fast:{seeds}" for name in ("line-consensus", "voronoi-coverage") for n, seeds in ((100, "0-9"), (1000, "0-2"))),
+    *(f"{name}:{n}:fast:{seeds}" for name in ("line-consensus", "voronoi-coverage") for n, seeds in LARGE),
     "affine-formation:98:fast:0-9",
     "affine-formation:1001:fast:0-2",
 ]
@@ -82,7 +83,8 @@ def measure(name: str, n: int, backend: str, seeds: range, faults: str, workers:
     summed = [sum(row[key] or 0 for row in results) for key in ("collisions", "boundary", "actuator")]
     seed_text = f"{seeds.start}-{seeds.stop - 1}" if len(seeds) > 1 else str(seeds.start)
     wall = f"{time.perf_counter() - start:.0f}"
-    return [name, n, backend, faults or "-", seed_text, f"{len(done)}/{len(seeds)}", *summed, steps, failed or "-", wall]
+    successes = f"{len(done)}/{len(seeds)}"
+    return [name, n, backend, faults or "-", seed_text, successes, *summed, steps, failed or "-", wall]
 
 
 def main() -> None:

@@ -10,16 +10,15 @@ arrays ``[x; y; theta]``, unicycle commands ``(2, n)`` arrays ``[v; w]`` (the Ro
 convention); positions given to geometry kernels are ``(n, 2)``.
 """
 
-from dream import kernels, specs
-from dream import _version
+from dream import _version, kernels, specs
 from dream.backends import Backend, Fast, Robotarium, initial_poses, make_robotarium
 from dream.errors import GeometryError
 from dream.experiments import Experiment, ExperimentResult, Param, param, run
 from dream.faults import Faults
-from dream.radios import GraphRadio, Radio, RangeRadio
-from dream.robot import Robot, RobotHRVO
 from dream.obstacles import Obstacle
 from dream.onboard import DistanceSensor, EncoderSensor, ImuReading, ImuSensor
+from dream.radios import GraphRadio, Radio, RangeRadio
+from dream.robot import Robot, RobotHRVO
 from dream.sensors import MovementSensor, ObstacleSensor, OdometrySensor, Sensor
 from dream.specs import (
     R_AC_MAX,

@@ -1,8 +1,9 @@
 """Types of the compiled kernels (dream-py). Poses are (3, n), commands (2, n), float64."""
 
+from typing import final
+
 import numpy as np
 from numpy.typing import NDArray
-from typing import final
 
 __version__: str
 __all__ = [

@@ -20,9 +20,9 @@ import signal
 import subprocess
 import sys
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from dream.backends import BACKENDS
 from dream.backends.robotarium import MAX_ROBOTS

@@ -92,7 +92,10 @@ class Obstacle:
                 self.velocity[axis] = -abs(self.velocity[axis])
 
     def __repr__(self) -> str:
-        return f"Obstacle(center={self.center.tolist()}, size={self.size.tolist()}, angle={self.angle}, velocity={self.velocity.tolist()})"
+        return (
+            f"Obstacle(center={self.center.tolist()}, size={self.size.tolist()}, angle={self.angle}, "
+            f"velocity={self.velocity.tolist()})"
+        )
 
 
 def touching(obstacles: list[Obstacle], positions: Any, radius: float) -> np.ndarray:

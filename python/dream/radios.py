@@ -8,7 +8,8 @@ defaults (no loss, no latency) behave as the original.
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 

@@ -17,9 +17,10 @@ def plot_sweep(rows: Sequence[dict[str, Any]], swept: Sequence[str], path: str |
     """Write a PNG: one row of panels per metric, one column per swept input.
 
     The metrics: the success rate, the step at which the runs were done, and the measures that
-    vary (at most :data:`MAX_MEASURES`). Each panel puts one swept input on the x axis and draws one line per combination of the
-    other swept inputs: the success rate (a run that raised counts as a failure), or the mean of
-    a metric over the seeds with its standard deviation as error bars. A sweep over seeds alone
+    vary (at most :data:`MAX_MEASURES`). Each panel puts one swept input on the x axis and draws
+    one line per combination of the other swept inputs: the success rate (a run that raised
+    counts as a failure), or the mean of a metric over the seeds with its standard deviation as
+    error bars. A sweep over seeds alone
     plots each seed's values.
 
     Parameters

@@ -427,7 +427,8 @@ class Renderer:
             moving = np.asarray(frame.obstacle_moving, dtype=bool).reshape(-1)
             if len(moving) != len(frame.obstacles):
                 raise ValueError(
-                    f"frame.obstacle_moving has {len(moving)} entries, expected {len(frame.obstacles)} (one per obstacle)"
+                    f"frame.obstacle_moving has {len(moving)} entries, expected {len(frame.obstacles)} "
+                    "(one per obstacle)"
                 )
         if self.focus is not None and self.focus >= n:
             raise ValueError(f"focus={self.focus}: the frame has {n} robots (ids 0..{n - 1})")
@@ -542,7 +543,7 @@ class Renderer:
                 self._by_offsets.append(mark)
                 self._roles[role] = (marker, mark)
         size = (0.4 * max(self.robot_pixels(), 4.0) * 72 / DPI) ** 2  # points^2: inside the notch
-        for role, (marker, mark) in self._roles.items():
+        for role, (_marker, mark) in self._roles.items():
             here = roles == role if roles is not None and role != plain else np.zeros(len(positions), dtype=bool)
             mark.set_offsets(positions[here])
             mark.set_sizes([size])

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
+from rps.robotarium import Robotarium as Rps
 
 from dream.backends import Fast, Robotarium
-from rps.robotarium import Robotarium as Rps
 
 KEYS = ("boundary", "collision", "actuator")
 

@@ -12,7 +12,6 @@ from numpy.testing import assert_allclose, assert_array_equal
 from dream import _reference, kernels
 from dream._reference import candidate_grid, hrvo
 
-
 SAFETY = 0.24
 V_MAX = 0.2
 NONE = (np.zeros(0), np.zeros(0), np.zeros((0, 2)))  # no neighbours: directions, distances, velocities

@@ -736,7 +736,9 @@ def planner():
     return _core.HrvoPlanner(GRID, safety=SAFETY, v_max=V_MAX, bounds=ARENA, include_preferred=True)
 
 
-def call_planner(detections=np.zeros((1, 4)) + 0.5, velocity=np.zeros(2), preferred=np.zeros(2), position=np.zeros(2)):
+def call_planner(detections=None, velocity=None, preferred=None, position=None):
+    detections = np.zeros((1, 4)) + 0.5 if detections is None else detections
+    velocity, preferred, position = (np.zeros(2) if v is None else v for v in (velocity, preferred, position))
     return lambda: planner().velocity(detections, velocity, preferred, position)
 
 

@@ -33,7 +33,8 @@ def initial_poses(
     columns, rows = int(width // spacing), int(height // spacing)
     if columns * rows < n:
         raise ValueError(
-            f"{n} robots do not fit {spacing} m apart in the central {width:.2f} x {height:.2f} m of the arena: use a larger arena"
+            f"{n} robots do not fit {spacing} m apart in the central {width:.2f} x {height:.2f} m of the arena: "
+            "use a larger arena"
         )
     cells = rng.choice(columns * rows, size=n, replace=False)
     cx, cy = (arena.xmin + arena.xmax) / 2, (arena.ymin + arena.ymax) / 2

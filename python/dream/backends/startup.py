@@ -9,8 +9,9 @@ points ``SAFETY`` apart; within ``NEAR`` of the goal it closes in with a plain u
 position controller (forwards or backwards, whichever faces the goal), and once in position
 it turns on the spot to its heading. HRVO can deadlock (robots waiting on each other): a
 robot that has not moved ``UNSTUCK_DISTANCE`` in ``STALL_STEPS`` heads for a random detour
-point nearby until it gets there or stalls again (rps 2.1 breaks deadlocks the same way). Start-up ends when every robot is within
-``POSITION_TOLERANCE`` of its position and ``HEADING_TOLERANCE`` of its heading.
+point nearby until it gets there or stalls again (rps 2.1 breaks deadlocks the same way).
+Start-up ends when every robot is within ``POSITION_TOLERANCE`` of its position and
+``HEADING_TOLERANCE`` of its heading.
 """
 
 from __future__ import annotations
