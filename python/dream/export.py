@@ -25,6 +25,7 @@ import shutil
 import sys
 import tempfile
 import time
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 from string import Template
@@ -43,6 +44,9 @@ from dream.world import World, reset_default_world
 #: The lab's testbed takes at most 20 robots (Robotarium Python Guide, section 2.7.3); rps itself
 #: accepts 50, and rps 2.1's start-up phase has 22 charger slots.
 LAB_MAX_ROBOTS = 20
+#: rps 2.1 draws initial conditions this far apart (m); its start-up phase from the chargers, which
+#: the lab's verifier runs, stalls in its barrier certificates when they are much closer.
+LAB_START_SPACING = 0.5
 #: Third-party packages a bundle may import: what the lab installs for every script.
 LAB_PACKAGES = ("numpy", "scipy", "matplotlib", "cvxopt", "rps")
 #: DREAM modules left out of a bundle, and why a script that uses one cannot go to the lab.
@@ -122,6 +126,10 @@ print(lab.report())
 
 class ExportError(ValueError):
     """An experiment, size or output folder that ``dream export`` cannot make a lab bundle of."""
+
+
+class ExportWarning(UserWarning):
+    """A bundle that runs, but that the lab's rps 2.1 may not take as it is."""
 
 
 # -- in the bundle: DREAM's side of main.py -----------------------------------------------------
@@ -299,8 +307,11 @@ def export(
         size the lab or the experiment refuses, bad parameters, or an output folder in the way.
     """
     script = None
-    if str(source) in EXPERIMENTS:
-        cls = EXPERIMENTS[str(source)]
+    if not str(source).endswith(".py"):
+        try:
+            cls = find(str(source))  # a built-in's name
+        except ValueError as err:
+            raise ExportError(str(err)) from None
     else:
         script = Path(source)
         if not script.is_file():
@@ -326,6 +337,15 @@ def export(
     exp = lab.stepper.exp
     if exp.arena != ROBOTARIUM:
         raise ExportError(f"{exp.label()} with {n} robots needs a larger arena than the Robotarium's")
+    closest = _closest(lab.initial_conditions)
+    if closest < LAB_START_SPACING:
+        warnings.warn(
+            f"{exp.label()}'s robots start {closest:.2f} m apart: rps 2.1's start-up phase, which the lab's "
+            f"verifier runs, drives them there from the chargers and stalls when starts are closer than "
+            f"~{LAB_START_SPACING} m (the bundle runs on rps 0.0.0; on 2.1 give the experiment wider initial_poses)",
+            ExportWarning,
+            stacklevel=2,
+        )
     target = _target(Path(output), force)
     bundled = cls.name if script is None else _bundled_name(script)
     files = [
@@ -356,6 +376,12 @@ def export(
         shutil.rmtree(folder, ignore_errors=True)
         raise
     return target
+
+
+def _closest(poses: FloatArray) -> float:
+    """The smallest distance between two robots of ``poses`` ``(3, n)`` (m; inf for one robot)."""
+    gaps = np.hypot(*(poses[:2, :, None] - poses[:2, None, :]))
+    return float(gaps[~np.eye(poses.shape[1], dtype=bool)].min(initial=np.inf))
 
 
 def _bundled_name(script: Path) -> str:
@@ -446,8 +472,12 @@ def command(args: argparse.Namespace) -> int:
             raise UsageError(f"--param takes NAME=VALUE, got {pair!r}")
         params[name.strip()] = value
     try:
-        folder = export(args.experiment, args.output, n=args.n, seed=args.seed, params=params, force=args.force)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", ExportWarning)
+            folder = export(args.experiment, args.output, n=args.n, seed=args.seed, params=params, force=args.force)
     except ExportError as err:
         raise UsageError(str(err)) from None
+    for warning in caught:
+        print(f"dream: warning: {warning.message}", file=sys.stderr)
     print(f"wrote {folder}: run `DREAM_HEADLESS=1 python {folder / 'main.py'}` to check it, then submit the folder")
     return 0
