@@ -425,7 +425,9 @@ def _copy_package(destination: Path) -> None:
             continue
         (destination / relative).parent.mkdir(parents=True, exist_ok=True)
         text = path.read_text(encoding="utf-8")
-        (destination / relative).write_text(_without_left_out(text) if relative == Path("__init__.py") else text)
+        (destination / relative).write_text(
+            _without_left_out(text) if relative == Path("__init__.py") else text, encoding="utf-8"
+        )
 
 
 def _without_left_out(text: str) -> str:
@@ -436,8 +438,10 @@ def _without_left_out(text: str) -> str:
     dropped: set[str] = set()
     spans: list[tuple[int, int, str]] = []
     for node in tree.body:
-        parts = (node.module or "").split(".") if isinstance(node, ast.ImportFrom) else []
-        if parts[:1] == ["dream"] and len(parts) > 1 and parts[1] in LEFT_OUT:
+        if not isinstance(node, ast.ImportFrom):
+            continue
+        parts = (node.module or "").split(".")
+        if parts[0] == "dream" and len(parts) > 1 and parts[1] in LEFT_OUT:
             dropped.update(alias.asname or alias.name for alias in node.names)
             spans.append((node.lineno, node.end_lineno or node.lineno, ""))
     for node in tree.body:
