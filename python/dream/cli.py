@@ -124,6 +124,22 @@ def _parser() -> argparse.ArgumentParser:
     sweeper.add_argument("--plot", metavar="PATH", help="PNG of success rate and measures against the swept values")
     sweeper.add_argument("--no-progress", action="store_true", help="no progress bar")
     sweeper.set_defaults(handler=command)
+    from dream import export
+
+    exporter = commands.add_parser(
+        "export", help="write a folder the Robotarium lab runs: main.py in its loop shape + pure-Python DREAM"
+    )
+    exporter.add_argument("experiment", help=f"one of {', '.join(sorted(EXPERIMENTS))}, or a .py file")
+    exporter.add_argument("-o", "--output", metavar="DIR", required=True, help="the bundle's folder (new or empty)")
+    exporter.add_argument(
+        "-n", type=_whole(1), default=None, help=f"number of robots, at most {export.LAB_MAX_ROBOTS} (the lab's)"
+    )
+    exporter.add_argument("--seed", type=_whole(0), default=0, help="random seed (default: 0)")
+    exporter.add_argument(
+        "--param", action="append", default=[], metavar="NAME=VALUE", help="set a parameter (repeatable)"
+    )
+    exporter.add_argument("--force", action="store_true", help="replace DIR if it is not empty")
+    exporter.set_defaults(handler=export.command)
     return parser
 
 
@@ -312,7 +328,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _bench(args.full)
         if args.command == "new":
             return _new(args.name, args.output)
-        if args.command == "sweep":
+        if args.command in ("sweep", "export"):
             return args.handler(args)
         return _run(args)
     except UsageError as err:

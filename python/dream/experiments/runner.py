@@ -12,9 +12,10 @@ from typing import Any
 import numpy as np
 
 from dream.backends import BACKENDS, make_robotarium
+from dream.backends.base import Backend
 from dream.experiments.result import ExperimentResult
 from dream.experiments.spec import Experiment
-from dream.faults import Faults
+from dream.faults import Faults, FaultState
 from dream.frames import Frame, fault_status
 from dream.world import World
 
@@ -74,12 +75,9 @@ def run(
         raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
     exp.check(n, backend)
     with World(seed) as world:
-        exp.n, exp.world, exp.arena = n, world, exp.arena_for(n)
-        exp.build(n)
-        sim = make_robotarium(n, backend, exp.initial_poses(n, world.rng), arena=exp.arena)
-        exp.sim, exp.dxu = sim, np.zeros((2, n))
-        state = world.inject(faults, n)
-        w_per_v = sim.sim.max_angular / sim.sim.max_linear
+        stepper = Stepper(exp, n, world)
+        sim = make_robotarium(n, backend, stepper.initial_conditions, arena=exp.arena)
+        stepper.attach(sim, faults)
         cap = exp.steps(n) if steps is None else _count(steps, "steps", 1)
         everyone = np.arange(n)
         poses = [sim.poses] if trace else []
@@ -87,35 +85,106 @@ def run(
         start = time.perf_counter()
         with _StopOnSignal() as stop:
             for t in range(cap):
-                exp.before_step(t)
                 x = sim.get_poses()
-                world.update_timers(t, exp.timer_params(x, exp.dxu))
-                sim.set_velocities(everyone, exp.dxu if state is None else state.actuate(exp.dxu, w_per_v))
+                sim.set_velocities(everyone, stepper.decide(t, x))
                 sim.step()
                 now = sim.poses
-                exp.after_step(t + 1, now)
+                done = stepper.after(t + 1, now)
                 if trace:
                     poses.append(now)
                 if progress is not None:
                     progress(t + 1, cap)
                 if record is not None:
-                    frame = exp.frame(t + 1, now)
-                    frame.time = (t + 1) * sim.time_step if frame.time is None else frame.time
-                    if state is not None and frame.status is None:  # who has crashed, is stuck or lies
-                        frame.status = fault_status(state.crashed, state.stuck, state.byzantine)
-                    record(frame)
-                if exp.done(t + 1, now):
+                    record(stepper.frame(t + 1, now))
+                if done:
                     done_at = t + 1
                     break
                 if stop.signal is not None:
                     break
         wall = time.perf_counter() - start
-    result = ExperimentResult.from_backend(
-        exp.label(), seed, sim, done_at, wall, exp.measures(), np.array(poses) if trace else None, exp.params
-    )
+    result = stepper.result(done_at, wall, np.array(poses) if trace else None)
     result.interrupted, result.signal = stop.signal is not None, stop.signal
-    result.faults = {} if state is None else state.summary()
     return result
+
+
+class Stepper:
+    """DREAM's part of one run, around a loop that makes the Robotarium's calls itself.
+
+    :func:`run` and the ``main.py`` of an exported bundle (:mod:`dream.export`) both drive their
+    simulator through this, so the experiment sees the same sequence of hooks in either::
+
+        stepper = Stepper(exp, n, world)      # the experiment builds its robots
+        sim = ...                             # a simulator started at stepper.initial_conditions
+        stepper.attach(sim, faults)
+        for t in range(cap):
+            x = sim.get_poses()
+            sim.set_velocities(ids, stepper.decide(t, x))
+            sim.step()
+            if stepper.after(t + 1, sim.poses):
+                break
+        result = stepper.result(done_at, wall_time)
+
+    Parameters
+    ----------
+    exp : Experiment
+        A fresh instance, already :meth:`~Experiment.check`-ed for ``n``.
+    n : int
+        Number of robots.
+    world : World
+        The run's world (current while the run steps); its generator draws the initial poses.
+    """
+
+    def __init__(self, exp: Experiment, n: int, world: World) -> None:
+        exp.n, exp.world, exp.arena = n, world, exp.arena_for(n)
+        exp.build(n)
+        self.exp, self.world = exp, world
+        #: ``(3, n)`` poses the simulator starts from (m, m, rad).
+        self.initial_conditions = exp.initial_poses(n, world.rng)
+        self.state: FaultState | None = None
+        self._w_per_v = 1.0
+
+    def attach(self, sim: Backend, faults: Faults | None = None) -> None:
+        """Give the experiment its simulator and command array, and draw the run's faults."""
+        exp = self.exp
+        exp.sim, exp.dxu = sim, np.zeros((2, exp.n))
+        self.state = self.world.inject(faults, exp.n)
+        # Actuator noise on w is scaled like the robot's speed range.
+        self._w_per_v = sim.sim.max_angular / sim.sim.max_linear
+
+    def decide(self, step: int, x: np.ndarray) -> np.ndarray:
+        """The commands ``(2, n)`` ``[v; w]`` (m/s, rad/s) of step ``step`` (0-based).
+
+        ``x`` ``(3, n)`` holds the poses that this step's ``get_poses()`` returned. Runs the
+        experiment's :meth:`~Experiment.before_step`, then every robot's timers (sensors, radios,
+        controllers, which write ``exp.dxu``); faulty wheels then change what is carried out.
+        """
+        exp = self.exp
+        exp.before_step(step)
+        self.world.update_timers(step, exp.timer_params(x, exp.dxu))
+        return exp.dxu if self.state is None else self.state.actuate(exp.dxu, self._w_per_v)
+
+    def frame(self, step: int, poses: np.ndarray) -> Frame:
+        """The experiment's frame of this step, with the simulated time and who is faulty."""
+        frame = self.exp.frame(step, poses)
+        frame.time = step * self.exp.sim.time_step if frame.time is None else frame.time
+        if self.state is not None and frame.status is None:  # who has crashed, is stuck or lies
+            frame.status = fault_status(self.state.crashed, self.state.stuck, self.state.byzantine)
+        return frame
+
+    def after(self, step: int, poses: np.ndarray) -> bool:
+        """After the simulator's step (``step`` steps run, ``poses`` ``(3, n)``): the experiment's
+        :meth:`~Experiment.after_step`, then whether it is :meth:`~Experiment.done`."""
+        self.exp.after_step(step, poses)
+        return bool(self.exp.done(step, poses))
+
+    def result(self, done_at: int | None, wall: float, trace: np.ndarray | None = None) -> ExperimentResult:
+        """The run's metrics: the simulator's counts, the experiment's measures and the faults."""
+        exp = self.exp
+        result = ExperimentResult.from_backend(
+            exp.label(), self.world.seed or 0, exp.sim, done_at, wall, exp.measures(), trace, exp.params
+        )
+        result.faults = {} if self.state is None else self.state.summary()
+        return result
 
 
 def _instance(experiment: type[Experiment] | Experiment | str, params: dict[str, Any]) -> Experiment:

@@ -1,0 +1,487 @@
+"""``dream export``: an experiment as a folder that the Robotarium lab runs.
+
+The lab runs plain Python scripts with ``rps`` and the common scientific packages (numpy, scipy,
+matplotlib, cvxopt), without DREAM's compiled extension. :func:`export` writes a folder with
+
+- ``main.py``: the lab's explicit loop. It builds ``rps.robotarium.Robotarium`` with keyword
+  arguments, calls ``get_poses``, ``set_velocities`` and ``step`` every iteration and ends with
+  ``debug()`` (rps 2.x) or ``call_at_scripts_end()`` (rps 0.0.0); DREAM's part of each step is
+  one call to :class:`LabRun`, which goes through the same :class:`~dream.experiments.runner.Stepper`
+  as :func:`dream.run`;
+- ``dream/``: the pure-Python part of DREAM (its kernels fall back to the NumPy reference);
+- the experiment's own file, when it is one.
+
+``DREAM_HEADLESS=1 python main.py`` runs the bundle without rps's figure and real-time pacing
+(rps 0.0.0's figure fails on current matplotlib); the last line it prints reads
+``dream: success, 0 collisions, 0 boundary, 0 actuator`` when the run met its success test.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import os
+import shutil
+import sys
+import tempfile
+import time
+import warnings
+from collections.abc import Mapping
+from pathlib import Path
+from string import Template
+from typing import Any
+
+import numpy as np
+
+from dream._checks import FloatArray, as_poses
+from dream.backends.base import Backend
+from dream.backends.robotarium import rps_generation
+from dream.experiments import EXPERIMENTS, ExperimentResult, find, load_file
+from dream.experiments.runner import Stepper
+from dream.specs import ROBOTARIUM, RULES
+from dream.world import World, reset_default_world
+
+#: The lab's testbed takes at most 20 robots (Robotarium Python Guide, section 2.7.3); rps itself
+#: accepts 50, and rps 2.1's start-up phase has 22 charger slots.
+LAB_MAX_ROBOTS = 20
+#: rps 2.1 draws initial conditions this far apart (m); its start-up phase from the chargers, which
+#: the lab's verifier runs, stalls in its barrier certificates when they are much closer.
+LAB_START_SPACING = 0.5
+#: Third-party packages a bundle may import: what the lab installs for every script.
+LAB_PACKAGES = ("numpy", "scipy", "matplotlib", "cvxopt", "rps")
+#: DREAM modules left out of a bundle, and why a script that uses one cannot go to the lab.
+LEFT_OUT = {
+    "_core": "the compiled extension (a bundle runs on the NumPy reference)",
+    "__main__": "the command line",
+    "cli": "the command line",
+    "viz": "drawing and video (Pillow, imageio)",
+    "sweep": "sweeps (Dask)",
+    "sweep_plot": "sweeps (Dask)",
+    "templates": "`dream new`'s templates",
+    "onboard": "onboard sensors, which DREAM simulates from the poses; the lab's robots need rps 2.1's own "
+    "(use_distance_sensors=True, get_distances(), get_encoders())",
+}
+#: Public names of left-out modules that ``from dream import *`` brings into a script.
+LEFT_OUT_NAMES = {"DistanceSensor": "onboard", "EncoderSensor": "onboard", "ImuSensor": "onboard", "sweep": "sweep"}
+
+PACKAGE = Path(__file__).resolve().parent
+DREAM_FILES = "DREAM's pure-Python package (without the compiled extension: its kernels run on NumPy)"
+
+MAIN = Template('''\
+"""$label for the Robotarium, exported by DREAM $version with
+
+    dream export $command
+
+Submit all of these files, keeping dream/ a folder, and mark main.py as the main file:
+$files
+Check the bundle before submitting:
+
+    python main.py                       # rps's figure, in real time, as the lab runs it
+    DREAM_HEADLESS=1 python main.py      # no figure, no real-time pacing
+
+The last line says whether the run met the experiment's success test:
+"dream: success, 0 collisions, 0 boundary, 0 actuator".
+"""
+
+import os
+import sys
+
+import numpy as np
+import rps.robotarium as robotarium
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)  # this folder's DREAM, before any installed copy
+
+from dream.export import LabRun  # noqa: E402
+
+EXPERIMENT = $experiment
+N = $n
+SEED = $seed
+PARAMS = $params
+ITERATIONS = $iterations  # at most; the loop ends when the experiment is done
+SHOW = os.environ.get("DREAM_HEADLESS", "0") in ("", "0")
+
+lab = LabRun(EXPERIMENT, N, SEED, PARAMS, folder=HERE)
+r = robotarium.Robotarium(
+    number_of_robots=N, show_figure=SHOW, initial_conditions=lab.initial_conditions, sim_in_real_time=SHOW
+)
+
+x = r.get_poses()
+for t in range(ITERATIONS):
+    dxu = lab.decide(t, x)  # DREAM: the robots' timers, sensors, radios and controllers
+    r.set_velocities(np.arange(N), dxu)
+    r.step()
+    x = r.get_poses()
+    if lab.stepped(t, x):  # DREAM: the experiment's bookkeeping; True once it is done
+        break
+
+# rps 2.x renamed rps 0.0.0's call_at_scripts_end() to debug().
+if hasattr(r, "debug"):
+    r.debug()
+else:
+    r.call_at_scripts_end()
+print(lab.report())
+''')
+
+
+class ExportError(ValueError):
+    """An experiment, size or output folder that ``dream export`` cannot make a lab bundle of."""
+
+
+class ExportWarning(UserWarning):
+    """A bundle that runs, but that the lab's rps 2.1 may not take as it is."""
+
+
+# -- in the bundle: DREAM's side of main.py -----------------------------------------------------
+class LabSimulator(Backend):
+    """DREAM's bookkeeping beside the lab's simulator in an exported ``main.py``.
+
+    The lab's ``rps.robotarium.Robotarium`` moves the robots; this backend holds the poses its
+    ``get_poses()`` returned (:meth:`follow`), takes the same commands and counts violations by
+    the rules of the rps generation installed, as :class:`~dream.backends.Robotarium` does. It
+    only uses rps's public calls, which the lab's testbed also has.
+
+    Parameters
+    ----------
+    initial_conditions : (3, n) array_like
+        The poses the run starts from (rps 2.x's start-up phase ends near them; :meth:`follow`
+        brings the real ones).
+    """
+
+    name = "lab"
+
+    def __init__(self, initial_conditions: Any) -> None:
+        super().__init__(initial_conditions, ROBOTARIUM, RULES[rps_generation() or "rps2"])
+
+    def follow(self, x: Any) -> None:
+        """Take ``x`` ``(3, n)``, what the lab's ``get_poses()`` returned, as the current poses."""
+        self._poses = as_poses(x, "x", self.number_of_robots).copy()
+
+    def _advance(self) -> None:
+        """Nothing to move: the lab's simulator has moved the robots, and :meth:`follow` brings their poses."""
+
+
+class LabRun:
+    """One run of an experiment inside the lab's loop (the ``lab`` of an exported ``main.py``).
+
+    Parameters
+    ----------
+    experiment : str
+        A built-in experiment's name, or the name of its ``.py`` file in ``folder``.
+    n, seed : int
+        Number of robots and the seed of the run's generator.
+    params : mapping
+        Values of the experiment's parameters.
+    folder : str or Path
+        Where the experiment's file is.
+    world : World, optional
+        The run's world; default: a fresh default world (:func:`dream.reset_default_world`).
+    """
+
+    def __init__(
+        self,
+        experiment: str,
+        n: int,
+        seed: int,
+        params: Mapping[str, Any],
+        folder: str | Path = ".",
+        world: World | None = None,
+    ) -> None:
+        source = experiment if experiment in EXPERIMENTS else str(Path(folder) / experiment)
+        exp = find(source)(**params)
+        exp.check(n, "robotarium")
+        self.stepper = Stepper(exp, n, reset_default_world(seed) if world is None else world)
+        #: ``(3, n)`` poses to start the lab's simulator at.
+        self.initial_conditions: FloatArray = self.stepper.initial_conditions
+        self.sim = LabSimulator(self.initial_conditions)
+        self.stepper.attach(self.sim)
+        self.done_at: int | None = None
+        self._everyone = np.arange(n)
+        self._start = time.perf_counter()
+
+    def decide(self, step: int, x: Any) -> FloatArray:
+        """The commands ``(2, n)`` for step ``step`` (0-based), from ``x``, this step's ``get_poses()``."""
+        self.sim.follow(x)
+        commands = self.stepper.decide(step, self.sim.get_poses())
+        self.sim.set_velocities(self._everyone, commands)
+        # rps clips the array it is given in place and keeps it: hand it a copy, not the robots' own.
+        return np.array(commands, dtype=np.float64)
+
+    def stepped(self, step: int, x: Any) -> bool:
+        """After the lab's ``step()`` of step ``step``, with ``x`` from the next ``get_poses()``:
+        counts the step's violations and runs the experiment's hooks; True once it is done."""
+        self.sim.step()
+        self.sim.follow(x)
+        if self.stepper.after(step + 1, self.sim.poses):
+            self.done_at = step + 1
+        return self.done_at is not None
+
+    def result(self) -> ExperimentResult:
+        """The run's metrics so far, as :func:`dream.run` returns them (backend ``"lab"``)."""
+        return self.stepper.result(self.done_at, time.perf_counter() - self._start)
+
+    def report(self) -> str:
+        """The metrics table and a last line that a script can parse:
+        ``dream: success, 0 collisions, 0 boundary, 0 actuator`` (else ``dream: failure, ...``)."""
+        result = self.result()
+        verdict = "success" if result.success else "failure" if result.completed else "failure (not completed)"
+        counts = f"{result.collisions} collisions, {result.boundary} boundary, {result.actuator} actuator"
+        return f"{result.summary()}\ndream: {verdict}, {counts}"
+
+
+# -- on the researcher's machine: writing the bundle ----------------------------------------------
+def check_script(path: Path) -> None:
+    """Raise :class:`ExportError` if the experiment file ``path`` uses what the lab cannot run.
+
+    Every import must be of the standard library, :data:`LAB_PACKAGES` or DREAM's pure part
+    (not :data:`LEFT_OUT`); the onboard sensors are refused by name too, for ``from dream import *``.
+    """
+    try:
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    except SyntaxError as err:
+        raise ExportError(f"{path}, line {err.lineno}: syntax error: {err.msg}") from None
+    for node in ast.walk(tree):
+        where = f"{path}, line {getattr(node, 'lineno', '?')}"
+        if isinstance(node, ast.ImportFrom) and node.level:
+            raise ExportError(f"{where}: a relative import; the bundle holds only this one file of yours")
+        if isinstance(node, ast.Import):
+            modules = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            modules = [base] + ([f"{base}.{alias.name}" for alias in node.names] if base == "dream" else [])
+        else:
+            name = node.id if isinstance(node, ast.Name) else node.attr if isinstance(node, ast.Attribute) else ""
+            if name in LEFT_OUT_NAMES and LEFT_OUT_NAMES[name] == "onboard":
+                raise ExportError(f"{where}: uses {name}: {LEFT_OUT['onboard']}")
+            continue
+        for module in modules:
+            _check_module(module, where)
+
+
+def _check_module(module: str, where: str) -> None:
+    parts = module.split(".")
+    if parts[0] == "dream":
+        inner = parts[1] if len(parts) > 1 else ""
+        left_out = LEFT_OUT_NAMES.get(inner, inner)
+        if left_out in LEFT_OUT:
+            raise ExportError(f"{where}: uses dream.{inner}, which a lab bundle leaves out: {LEFT_OUT[left_out]}")
+    elif parts[0] not in LAB_PACKAGES and parts[0] not in sys.stdlib_module_names:
+        raise ExportError(
+            f"{where}: imports {module}, which the lab does not have "
+            f"(it runs {', '.join(LAB_PACKAGES)} and the standard library)"
+        )
+
+
+def export(
+    source: str | Path,
+    output: str | Path,
+    *,
+    n: int | None = None,
+    seed: int = 0,
+    params: Mapping[str, Any] | None = None,
+    force: bool = False,
+) -> Path:
+    """Write the lab bundle of ``source`` (a built-in experiment's name or a ``.py`` file) to ``output``.
+
+    Parameters
+    ----------
+    n : int, optional
+        Number of robots (default: the experiment's), at most :data:`LAB_MAX_ROBOTS`.
+    seed : int
+        Seed of the run's generator (initial poses, noise), baked into ``main.py`` like ``n``.
+    params : mapping, optional
+        Parameter values (Python values, or text as on the command line).
+    force : bool
+        Replace ``output`` if it is a folder that is not empty.
+
+    Returns
+    -------
+    Path
+        The bundle's folder. It is written beside ``output`` and renamed into place, so a
+        failure leaves nothing half-written.
+
+    Raises
+    ------
+    ExportError
+        A missing file, an experiment that uses what the lab lacks (:func:`check_script`), a
+        size the lab or the experiment refuses, bad parameters, or an output folder in the way.
+    """
+    script = None
+    if not str(source).endswith(".py"):
+        try:
+            cls = find(str(source))  # a built-in's name
+        except ValueError as err:
+            raise ExportError(str(err)) from None
+    else:
+        script = Path(source)
+        if not script.is_file():
+            raise ExportError(f"{script}: no such file")
+        check_script(script)
+        try:
+            cls = load_file(script)
+        except ValueError as err:
+            raise ExportError(str(err)) from None
+    n = cls.default_n if n is None else n
+    if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= LAB_MAX_ROBOTS:
+        raise ExportError(
+            f"-n {n}: the lab's testbed runs 1 to {LAB_MAX_ROBOTS} robots (rps simulates up to 50, "
+            "but the Robotarium has 20)"
+        )
+    try:
+        baked = cls(**dict(params or {})).params
+        with World(seed) as world:  # a dry build: errors show now, not at the lab
+            name, folder = (cls.name, ".") if script is None else (script.name, script.parent)
+            lab = LabRun(name, n, seed, baked, folder, world)
+    except ValueError as err:
+        raise ExportError(str(err)) from None
+    exp = lab.stepper.exp
+    if exp.arena != ROBOTARIUM:
+        raise ExportError(f"{exp.label()} with {n} robots needs a larger arena than the Robotarium's")
+    closest = _closest(lab.initial_conditions)
+    if closest < LAB_START_SPACING:
+        warnings.warn(
+            f"{exp.label()}'s robots start {closest:.2f} m apart: rps 2.1's start-up phase, which the lab's "
+            f"verifier runs, drives them there from the chargers and stalls when starts are closer than "
+            f"~{LAB_START_SPACING} m (the bundle runs on rps 0.0.0; on 2.1 give the experiment wider initial_poses)",
+            ExportWarning,
+            stacklevel=2,
+        )
+    target = _target(Path(output), force)
+    bundled = cls.name if script is None else _bundled_name(script)
+    files = [
+        ("main.py", "the lab's loop"),
+        *([] if script is None else [(bundled, "the experiment")]),
+        ("dream/", DREAM_FILES),
+    ]
+    width = max(len(name) for name, _ in files)
+    text = MAIN.substitute(
+        label=exp.label(),
+        version=_version(),
+        command=_command(source, output, n, seed, params),
+        files="".join(f"    {name:<{width}}  {what}\n" for name, what in files),
+        experiment=repr(bundled),
+        n=n,
+        seed=seed,
+        params=repr(baked),
+        iterations=exp.steps(n),
+    )
+    folder = Path(tempfile.mkdtemp(prefix=f".{target.name}-", dir=target.parent))
+    try:
+        (folder / "main.py").write_text(text, encoding="utf-8")
+        if script is not None:
+            shutil.copyfile(script, folder / _bundled_name(script))
+        _copy_package(folder / "dream")
+        _replace(folder, target)
+    except BaseException:
+        shutil.rmtree(folder, ignore_errors=True)
+        raise
+    return target
+
+
+def _closest(poses: FloatArray) -> float:
+    """The smallest distance between two robots of ``poses`` ``(3, n)`` (m; inf for one robot)."""
+    gaps = np.hypot(*(poses[:2, :, None] - poses[:2, None, :]))
+    return float(gaps[~np.eye(poses.shape[1], dtype=bool)].min(initial=np.inf))
+
+
+def _bundled_name(script: Path) -> str:
+    # main.py is the lab's entry point, and a file named like the package would hide it.
+    return "experiment.py" if script.name in ("main.py", "dream.py") else script.name
+
+
+def _target(output: Path, force: bool) -> Path:
+    if output.exists() and not output.is_dir():
+        raise ExportError(f"-o {output}: is a file; give a folder")
+    if output.is_dir() and any(output.iterdir()) and not force:
+        raise ExportError(f"-o {output}: exists and is not empty; choose another folder or pass --force")
+    parent = output.resolve().parent
+    if not parent.is_dir():
+        raise ExportError(f"-o {output}: the folder {parent} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise ExportError(f"-o {output}: the folder {parent} is not writable")
+    return output.resolve()
+
+
+def _replace(folder: Path, target: Path) -> None:
+    """Rename the finished ``folder`` to ``target``, moving an old ``target`` away first."""
+    if not target.exists():
+        folder.rename(target)
+        return
+    old = Path(tempfile.mkdtemp(prefix=f".{target.name}-old-", dir=target.parent))
+    target.rename(old / target.name)
+    try:
+        folder.rename(target)
+    except OSError:
+        (old / target.name).rename(target)  # put the old bundle back
+        raise
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def _copy_package(destination: Path) -> None:
+    """DREAM's ``.py`` files but :data:`LEFT_OUT`; the package's ``__init__`` without their names."""
+    for path in sorted(PACKAGE.rglob("*.py")):
+        relative = path.relative_to(PACKAGE)
+        if relative.parts[0].removesuffix(".py") in LEFT_OUT or "__pycache__" in relative.parts:
+            continue
+        (destination / relative).parent.mkdir(parents=True, exist_ok=True)
+        text = path.read_text(encoding="utf-8")
+        (destination / relative).write_text(
+            _without_left_out(text) if relative == Path("__init__.py") else text, encoding="utf-8"
+        )
+
+
+def _without_left_out(text: str) -> str:
+    """The package's ``__init__`` source without its imports of left-out modules, and their names
+    taken out of ``__all__`` (so that ``from dream import *`` still works in the bundle)."""
+    tree = ast.parse(text)
+    lines = text.splitlines(keepends=True)
+    dropped: set[str] = set()
+    spans: list[tuple[int, int, str]] = []
+    for node in tree.body:
+        if not isinstance(node, ast.ImportFrom):
+            continue
+        parts = (node.module or "").split(".")
+        if parts[0] == "dream" and len(parts) > 1 and parts[1] in LEFT_OUT:
+            dropped.update(alias.asname or alias.name for alias in node.names)
+            spans.append((node.lineno, node.end_lineno or node.lineno, ""))
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and any(getattr(t, "id", None) == "__all__" for t in node.targets):
+            kept = [name for name in ast.literal_eval(node.value) if name not in dropped]
+            listing = "".join(f"    {name!r},\n" for name in kept)
+            spans.append((node.lineno, node.end_lineno or node.lineno, f"__all__ = [\n{listing}]\n"))
+    for first, last, replacement in sorted(spans, reverse=True):
+        lines[first - 1 : last] = [replacement]
+    return "".join(lines)
+
+
+def _version() -> str:
+    from dream import __version__
+
+    return __version__
+
+
+def _command(source: str | Path, output: str | Path, n: int, seed: int, params: Mapping[str, Any] | None) -> str:
+    settings = "".join(f" --param {key}={value}" for key, value in (params or {}).items())
+    return f"{source} -o {output} -n {n} --seed {seed}{settings}"
+
+
+def command(args: argparse.Namespace) -> int:
+    """``dream export``: the parsed command line to :func:`export`, bad input as one line (exit 2)."""
+    from dream.cli import UsageError
+
+    params: dict[str, str] = {}
+    for pair in args.param:
+        name, equals, value = pair.partition("=")
+        if not equals or not name.strip():
+            raise UsageError(f"--param takes NAME=VALUE, got {pair!r}")
+        params[name.strip()] = value
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", ExportWarning)
+            folder = export(args.experiment, args.output, n=args.n, seed=args.seed, params=params, force=args.force)
+    except ExportError as err:
+        raise UsageError(str(err)) from None
+    for warning in caught:
+        print(f"dream: warning: {warning.message}", file=sys.stderr)
+    print(f"wrote {folder}: run `DREAM_HEADLESS=1 python {folder / 'main.py'}` to check it, then submit the folder")
+    return 0
