@@ -3,13 +3,11 @@ window's life cycle (mocked, headless), real-time pacing (a fake clock), and the
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 import pytest
 from PIL import Image
 
-from dream import viz
+from dream import Faults, viz
 from dream.cli import _parser, main
 from dream.experiments import EXPERIMENTS, Experiment, run
 from dream.frames import Frame, fault_status
@@ -327,15 +325,13 @@ def test_realtime_paces_rendered_frames_to_simulated_time():
 
 
 class Still(Experiment):
-    """Robots that do not move; the world says robot 1 crashed and robot 2 lies."""
+    """Robots that do not move."""
 
     name = "still"
-    default_n = 3
+    default_n = 6
 
     def build(self, n):
-        self.world.fault_state = SimpleNamespace(
-            crashed=np.array([False, True, False]), stuck=np.zeros(3, bool), byzantine=np.array([False, False, True])
-        )
+        pass
 
     def steps(self, n):
         return 4
@@ -343,9 +339,14 @@ class Still(Experiment):
 
 def test_runner_fills_time_and_fault_status():
     frames: list[Frame] = []
-    run(Still, record=frames.append, backend="fast")
+    result = run(Still, record=frames.append, backend="fast", faults=Faults(crash=0.5, crash_at=2, byzantine=1))
     assert [f.time for f in frames] == pytest.approx([0.033 * k for k in range(1, 5)])
-    assert frames[-1].status.tolist() == ["ok", "crashed", "byzantine"]
+    expected = np.full(6, "ok", dtype=object)
+    for event in result.faults["events"]:
+        if expected[event["robot"]] != "crashed":  # a crashed liar shows as crashed, the worst
+            expected[event["robot"]] = "crashed" if event["kind"] == "crash" else "byzantine"
+    assert frames[-1].status.tolist() == expected.tolist()
+    assert frames[0].status.tolist().count("crashed") == 0  # the crash comes at step 2
 
 
 # -- the CLI's options -----------------------------------------------------------------------------
@@ -370,9 +371,9 @@ def test_cli_refuses_a_focus_robot_the_run_does_not_have(monkeypatch, capsys, tm
     ran = []
     monkeypatch.setitem(EXPERIMENTS, "still", type("S", (Still,), {"build": lambda self, n: ran.append(n)}))
     path = tmp_path / "out.gif"
-    assert main(["run", "still", "--video", str(path), "--focus", "3"]) == 2
+    assert main(["run", "still", "--video", str(path), "--focus", "6"]) == 2
     err = capsys.readouterr().err
-    assert err.strip() == "dream: error: --focus 3: no such robot; the run has 3 (ids 0 to 2)"
+    assert err.strip() == "dream: error: --focus 6: no such robot; the run has 6 (ids 0 to 5)"
     assert ran == [] and not path.exists()
 
 
