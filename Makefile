@@ -1,5 +1,5 @@
 # DREAM developer tasks. `make help` lists them.
-.PHONY: help build-dev test test-pure bench stubs wheel docs docs-serve
+.PHONY: lint help build-dev test test-pure bench stubs wheel docs docs-serve
 
 help:  ## list the targets
 	@grep -E '^[a-z-]+:.*##' $(MAKEFILE_LIST) | sed 's/:.*## /\t/'
@@ -28,3 +28,6 @@ docs:  ## site/: the documentation, warnings as errors (needs the docs extra: pi
 
 docs-serve:  ## the documentation on http://127.0.0.1:8000, rebuilt on every edit
 	mkdocs serve
+
+lint:  ## format and lint gates of CI: cargo fmt, clippy -D warnings, ruff format, ruff check
+	bash .ci/lint
