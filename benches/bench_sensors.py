@@ -19,7 +19,6 @@ import datetime
 import functools
 import math
 import os
-import platform
 import statistics
 import time
 from collections.abc import Callable
@@ -28,21 +27,10 @@ import numpy as np
 
 from dream import _core, _reference, kernels
 from dream.specs import ONBOARD
-from harness import median_seconds, show, table
+from harness import cpu_model, median_seconds, show, table
 
 WALLS = 20
 SPACING = 1.0 * math.sqrt(math.pi / 10)  #: lattice spacing for ~10 robots within 1 m
-
-
-def cpu_model() -> str:
-    try:
-        with open("/proc/cpuinfo") as info:
-            for line in info:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def median_cpu_seconds(call: Callable[[], object], repeat: int, loops: int = 20) -> float:
