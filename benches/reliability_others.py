@@ -78,6 +78,7 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--experiments", nargs="+", choices=list(CASES), default=list(CASES))
     parser.add_argument("--sizes", nargs="+", type=int, default=[100, 1000])
+    parser.add_argument("--first-seed", type=int, default=0, help="start the seeds here (to resume)")
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0..K-1 below N = 1000")
     parser.add_argument("--large-seeds", type=int, default=3, help="seeds 0..K-1 from N = 1000 up")
     parser.add_argument("--jobs", type=int, default=1, help="runs in parallel (processes)")
@@ -87,7 +88,7 @@ def main(argv: list[str] | None = None) -> None:
     work = [
         (case, size_for(case, n), seed)
         for n in args.sizes
-        for seed in range(args.large_seeds if n >= LARGE else args.seeds)
+        for seed in range(args.first_seed, args.large_seeds if n >= LARGE else args.seeds)
         for case in args.experiments
     ]
     done: dict[tuple[str, int], list[Any]] = {}
