@@ -55,7 +55,6 @@ GAIN = 8.0  #: the followers' stress gain k (1/s)
 SAFETY = 0.15  #: the followers' HRVO safety radius (m): the formation's robots are 0.3 m apart
 FINE = 0.03  #: below this desired speed (m/s) a follower moves without HRVO
 SETTLE = 1200  #: steps for the followers to take their places before the first manoeuvre
-SETTLE_TILED = 2400  #: the same for several formations, each on its own tile
 LEAD = 600  #: steps between the leaders' change of shape and the bars' entry
 RECOVER = 450  #: steps back in the nominal shape between two passes
 ENTRY = 0.15  #: the bars enter and leave this far beyond the walls (m)
@@ -183,12 +182,12 @@ class Follower(RobotHRVO):
         self.command(dxu)
 
 
-def schedule(settle: int = SETTLE) -> list[tuple[int, int, int, str, float]]:
-    """The two bar passes as ``(deform, enter, leave, shape, gap)`` steps, the first ``settle``
-    steps after the start: the leaders take the shape at ``deform``, the bars enter at the right wall at ``enter`` and have left at the left
+def schedule() -> list[tuple[int, int, int, str, float]]:
+    """The two bar passes as ``(deform, enter, leave, shape, gap)`` steps: the leaders take the
+    shape at ``deform``, the bars enter at the right wall at ``enter`` and have left at the left
     wall at ``leave``, when the leaders return to the nominal shape."""
     crossing = round((ROBOTARIUM.width + 2 * ENTRY) / (BAR_SPEED * RPS.time_step))
-    passes, t = [], settle
+    passes, t = [], SETTLE
     for shape, gap in zip(("compressed", "collinear"), GAPS):
         passes.append((t, t + LEAD, t + LEAD + crossing, shape, gap))
         t += LEAD + crossing + RECOVER
@@ -199,8 +198,7 @@ class AffineFormation(Experiment):
     """The affine-formation experiment (see the module docs).
 
     ``n`` is 7 (the thesis's formation) or a multiple of 7: then each group of seven has its
-    own Robotarium-sized tile of a larger arena, its own bars and the same manoeuvres, which
-    start after ``SETTLE_TILED`` steps instead of ``SETTLE``.
+    own Robotarium-sized tile of a larger arena, its own bars and the same manoeuvres.
     """
 
     name = NAME
@@ -224,9 +222,7 @@ class AffineFormation(Experiment):
         self.centres = tile_centres(n // 7)
         self.weights = np.kron(np.eye(n // 7), WEIGHTS)
         self.leader = np.arange(n) % 7 < LEADERS
-        # Every formation must have settled before the bars come: with many, the slowest of them
-        # decides (N = 98, seed 1: one of 14 was at 0.105 m at step 1200, at 0.02 m later).
-        self.passes = schedule(SETTLE if n == 7 else SETTLE_TILED)
+        self.passes = schedule()
         adjacency = (self.weights != 0).astype(float)
         for i in range(n):
             robot: Leader | Follower
