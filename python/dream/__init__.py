@@ -36,8 +36,8 @@ from dream.specs import (
     T_WIDTH,
 )
 from dream.sweep import sweep
-from dream.timers import Timer, create_timer, update_timers
-from dream.world import World, current_world, reset_default_world
+from dream.timers import Timer
+from dream.world import World, create_timer, current_world, reset_default_world, update_timers
 
 __version__ = _version.version()
 

@@ -3,6 +3,8 @@
 A timer belongs to a robot. It stays off while ``current_time <= delay`` (start-up delay);
 afterwards each entry ``{"delay": gap, "tag": tag, "call": callable}`` runs
 ``call(*param[tag])`` whenever ``gap`` steps have passed since it last ran (initially at 0).
+``create_timer`` and ``update_timers`` (the current world's timers) live in :mod:`dream.world`;
+this module imports nothing of DREAM.
 """
 
 from __future__ import annotations
@@ -12,8 +14,6 @@ import numbers
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
-
-from dream.world import current_world
 
 
 @dataclass
@@ -86,17 +86,3 @@ def _steps(value: Any, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value) or value < 0:
         raise ValueError(f"{what} must be a finite number of steps >= 0, got {value!r}")
     return value
-
-
-def create_timer(robot_id: int, delay: float, list_of_timers: Sequence[Mapping[str, Any]]) -> Timer:
-    """Create a timer for ``robot_id`` in the current world (see :class:`Timer`)."""
-    return current_world().create_timer(robot_id, delay, list_of_timers)
-
-
-def update_timers(current_time: float, param: Mapping[str, Sequence[Any]]) -> None:
-    """Update every timer of the current world; call once per simulation step.
-
-    ``param`` maps each tag to the tuple of arguments of its callbacks, e.g.
-    ``{"odom": (x,), "movement": (x, dxu), "robot": (dxu,)}``.
-    """
-    current_world().update_timers(current_time, param)

@@ -27,10 +27,10 @@ import numpy as np
 from dream import kernels
 from dream._checks import as_poses
 from dream.faults import Faults, FaultState
+from dream.timers import Timer
 
 if TYPE_CHECKING:
     from dream.backends import Backend
-    from dream.timers import Timer
 
 
 class World:
@@ -185,8 +185,6 @@ class World:
     # -- timers ----------------------------------------------------------------------------
     def create_timer(self, robot_id: int, delay: float, list_of_timers: Sequence[Mapping[str, Any]]) -> Timer:
         """Create a :class:`~dream.timers.Timer` and register it in this world."""
-        from dream.timers import Timer
-
         timer = Timer(robot_id, delay, list_of_timers)
         self.timers.append(timer)
         return timer
@@ -245,3 +243,17 @@ def reset_default_world(seed: int | None = None) -> World:
     """Replace the default world (for scripts that run several simulations in sequence)."""
     _stack[0] = World(seed)
     return _stack[0]
+
+
+def create_timer(robot_id: int, delay: float, list_of_timers: Sequence[Mapping[str, Any]]) -> Timer:
+    """Create a timer for ``robot_id`` in the current world (see :class:`Timer`)."""
+    return current_world().create_timer(robot_id, delay, list_of_timers)
+
+
+def update_timers(current_time: float, param: Mapping[str, Sequence[Any]]) -> None:
+    """Update every timer of the current world; call once per simulation step.
+
+    ``param`` maps each tag to the tuple of arguments of its callbacks, e.g.
+    ``{"odom": (x,), "movement": (x, dxu), "robot": (dxu,)}``.
+    """
+    current_world().update_timers(current_time, param)

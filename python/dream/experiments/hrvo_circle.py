@@ -50,7 +50,7 @@ from dream.radios import RangeRadio
 from dream.robot import RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec
-from dream.timers import create_timer
+from dream.world import create_timer
 
 NAME = "hrvo-circle"
 CIRCLES = 3

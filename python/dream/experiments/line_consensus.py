@@ -36,7 +36,7 @@ from dream.radios import GraphRadio
 from dream.robot import RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec
-from dream.timers import create_timer
+from dream.world import create_timer
 
 NAME = "line-consensus"
 SPACING = 0.3  #: distance between neighbours on the line (m)

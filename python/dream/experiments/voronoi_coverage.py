@@ -30,7 +30,7 @@ from dream.radios import RangeRadio
 from dream.robot import Robot
 from dream.sensors import MovementSensor, ObstacleSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec
-from dream.timers import create_timer
+from dream.world import create_timer
 
 NAME = "voronoi-coverage"
 CELL_RADIUS = 1.0  #: radius of the disc a robot's cell starts from (m)
