@@ -61,6 +61,9 @@ def swarms(draw: st.DrawFn, max_n: int = 12, outside: float = 0.5) -> tuple[np.n
         xs = st.floats(x0 * grow, x1 * grow)
         ys = st.floats(y0 * grow, y1 * grow)
         points = np.array(draw(st.lists(st.tuples(xs, ys), min_size=n, max_size=n)), dtype=float).reshape(-1, 2)
+        # Robots either coincide or are >= 1e-9 of the box apart: closer (1e-177 apart, at a scale
+        # of 1e-100) their squared separation underflows and no float64 bisector exists.
+        points = np.round(points, 9)
     return points * scale, scale
 
 

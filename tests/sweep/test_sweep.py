@@ -218,7 +218,7 @@ def test_plan_sweeps_faults_as_input_columns(drift):
 
 def test_plan_of_a_builtin_sends_its_name_and_refuses_bad_values():
     assert plan("line-consensus", seeds=[0]).source == "line-consensus"
-    assert plan(dream.experiments.LineConsensus(radio_gap=5), seeds=[1]).tasks[0].params[-1] == ("radio_gap", 5)
+    assert dict(plan(dream.experiments.LineConsensus(radio_gap=5), seeds=[1]).tasks[0].params)["radio_gap"] == 5
     with pytest.raises(ValueError, match="seeds must be an integer >= 0"):
         plan("line-consensus", seeds=[-1])
     with pytest.raises(ValueError, match=r"params\['spacing'\] has no values"):
