@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 
@@ -42,8 +42,10 @@ def finite(limit: float) -> st.SearchStrategy[float]:
 
 
 def arrays(shape: tuple[int, ...], limit: float) -> st.SearchStrategy[np.ndarray]:
+    """Arrays of finite values, each 0 or at least 1e-12 in magnitude: the checks square them, and
+    squares of subnormal values (1e-213) underflow to 0 in the test's own arithmetic."""
     size = math.prod(shape)
-    return st.lists(finite(limit), min_size=size, max_size=size).map(lambda v: np.array(v).reshape(shape))
+    return st.lists(finite(limit), min_size=size, max_size=size).map(lambda v: np.round(np.array(v), 12).reshape(shape))
 
 
 @st.composite
@@ -180,6 +182,7 @@ def test_validate_counts_match_brute_force(swarm, headings, rules):
 @PROPERTY
 def test_neighbours_are_symmetric_and_match_brute_force(swarm, radius):
     p, scale = swarm
+    assume(radius > 0 or scale <= 1e6)  # see test_neighbours_of_coincident_far_robots_at_radius_0
     r = min(radius * scale, FMAX)
     indptr, indices, distances = kernels.neighbours(p, r)
     n = len(p)
@@ -444,6 +447,9 @@ def obstacles(draw: st.DrawFn) -> tuple[np.ndarray, np.ndarray]:
 def test_virtual_agents_put_each_bisector_offset_before_the_obstacle(swarm, obstacle_csr, sensing, offset):
     p = swarm[0] / swarm[1]  # obstacles and offsets are in metres: unit scale
     vertices, offsets = obstacle_csr
+    # A robot's centre on an obstacle's edge line (hypothesis reuses values) is inside or out by
+    # rounding alone, below the kernel's 1 um floor: no invariant to check there.
+    assume(not np.isclose(p[:, None, :], vertices[None, :, :], rtol=0, atol=1e-6).any())
     indptr, points = kernels.virtual_agents(p, (vertices, offsets), range=sensing, robot_radius=offset, margin=0.0)
     assert indptr.shape == (len(p) + 1,) and np.isfinite(points).all()
     hulls = [convex_hull(vertices[a:b]) for a, b in itertools.pairwise(offsets)]
@@ -716,3 +722,13 @@ def test_neighbours_far_apart_within_a_huge_radius_are_found():
     assert_array_equal(indptr, [0, 1, 2])
     assert_array_equal(indices, [1, 0])
     assert_allclose(distances, [1e200, 1e200], rtol=1e-15)
+
+
+@pytest.mark.xfail(
+    RUST,
+    strict=True,
+    reason="Rust: with radius 0 the grid's cell size is 0: two coincident robots at x = 1e99 list each other twice",
+)
+def test_neighbours_of_coincident_far_robots_at_radius_0():
+    indptr, indices, _ = kernels.neighbours(np.array([[1e99, 0.0], [1e99, 0.0]]), 0.0)
+    assert indptr.tolist() == [0, 1, 2] and indices.tolist() == [1, 0]
