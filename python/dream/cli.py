@@ -28,6 +28,7 @@ from dream.backends import BACKENDS
 from dream.backends.robotarium import MAX_ROBOTS
 from dream.experiments import EXPERIMENTS, Experiment, find, run
 from dream.faults import KINDS, Faults
+from dream.specs import RULES
 
 STARTER = Path(__file__).parent / "templates" / "starter.py"
 
@@ -72,6 +73,7 @@ def _parser() -> argparse.ArgumentParser:
     runner.add_argument("-n", type=_whole(1), default=None, help="number of robots (default: the experiment's)")
     runner.add_argument("--seed", type=_whole(0), default=0, help="random seed (default: 0)")
     runner.add_argument("--backend", choices=BACKENDS, default="auto")
+    runner.add_argument("--rules", choices=RULES, help="the rps generation to follow (default: the installed rps's)")
     runner.add_argument("--steps", type=_whole(1), default=None, help="step cap (default: what the run needs)")
     runner.add_argument(
         "--param", action="append", default=[], metavar="NAME=VALUE", help="set a parameter (repeatable)"
@@ -281,6 +283,7 @@ def _run(args: argparse.Namespace) -> int:
     progress = _progress(not args.no_progress)
     try:
         result = run(cls, n=n, seed=args.seed, backend=args.backend, steps=args.steps, progress=progress, faults=faults,
+                     rules=args.rules,
                      **({"record": recorder} if recorder is not None else {}), **params)  # fmt: skip
     except ValueError as err:  # an experiment's refusal (a size it cannot do), said before any step
         raise UsageError(str(err)) from None

@@ -38,7 +38,7 @@ from dream.backends.base import Backend
 from dream.backends.robotarium import rps_generation
 from dream.experiments import EXPERIMENTS, ExperimentResult, find, load_file
 from dream.experiments.runner import Stepper
-from dream.specs import ROBOTARIUM, RULES
+from dream.specs import ROBOTARIUM, RULES, SimulatorSpec
 from dream.world import World, reset_default_world
 
 #: The lab's testbed takes at most 20 robots (Robotarium Python Guide, section 2.7.3); rps itself
@@ -146,12 +146,14 @@ class LabSimulator(Backend):
     initial_conditions : (3, n) array_like
         The poses the run starts from (rps 2.x's start-up phase ends near them; :meth:`follow`
         brings the real ones).
+    spec : SimulatorSpec
+        The rules of the installed rps generation.
     """
 
     name = "lab"
 
-    def __init__(self, initial_conditions: Any) -> None:
-        super().__init__(initial_conditions, ROBOTARIUM, RULES[rps_generation() or "rps2"])
+    def __init__(self, initial_conditions: Any, spec: SimulatorSpec) -> None:
+        super().__init__(initial_conditions, ROBOTARIUM, spec)
 
     def follow(self, x: Any) -> None:
         """Take ``x`` ``(3, n)``, what the lab's ``get_poses()`` returned, as the current poses."""
@@ -190,10 +192,11 @@ class LabRun:
         source = experiment if experiment in EXPERIMENTS else str(Path(folder) / experiment)
         exp = find(source)(**params)
         exp.check(n, "robotarium")
-        self.stepper = Stepper(exp, n, reset_default_world(seed) if world is None else world)
+        rules = RULES[rps_generation() or "rps2"]  # the lab's, should the bundle run without rps
+        self.stepper = Stepper(exp, n, reset_default_world(seed) if world is None else world, rules)
         #: ``(3, n)`` poses to start the lab's simulator at.
         self.initial_conditions: FloatArray = self.stepper.initial_conditions
-        self.sim = LabSimulator(self.initial_conditions)
+        self.sim = LabSimulator(self.initial_conditions, rules)
         self.stepper.attach(self.sim)
         self.done_at: int | None = None
         self._everyone = np.arange(n)

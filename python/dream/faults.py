@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from dream import kernels
+from dream.specs import RobotSpec
 
 LIES = ("constant", "random", "drift")
 #: What a constant liar sends in place of every float, and how fast a drifting one drifts (per step).
@@ -282,13 +283,14 @@ class FaultState:
         self.readings_dropped += lost
         return bool(lost)
 
-    def actuate(self, dxu: np.ndarray, w_per_v: float) -> np.ndarray:
+    def actuate(self, dxu: np.ndarray, limits: RobotSpec) -> np.ndarray:
         """The commands ``(2, n)`` the wheels carry out: none for crashed or stuck robots; noisy ones
-        for the others, within what the wheels can do (a motor does not exceed its top speed)."""
+        for the others, within what the wheels can do (a motor does not exceed its top speed).
+        The noise on ``w`` is scaled like the robots' speed range (``w_max / v_max``)."""
         out = np.array(dxu, dtype=np.float64)
         if self.faults.actuator_noise:
             noise = self.rng.normal(0.0, self.faults.actuator_noise, out.shape)
-            out = kernels.actuator_limit(out + noise * np.array([[1.0], [w_per_v]]))
+            out = kernels.actuator_limit(out + noise * np.array([[1.0], [limits.w_max / limits.v_max]]), limits)
         out[:, self.crashed | self.stuck] = 0.0
         return out
 

@@ -70,47 +70,47 @@ def unicycle_step(poses: Any, velocities: Any, dt: float = RPS.time_step) -> Flo
     return _core.unicycle_step(p, u, dt)
 
 
-def threshold_velocities(velocities: Any, sim: SimulatorSpec = RPS) -> FloatArray:
-    """Commands ``(2, n)`` clipped as the simulator ``sim`` clips them.
+def threshold_velocities(velocities: Any, spec: SimulatorSpec = RPS) -> FloatArray:
+    """Commands ``(2, n)`` clipped as a simulator following ``spec`` clips them.
 
-    rps 0.0.0 (``sim.wheel_thresholding`` off) clips ``v`` and ``w`` to their limits separately;
-    rps 2.1 clips each wheel's speed to ``sim.max_wheel`` and converts back to ``(v, w)``.
+    rps 0.0.0 (``spec.wheel_thresholding`` off) clips ``v`` and ``w`` to their limits separately;
+    rps 2.1 clips each wheel's speed to ``spec.max_wheel`` and converts back to ``(v, w)``.
     """
     u = _commands(velocities, "velocities")
-    if sim.wheel_thresholding:
-        wheels = {"wheel_radius": sim.wheel_radius, "base_length": sim.base_length, "max_wheel": sim.max_wheel}
+    if spec.wheel_thresholding:
+        wheels = {"wheel_radius": spec.wheel_radius, "base_length": spec.base_length, "max_wheel": spec.max_wheel}
         if _core is None:
             return _reference.threshold_wheels(u, **wheels)
         return _core.threshold_wheels(u, **wheels)
     if _core is None:
-        return _reference.threshold_velocities(u, sim.max_linear, sim.max_angular)
-    return _core.threshold_velocities(u, sim.max_linear, sim.max_angular)
+        return _reference.threshold_velocities(u, spec.max_linear, spec.max_angular)
+    return _core.threshold_velocities(u, spec.max_linear, spec.max_angular)
 
 
-def wheel_speeds(velocities: Any, sim: SimulatorSpec = RPS) -> FloatArray:
-    """Left and right wheel speeds ``(2, n)`` (rad/s) of unicycle commands ``(2, n)`` on ``sim``'s robot.
+def wheel_speeds(velocities: Any, spec: SimulatorSpec = RPS) -> FloatArray:
+    """Left and right wheel speeds ``(2, n)`` (rad/s) of unicycle commands ``(2, n)`` on ``spec``'s robot.
 
     Elementwise NumPy (nothing for the Rust core to gain): ``(2v -+ L w) / (2 r)``.
     """
-    return _reference.wheel_speeds(_commands(velocities, "velocities"), sim.wheel_radius, sim.base_length)
+    return _reference.wheel_speeds(_commands(velocities, "velocities"), spec.wheel_radius, spec.base_length)
 
 
-def validate(poses: Any, velocities: Any, arena: ArenaSpec = ROBOTARIUM, sim: SimulatorSpec = RPS) -> Violations:
-    """Boundary, collision and actuator counts for one iteration, as the simulator ``sim`` counts them.
+def validate(poses: Any, velocities: Any, arena: ArenaSpec = ROBOTARIUM, spec: SimulatorSpec = RPS) -> Violations:
+    """Boundary, collision and actuator counts for one iteration, as a simulator following ``spec`` counts them.
 
-    Collisions are pairs of colliders (``sim.collider_offset`` ahead of the centres) within
-    ``sim.diameter``, found with a grid by the Rust kernel (O(n)); robots outside the arena count
-    one each, or once per iteration when ``sim.boundary_per_iteration`` (rps 2.1).
+    Collisions are pairs of colliders (``spec.collider_offset`` ahead of the centres) within
+    ``spec.diameter``, found with a grid by the Rust kernel (O(n)); robots outside the arena count
+    one each, or once per iteration when ``spec.boundary_per_iteration`` (rps 2.1).
     """
     p = as_poses(poses)
     u = _commands(velocities, "velocities", p.shape[1])
     rules = {
-        "diameter": sim.diameter,
-        "wheel_radius": sim.wheel_radius,
-        "base_length": sim.base_length,
-        "max_wheel": sim.max_wheel,
-        "collider_offset": sim.collider_offset,
-        "boundary_per_iteration": sim.boundary_per_iteration,
+        "diameter": spec.diameter,
+        "wheel_radius": spec.wheel_radius,
+        "base_length": spec.base_length,
+        "max_wheel": spec.max_wheel,
+        "collider_offset": spec.collider_offset,
+        "boundary_per_iteration": spec.boundary_per_iteration,
     }
     if _core is None:
         return Violations(*_reference.validate(p, u, arena.bounds, **rules))

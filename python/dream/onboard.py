@@ -100,7 +100,7 @@ class EncoderSensor(Sensor):
         Receives the counts, an int64 array ``(2,)``.
     noise : bool
     spec : OnboardSpec
-    sim : SimulatorSpec
+    simulator_spec : SimulatorSpec
         The wheels (radius, base) and time step; rps 2.1's by default.
     """
 
@@ -111,13 +111,13 @@ class EncoderSensor(Sensor):
         callback: Callable[[np.ndarray], Any],
         noise: bool = True,
         spec: OnboardSpec = ONBOARD,
-        sim: SimulatorSpec = RPS2,
+        simulator_spec: SimulatorSpec = RPS2,
     ) -> None:
         super().__init__(robot_id, tag)
         self.callback = callback
         self.noise = bool(noise)
         self.spec = spec
-        self.sim = sim
+        self.simulator_spec = simulator_spec
         self.counts = np.zeros(2, dtype=np.int64)
 
     def update(self, x: Any, v: Any, steps: int = 1) -> None:  # type: ignore[override]
@@ -128,7 +128,8 @@ class EncoderSensor(Sensor):
             raise ValueError(f"`steps` must be an integer >= 1, got {steps!r}")
         command = as_array(v, "v", (2, self._poses.shape[1]))[:, [self.robot_id]]
         per_radian = self.spec.counts_per_revolution * self.spec.gear_ratio / (2 * np.pi)
-        delta = kernels.wheel_speeds(command, self.sim)[:, 0] * (self.sim.time_step * steps) * per_radian
+        wheels = self.simulator_spec
+        delta = kernels.wheel_speeds(command, wheels)[:, 0] * (wheels.time_step * steps) * per_radian
         if self.noise:
             spread = self.spec.encoder_noise * np.sqrt(np.maximum(np.abs(delta), 1.0))
             delta = delta + spread * self.world.rng.standard_normal(2)

@@ -69,6 +69,8 @@ class Robot:
         self.ac_max = spec.ac_max
         self.r_wheel = spec.wheel_radius
         self.r_length = spec.base_length
+        self.world = current_world()
+        self._limits: tuple[tuple[Any, ...], RobotSpec] | None = None
 
     def update_odom(self, pose: Any) -> None:
         """Odometry callback: take ``pose`` ``[x, y, theta]`` as the robot's belief of its pose."""
@@ -106,16 +108,29 @@ class Robot:
 
         ``v`` and ``w`` are clipped to ``v_max`` and ``w_max``; if the faster wheel would then
         exceed ``ac_max`` (``|v|/r + |w| L/(2r) > ac_max``), ``|v|`` becomes
-        ``ac_max r - |w| L/2``, keeping its sign.
+        ``ac_max r - |w| L/2``, keeping its sign. In a world with a simulator the limits are
+        also those the simulator checks (:meth:`dream.specs.RobotSpec.within`).
         """
-        v = max(-self.v_max, min(self.v_max, float(self.dxu[0])))
-        w = max(-self.w_max, min(self.w_max, float(self.dxu[1])))
-        half = self.r_length / 2
-        if abs(v) / self.r_wheel + abs(w) * half / self.r_wheel > self.ac_max:
-            speed = max(self.ac_max * self.r_wheel - half * abs(w), 0.0)
+        limits = self.limits
+        v = max(-limits.v_max, min(limits.v_max, float(self.dxu[0])))
+        w = max(-limits.w_max, min(limits.w_max, float(self.dxu[1])))
+        half = limits.base_length / 2
+        if abs(v) / limits.wheel_radius + abs(w) * half / limits.wheel_radius > limits.ac_max:
+            speed = max(limits.ac_max * limits.wheel_radius - half * abs(w), 0.0)
             v = speed if v > 0 else -speed
         self.dxu[0] = v
         self.dxu[1] = w
+
+    @property
+    def limits(self) -> RobotSpec:
+        """The limits :meth:`actuator_limit` keeps to: the robot's own (``v_max``, ``w_max``,
+        ``ac_max``, ``r_wheel``, ``r_length``), tightened to its world's simulator's."""
+        simulator = self.world.simulator
+        key = (self.v_max, self.w_max, self.ac_max, self.r_wheel, self.r_length, simulator and simulator.spec)
+        if self._limits is None or self._limits[0] != key:
+            own = RobotSpec(*key[:5], diameter=self.spec.diameter)
+            self._limits = (key, own if simulator is None else own.within(simulator.spec))
+        return self._limits[1]
 
 
 class RobotHRVO(Robot):
@@ -158,7 +173,6 @@ class RobotHRVO(Robot):
             raise ValueError(f"safety must be finite and >= 0, got {safety}")
         self.safety = safety
         self.check_boundaries = check_boundaries
-        self.world = current_world()
         self._arena = arena
         self._margin = spec.radius if boundary_margin is None else boundary_margin
         self.include_preferred = include_preferred

@@ -52,6 +52,22 @@ class RobotSpec:
     def radius(self) -> float:
         return self.diameter / 2
 
+    def within(self, checked: SimulatorSpec) -> RobotSpec:
+        """These limits tightened to those a simulator ``checked`` enforces and validates.
+
+        rps 2.1 models the GRITSbot with a 0.11 m wheel base, rps 0.0.0 and the robot's own
+        figures with 0.105 m: a command within the robot's limits can still need a wheel faster
+        than 2.1 allows, so robots keep within both.
+        """
+        return replace(
+            self,
+            v_max=min(self.v_max, checked.max_linear),
+            w_max=min(self.w_max, checked.max_angular),
+            ac_max=min(self.ac_max, checked.max_wheel),
+            wheel_radius=min(self.wheel_radius, checked.wheel_radius),
+            base_length=max(self.base_length, checked.base_length),
+        )
+
 
 @dataclass(frozen=True)
 class SimulatorSpec:
@@ -75,6 +91,13 @@ class SimulatorSpec:
     wheel_thresholding: bool = False  #: clip each wheel's speed instead of ``v`` and ``w``
     boundary_per_iteration: bool = False  #: count 1 per iteration with a robot outside, not each robot
     validates_requested: bool = False  #: check the actuator limit on commands before clipping
+
+    @property
+    def contact(self) -> float:
+        """The centre distance (m) within which two robots' colliders can touch, whatever their
+        headings: the collider's diameter plus twice its offset (0.11 m for rps 0.0.0, 0.185 m
+        for 2.1, whose colliders sit ahead of the centres)."""
+        return self.diameter + 2 * abs(self.collider_offset)
 
     def __post_init__(self) -> None:
         positive = ("time_step", "max_linear", "max_angular", "max_wheel", "wheel_radius", "base_length", "diameter")

@@ -23,7 +23,7 @@ EXACT = ONBOARD.noiseless()
 
 def replay(data):
     """Yields the Fast backend (rps 2.1 rules) after each recorded step."""
-    sim = Fast(data["initial_conditions"], sim=RPS2, obstacles=data["obstacles"])
+    sim = Fast(data["initial_conditions"], spec=RPS2, obstacles=data["obstacles"])
     for commands in data["commands"]:
         sim.get_poses()
         sim.set_velocities(np.arange(sim.number_of_robots), commands)

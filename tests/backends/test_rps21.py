@@ -31,7 +31,7 @@ def wrapped(angles):
 
 def replay(data):
     """Runs the recorded commands on Fast with rps 2.1's rules; returns the poses before each step."""
-    sim = Fast(data["initial_conditions"], sim=RPS2, obstacles=data["obstacles"])
+    sim = Fast(data["initial_conditions"], spec=RPS2, obstacles=data["obstacles"])
     n = sim.number_of_robots
     poses = []
     for commands in data["commands"]:
@@ -71,7 +71,7 @@ def test_recorded_cases_tell_the_generations_apart():
     # the random cases' spins are within 0.0.0's separate v/w limits far more often.
     for name in FILES:
         data = np.load(GOLDEN / name)
-        old = Fast(data["initial_conditions"], sim=RPS0)
+        old = Fast(data["initial_conditions"], spec=RPS0)
         for commands in data["commands"]:
             old.get_poses()
             old.set_velocities(np.arange(old.number_of_robots), commands)
@@ -94,24 +94,24 @@ def test_validate_with_rps2_rules_matches_reference(rng, n):
             "boundary_per_iteration": True,
         }
         expected = _reference.validate(poses, commands, ROBOTARIUM.bounds, **rules)
-        assert tuple(kernels.validate(poses, commands, sim=RPS2)) == expected
+        assert tuple(kernels.validate(poses, commands, spec=RPS2)) == expected
         assert expected[0] in (0, 1)
 
 
 def test_validate_counts_offset_colliders_that_centres_would_miss():
     # 0.15 m apart, facing each other: colliders 0.10 m apart (rps 2.1 counts), centres 0.15 (0.0.0 does not).
     poses = np.array([[0.0, 0.15], [0.0, 0.0], [0.0, np.pi]])
-    assert kernels.validate(poses, np.zeros((2, 2)), sim=RPS2).collision == 1
-    assert kernels.validate(poses, np.zeros((2, 2)), sim=RPS0).collision == 0
+    assert kernels.validate(poses, np.zeros((2, 2)), spec=RPS2).collision == 1
+    assert kernels.validate(poses, np.zeros((2, 2)), spec=RPS0).collision == 0
     # Back to back 0.12 m apart: the colliders are 0.17 m apart, so rps 2.1 counts nothing.
     back = np.array([[0.0, 0.12], [0.0, 0.0], [np.pi, 0.0]])
-    assert kernels.validate(back, np.zeros((2, 2)), sim=RPS2).collision == 0
+    assert kernels.validate(back, np.zeros((2, 2)), spec=RPS2).collision == 0
 
 
 def test_validate_counts_the_boundary_once_per_iteration_with_rps2_rules():
     poses = np.array([[1.7, -1.7, 0.0], [0.0, 0.0, 1.2], [0.0, 0.0, 0.0]])
-    assert kernels.validate(poses, np.zeros((2, 3)), sim=RPS2).boundary == 1
-    assert kernels.validate(poses, np.zeros((2, 3)), sim=RPS0).boundary == 3
+    assert kernels.validate(poses, np.zeros((2, 3)), spec=RPS2).boundary == 1
+    assert kernels.validate(poses, np.zeros((2, 3)), spec=RPS0).boundary == 3
 
 
 @pytest.mark.parametrize("n", [0, 1, 5, 300])
@@ -129,12 +129,12 @@ def test_validate_rejects_a_non_finite_collider_offset():
     from dataclasses import replace
 
     with pytest.raises(ValueError, match="collider_offset"):
-        kernels.validate(np.zeros((3, 2)), np.zeros((2, 2)), sim=replace(RPS2, collider_offset=float("nan")))
+        kernels.validate(np.zeros((3, 2)), np.zeros((2, 2)), spec=replace(RPS2, collider_offset=float("nan")))
 
 
 # -- the backend protocol: both report names, and make_robotarium's rules ---------------------------
 def test_debug_and_call_at_scripts_end_print_the_same_report(capsys):
-    sim = Fast(np.array([[0.0, 1.7], [0.0, 0.0], [0.0, 0.0]]), sim=RPS2)
+    sim = Fast(np.array([[0.0, 1.7], [0.0, 0.0], [0.0, 0.0]]), spec=RPS2)
     sim.get_poses()
     sim.set_velocities(np.arange(2), np.array([[0.1, 0.0], [9.0, 0.0]]))
     sim.step()
@@ -146,20 +146,20 @@ def test_debug_and_call_at_scripts_end_print_the_same_report(capsys):
 
 
 def test_make_robotarium_follows_the_installed_rps_by_default_and_takes_rules():
-    assert make_robotarium(3, backend="fast", seed=0).sim == RULES[rps_generation() or "rps0"]
+    assert make_robotarium(3, backend="fast", seed=0).spec == RULES[rps_generation() or "rps0"]
     sim = make_robotarium(3, seed=0, rules="rps2")
-    assert type(sim) is Fast and sim.sim == RPS2
+    assert type(sim) is Fast and sim.spec == RPS2
     with pytest.raises(ValueError, match="'rps1'"):
         make_robotarium(3, seed=0, rules="rps1")
 
 
 def test_fast_takes_the_rules_by_name():
-    assert Fast(np.zeros((3, 1)), rules="rps2").sim == RPS2
-    assert Fast(np.zeros((3, 1)), rules="rps0").sim == RPS0
+    assert Fast(np.zeros((3, 1)), rules="rps2").spec == RPS2
+    assert Fast(np.zeros((3, 1)), rules="rps0").spec == RPS0
     with pytest.raises(ValueError, match="'rps3'"):
         Fast(np.zeros((3, 1)), rules="rps3")
     with pytest.raises(ValueError, match="disagree"):
-        Fast(np.zeros((3, 1)), sim=RPS2, rules="rps0")
+        Fast(np.zeros((3, 1)), spec=RPS2, rules="rps0")
 
 
 @pytest.mark.skipif(rps_generation() != "rps0", reason="needs rps 0.0.0 installed")
@@ -228,14 +228,14 @@ def test_robotarium_backend_drives_rps2_without_throttling_and_passes_its_option
     options = fake_rps2.made[-1]
     assert options["sim_in_real_time"] is False and options["skip_initialization"] is False
     assert_array_equal(options["obstacles"], walls) and options["use_distance_sensors"] is True
-    assert sim.sim == RPS2
+    assert sim.spec == RPS2
     assert_allclose(sim.get_poses()[:2], start[:2] + 0.01)  # poses where rps's start-up left them
     sim.set_velocities(np.arange(2), np.array([[0.1, 0.1], [0.0, 0.0]]))
     sim.step()
     assert_allclose(sim.poses[0], start[0] + 0.01 + 0.0033)
     Robotarium(start, skip_initialization=True, sim_in_real_time=True)
     assert fake_rps2.made[-1]["skip_initialization"] is True and fake_rps2.made[-1]["sim_in_real_time"] is True
-    assert make_robotarium(2, initial_conditions=start).sim == RPS2  # auto: the installed generation
+    assert make_robotarium(2, initial_conditions=start).spec == RPS2  # auto: the installed generation
 
 
 def test_robotarium_backend_stops_a_deadlocked_rps2_start_up_with_an_error(fake_rps2, monkeypatch):
@@ -258,7 +258,7 @@ def test_charger_poses_are_distinct_slots_on_the_edges_facing_inwards(rng):
 @pytest.mark.parametrize("case", CASES["startup_cases"], ids=lambda case: f"n={case['n']}")
 def test_start_up_reaches_the_recorded_initial_conditions_without_violations(case):
     targets = np.array(case["initial_conditions"])
-    sim = Fast(targets, sim=RPS2, start_up=True, rng=np.random.default_rng(case["seed"]))
+    sim = Fast(targets, spec=RPS2, start_up=True, rng=np.random.default_rng(case["seed"]))
     report = sim.startup
     assert report is not None
     assert np.all(np.isin(report.chargers[1], [-0.945, 0.945]))

@@ -213,7 +213,7 @@ def test_validate_counts_every_adjacent_pair_of_a_lattice_at_exactly_one_diamete
     commands = np.zeros((2, gx.size))
     expected = columns * (rows - 1) + rows * (columns - 1)
     sim = SimulatorSpec(diameter=0.125)
-    assert kernels.validate(poses, commands, sim=sim).collision == expected
+    assert kernels.validate(poses, commands, spec=sim).collision == expected
     assert _core.validate(poses, commands, BOUNDS, **{**WHEELS, "diameter": 0.125})[1] == expected
     # a hair smaller diameter: no pair at all
     assert _core.validate(poses, commands, BOUNDS, **{**WHEELS, "diameter": np.nextafter(0.125, 0)})[1] == 0

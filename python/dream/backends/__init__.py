@@ -10,10 +10,19 @@ from dream._checks import FloatArray, as_poses
 from dream.backends.base import Backend
 from dream.backends.fast import Fast
 from dream.backends.robotarium import MAX_ROBOTS, Robotarium, rps_available, rps_generation
-from dream.specs import ROBOTARIUM, RULES, ArenaSpec
+from dream.specs import ROBOTARIUM, RULES, ArenaSpec, SimulatorSpec
 from dream.world import current_world
 
-__all__ = ["Backend", "Fast", "Robotarium", "initial_poses", "make_robotarium", "rps_available", "rps_generation"]
+__all__ = [
+    "Backend",
+    "Fast",
+    "Robotarium",
+    "initial_poses",
+    "make_robotarium",
+    "rps_available",
+    "rules_named",
+    "rps_generation",
+]
 
 BACKENDS = ("auto", "robotarium", "fast")
 
@@ -45,6 +54,15 @@ def initial_poses(
     return poses
 
 
+def rules_named(rules: str | None = None) -> SimulatorSpec:
+    """The rules of the rps generation ``rules`` ("rps0" or "rps2"); default: the installed
+    rps's, else rps 0.0.0's."""
+    rules = rules if rules is not None else (rps_generation() or "rps0")
+    if rules not in RULES:
+        raise ValueError(f"unknown rules {rules!r}: choose one of {', '.join(RULES)}")
+    return RULES[rules]
+
+
 def make_robotarium(
     n: int,
     backend: str = "auto",
@@ -74,9 +92,7 @@ def make_robotarium(
         raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
         raise ValueError(f"the number of robots must be an integer >= 0, got {n!r}")
-    rules = rules if rules is not None else (rps_generation() or "rps0")
-    if rules not in RULES:
-        raise ValueError(f"unknown rules {rules!r}: choose one of {', '.join(RULES)}")
+    rules = rules_named(rules).rules
     arena = ROBOTARIUM if arena is None else arena
     if initial_conditions is None:
         rng = current_world().rng if seed is None else np.random.default_rng(seed)

@@ -19,7 +19,7 @@ class Backend(ABC):
 
     The protocol is the Robotarium's: each iteration calls :meth:`get_poses` once, then
     :meth:`set_velocities`, then :meth:`step`. Before each step the backend counts violations
-    by the criteria of the rps generation ``sim`` follows (robots outside the arena, colliders
+    by the criteria of the rps generation ``spec`` follows (robots outside the arena, colliders
     closer than a diameter, commands beyond the wheel limit) into :attr:`violations`. Scripts
     end with :meth:`call_at_scripts_end` (rps 0.0.0) or :meth:`debug` (rps 2.1): both print the
     same report, so a script written for either generation runs on every backend.
@@ -28,7 +28,7 @@ class Backend(ABC):
     ----------
     number_of_robots : int
     arena : ArenaSpec
-    sim : SimulatorSpec
+    spec : SimulatorSpec
         Time step and the limits the simulator enforces.
     velocities : (2, n) ndarray
         The commands applied at the next step (after thresholding).
@@ -40,12 +40,12 @@ class Backend(ABC):
 
     name = "backend"
 
-    def __init__(self, initial_conditions: Any, arena: ArenaSpec = ROBOTARIUM, sim: SimulatorSpec = RPS) -> None:
+    def __init__(self, initial_conditions: Any, arena: ArenaSpec = ROBOTARIUM, spec: SimulatorSpec = RPS) -> None:
         poses = as_poses(initial_conditions, "initial_conditions")
         self.number_of_robots = poses.shape[1]
         self.arena = arena
-        self.sim = sim
-        self.time_step = sim.time_step
+        self.spec = spec
+        self.time_step = spec.time_step
         self.velocities = np.zeros((2, self.number_of_robots))
         self._requested = np.zeros((2, self.number_of_robots))
         self.iterations = 0
@@ -86,14 +86,14 @@ class Backend(ABC):
         # Kept as given: rps 2.1 checks the actuator limit on commands before clipping them.
         self._requested = self._requested.copy()
         self._requested[:, index] = commands
-        self.velocities = kernels.threshold_velocities(self._requested, self.sim)
+        self.velocities = kernels.threshold_velocities(self._requested, self.spec)
 
     def step(self) -> None:
         """Count this iteration's violations, then advance the simulation by one time step."""
         if not self._poses_taken:
             raise RuntimeError("call get_poses() before each step(), as on the Robotarium")
-        checked = self._requested if self.sim.validates_requested else self.velocities
-        found = kernels.validate(self._poses, checked, self.arena, self.sim)
+        checked = self._requested if self.spec.validates_requested else self.velocities
+        found = kernels.validate(self._poses, checked, self.arena, self.spec)
         self.violations = kernels.Violations(*(a + b for a, b in zip(self.violations, found)))
         self._advance()
         self.iterations += 1
@@ -117,7 +117,7 @@ class Backend(ABC):
         seconds = math.ceil(self.iterations * self.time_step)
         lines = [f"{self.iterations} iterations on the {self.name} backend (~{seconds} s on the Robotarium)."]
         if b or c or a:
-            outside = "iteration(s) with robots" if self.sim.boundary_per_iteration else "robot-iteration(s)"
+            outside = "iteration(s) with robots" if self.spec.boundary_per_iteration else "robot-iteration(s)"
             lines += [
                 f"  {b} {outside} outside the boundaries",
                 f"  {c} pair-iteration(s) where robots collided",

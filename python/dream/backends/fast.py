@@ -3,7 +3,7 @@
 Same velocity thresholding, same forward-Euler unicycle update and angle wrapping, same
 validation criteria as rps, but any number of robots, any arena, an O(n) collision check and no
 drawing. Given the same initial poses and commands it reproduces rps's poses (to 1e-9). It
-follows rps 0.0.0's rules by default and rps 2.1's with ``sim=dream.specs.RPS2``, optionally
+follows rps 0.0.0's rules by default and rps 2.1's with ``spec=dream.specs.RPS2``, optionally
 with 2.1's start-up phase from the chargers (:mod:`dream.backends.startup`).
 """
 
@@ -28,10 +28,10 @@ class Fast(Backend):
     ----------
     initial_conditions : (3, n) array_like
     arena : ArenaSpec
-    sim : SimulatorSpec
+    spec : SimulatorSpec
         The rules to follow: :data:`dream.specs.RPS0` (default) or :data:`dream.specs.RPS2`.
     rules : {"rps0", "rps2"}, optional
-        The same by name (:data:`dream.specs.RULES`); give ``sim`` or ``rules``, not both.
+        The same by name (:data:`dream.specs.RULES`); give ``spec`` or ``rules``, not both.
     obstacles : (m, 2, 2) array_like, optional
         Line-segment walls (``[k, 0]`` start, ``[k, 1]`` end), as rps 2.1 takes them; the robots'
         distance sensors see them (:class:`dream.DistanceSensor`), the dynamics do not.
@@ -48,7 +48,7 @@ class Fast(Backend):
         self,
         initial_conditions: Any,
         arena: ArenaSpec = ROBOTARIUM,
-        sim: SimulatorSpec = RPS,
+        spec: SimulatorSpec = RPS,
         *,
         rules: str | None = None,
         obstacles: Any = None,
@@ -58,15 +58,15 @@ class Fast(Backend):
         if rules is not None:
             if rules not in RULES:
                 raise ValueError(f"unknown rules {rules!r}: choose one of {', '.join(RULES)}")
-            if sim != RPS and sim != RULES[rules]:
-                raise ValueError(f"`sim` and `rules={rules!r}` disagree: give one of them")
-            sim = RULES[rules]
-        super().__init__(initial_conditions, arena, sim)
+            if spec != RPS and spec != RULES[rules]:
+                raise ValueError(f"`spec` and `rules={rules!r}` disagree: give one of them")
+            spec = RULES[rules]
+        super().__init__(initial_conditions, arena, spec)
         self.obstacles = as_obstacles(obstacles)
         self.startup: StartUp | None = None
         if start_up:
             generator = np.random.default_rng() if rng is None else rng
-            self.startup = drive_from_chargers(self._poses, generator, arena, sim)
+            self.startup = drive_from_chargers(self._poses, generator, arena, spec)
             self._poses = self.startup.poses.copy()
 
     def _advance(self) -> None:

@@ -22,7 +22,7 @@ import numpy as np
 
 from dream import kernels
 from dream._checks import FloatArray
-from dream.specs import ROBOTARIUM, RPS2, ArenaSpec, RobotSpec, SimulatorSpec
+from dream.specs import GRITSBOT, ROBOTARIUM, RPS2, ArenaSpec, SimulatorSpec
 
 #: Charger slots per edge (rps 2.1: 11 on the top edge and 11 on the bottom one).
 SLOTS_PER_EDGE = 11
@@ -80,7 +80,7 @@ def start_up(
     targets: FloatArray,
     rng: np.random.Generator,
     arena: ArenaSpec = ROBOTARIUM,
-    sim: SimulatorSpec = RPS2,
+    spec: SimulatorSpec = RPS2,
 ) -> StartUp:
     """Drive ``n`` robots from random charger slots to ``targets`` ``(3, n)`` (see module docs).
 
@@ -92,7 +92,7 @@ def start_up(
     """
     n = targets.shape[1]
     chargers = charger_poses(n, rng, arena)
-    robot = RobotSpec(wheel_radius=sim.wheel_radius, base_length=sim.base_length, ac_max=sim.max_wheel)
+    robot = GRITSBOT.within(spec)
     bounds = arena.shrunk(LOOKAHEAD)
     poses = chargers.copy()
     velocity = np.zeros((n, 2))
@@ -135,7 +135,7 @@ def start_up(
         commands[:, near] = closing[:, near]
         commands[:, placed] = np.vstack((np.zeros(n), TURN_GAIN * heading_error))[:, placed]
         commands = kernels.actuator_limit(commands, robot)
-        found = kernels.validate(poses, commands, arena, sim)
+        found = kernels.validate(poses, commands, arena, spec)
         violations = kernels.Violations(*(a + b for a, b in zip(violations, found)))
-        poses = kernels.unicycle_step(poses, kernels.threshold_velocities(commands, sim), sim.time_step)
+        poses = kernels.unicycle_step(poses, kernels.threshold_velocities(commands, spec), spec.time_step)
     raise RuntimeError(f"the start-up phase did not bring every robot to its pose within {MAX_ITERATIONS} steps")

@@ -371,6 +371,7 @@ def run_batch(
     goals = circle_goals(n)
     bounds = layout.arena.shrunk(GRITSBOT.radius)
     sim = make_robotarium(n, "fast", arena=layout.arena, seed=seed)
+    limits = GRITSBOT.within(sim.spec)
     everyone = np.arange(n)
     state = np.zeros(n, dtype=np.int64)  # goals reached
     heading_for = np.zeros(n, dtype=np.int64)  # index of the goal being approached
@@ -403,7 +404,7 @@ def run_batch(
         wanted, sidestep = rules.sidestep_preference(desired, sidestep, side)
         dxi = kernels.hrvo(p, dxi, wanted, radius=1.0, safety=layout.safety, bounds=bounds)
         sidestep, side = rules.sidestep_update(dxi, desired, sidestep, side, SIDESTEP_UPDATES)
-        sim.set_velocities(everyone, kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, x)))
+        sim.set_velocities(everyone, kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, x), limits))
         sim.step()
         if progress is not None:
             progress(t + 1, cap)

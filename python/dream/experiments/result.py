@@ -37,6 +37,7 @@ class ExperimentResult:
     interrupted: bool = False
     signal: int | None = field(default=None, repr=False)  #: the signal that interrupted the run
     faults: dict[str, Any] = field(default_factory=dict)
+    rules: str = "rps0"  #: the rps generation whose rules counted the violations
 
     @property
     def completed(self) -> bool:
@@ -79,6 +80,7 @@ class ExperimentResult:
             measures,
             trace,
             dict(params or {}),
+            rules=backend.spec.rules,
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -97,7 +99,7 @@ class ExperimentResult:
             ("experiment", self.experiment),
             ("robots", self.n),
             ("seed", self.seed),
-            ("backend", self.backend),
+            ("backend", f"{self.backend} (rules {self.rules})"),
             *((f"  {key}", value) for key, value in self.params.items()),
             ("steps run", self.steps),
             ("completed at step", "not completed" if self.completed_step is None else self.completed_step),

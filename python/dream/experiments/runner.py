@@ -11,12 +11,13 @@ from typing import Any
 
 import numpy as np
 
-from dream.backends import BACKENDS, make_robotarium
+from dream.backends import BACKENDS, make_robotarium, rules_named
 from dream.backends.base import Backend
 from dream.experiments.result import ExperimentResult
 from dream.experiments.spec import Experiment
 from dream.faults import Faults, FaultState
 from dream.frames import Frame, fault_status
+from dream.specs import GRITSBOT, RPS, SimulatorSpec
 from dream.world import World
 
 Progress = Callable[[int, int], None]
@@ -33,6 +34,7 @@ def run(
     progress: Progress | None = None,
     trace: bool = False,
     faults: Faults | None = None,
+    rules: str | None = None,
     **params: Any,
 ) -> ExperimentResult:
     """Run ``experiment`` until it is done or ``steps`` have run.
@@ -59,6 +61,9 @@ def run(
     faults : Faults, optional
         What goes wrong (:mod:`dream.faults`), injected by the world; the result lists the
         settings, the robot fault events and the counts of lost messages and readings.
+    rules : {"rps0", "rps2"}, optional
+        The rps generation whose dynamics and validation the run follows, i.e. the lab it
+        targets (default: the installed rps's, else "rps0"); see :func:`dream.make_robotarium`.
     **params
         Values of the experiment's declared parameters.
 
@@ -75,8 +80,8 @@ def run(
         raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
     exp.check(n, backend)
     with World(seed) as world:
-        stepper = Stepper(exp, n, world)
-        sim = make_robotarium(n, backend, stepper.initial_conditions, arena=exp.arena)
+        stepper = Stepper(exp, n, world, rules_named(rules))
+        sim = make_robotarium(n, backend, stepper.initial_conditions, arena=exp.arena, rules=exp.rules.rules)
         stepper.attach(sim, faults)
         cap = exp.steps(n) if steps is None else _count(steps, "steps", 1)
         everyone = np.arange(n)
@@ -113,7 +118,7 @@ class Stepper:
     :func:`run` and the ``main.py`` of an exported bundle (:mod:`dream.export`) both drive their
     simulator through this, so the experiment sees the same sequence of hooks in either::
 
-        stepper = Stepper(exp, n, world)      # the experiment builds its robots
+        stepper = Stepper(exp, n, world, rules)  # the experiment builds its robots
         sim = ...                             # a simulator started at stepper.initial_conditions
         stepper.attach(sim, faults)
         for t in range(cap):
@@ -132,24 +137,26 @@ class Stepper:
         Number of robots.
     world : World
         The run's world (current while the run steps); its generator draws the initial poses.
+    rules : SimulatorSpec
+        The rules of the simulator the run will have (the experiment may size its safety
+        distances by them).
     """
 
-    def __init__(self, exp: Experiment, n: int, world: World) -> None:
-        exp.n, exp.world, exp.arena = n, world, exp.arena_for(n)
+    def __init__(self, exp: Experiment, n: int, world: World, rules: SimulatorSpec = RPS) -> None:
+        exp.n, exp.world, exp.rules, exp.arena = n, world, rules, exp.arena_for(n)
         exp.build(n)
         self.exp, self.world = exp, world
         #: ``(3, n)`` poses the simulator starts from (m, m, rad).
         self.initial_conditions = exp.initial_poses(n, world.rng)
         self.state: FaultState | None = None
-        self._w_per_v = 1.0
+        self._limits = GRITSBOT
 
     def attach(self, sim: Backend, faults: Faults | None = None) -> None:
         """Give the experiment its simulator and command array, and draw the run's faults."""
         exp = self.exp
         exp.sim, exp.dxu = sim, np.zeros((2, exp.n))
         self.state = self.world.inject(faults, exp.n)
-        # Actuator noise on w is scaled like the robot's speed range.
-        self._w_per_v = sim.sim.max_angular / sim.sim.max_linear
+        self._limits = GRITSBOT.within(sim.spec)
 
     def decide(self, step: int, x: np.ndarray) -> np.ndarray:
         """The commands ``(2, n)`` ``[v; w]`` (m/s, rad/s) of step ``step`` (0-based).
@@ -161,7 +168,7 @@ class Stepper:
         exp = self.exp
         exp.before_step(step)
         self.world.update_timers(step, exp.timer_params(x, exp.dxu))
-        return exp.dxu if self.state is None else self.state.actuate(exp.dxu, self._w_per_v)
+        return exp.dxu if self.state is None else self.state.actuate(exp.dxu, self._limits)
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
         """The experiment's frame of this step, with the simulated time and who is faulty."""

@@ -33,7 +33,7 @@ import numpy as np
 
 from dream.backends import Backend, initial_poses
 from dream.frames import Frame
-from dream.specs import ROBOTARIUM, ArenaSpec
+from dream.specs import ROBOTARIUM, ArenaSpec, SimulatorSpec
 from dream.world import World
 
 _TRUE = {"1", "true", "yes", "on"}
@@ -113,7 +113,8 @@ class Experiment:
 
     Attributes the runner sets
     --------------------------
-    n, world, arena (before :meth:`build`); sim, dxu (the swarm's command array, ``(2, n)``,
+    n, world, rules (the :class:`~dream.specs.SimulatorSpec` the run follows), arena (before
+    :meth:`build`); sim, dxu (the swarm's command array, ``(2, n)``,
     that controllers write into) once the simulator exists. ``robots`` is a list for
     :meth:`build` to fill (used by the default :meth:`frame`).
     """
@@ -124,6 +125,7 @@ class Experiment:
 
     n: int
     world: World
+    rules: SimulatorSpec
     arena: ArenaSpec
     sim: Backend
     dxu: np.ndarray
