@@ -18,6 +18,9 @@ from dream.kernels import Bounds
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec, RobotSpec
 from dream.world import current_world
 
+GUARD_MARGIN = 0.01  #: what :meth:`RobotHRVO.guard` adds to the contact distance (m)
+GUARD_HORIZON = 0.25  #: how far ahead :meth:`RobotHRVO.guard` looks (s): beyond the next decision
+
 
 class Robot:
     """Base robot: parameters, velocity placeholders and the unicycle conversion.
@@ -101,7 +104,11 @@ class Robot:
         ``robot_id`` of the swarm's command array ``dxu`` ``(2, n)``."""
         self.dxi_to_dxu()
         self.actuator_limit()
+        self.guard()
         dxu[:, self.robot_id] = self.dxu
+
+    def guard(self) -> None:
+        """The last check of ``dxu`` before it is sent: nothing here (see :meth:`RobotHRVO.guard`)."""
 
     def actuator_limit(self) -> None:
         """Keep ``dxu`` within the robot's limits, slowing down rather than turning less.
@@ -265,6 +272,34 @@ class RobotHRVO(Robot):
                 "arena (leave `arena` unset, or pass arena=sim.arena)",
                 stacklevel=3,
             )
+
+    def guard(self) -> None:
+        """Drive no further (turn only) when the unicycle's motion would bring it within contact
+        distance (the simulator's, plus :data:`GUARD_MARGIN`, at most the safety radius) of where a
+        detected robot is, in the next :data:`GUARD_HORIZON` seconds.
+
+        HRVO chooses a safe ``dxi``, but a unicycle moves along its heading, not along ``dxi``:
+        while it turns, the part of ``dxi`` it carries out can close in on a neighbour that
+        ``dxi`` itself avoided. The neighbours are taken as standing still: the sensor's
+        velocities are those of a point ahead of each robot, which a robot turning in place
+        moves sideways, and each robot's own guard checks its own motion.
+        """
+        if self.dxu[0] == 0.0 or not len(self.detections) or not self.has_pose:
+            return
+        rows = np.asarray(self.detections)
+        offsets = rows[:, :1] * np.column_stack((np.cos(rows[:, 1]), np.sin(rows[:, 1])))
+        moving = self.dxu[0] * np.array([math.cos(self.rot_w), math.sin(self.rot_w)])
+        if rules.closing_in(
+            offsets, np.broadcast_to(moving, offsets.shape), self.contact + GUARD_MARGIN, GUARD_HORIZON
+        ).any():
+            self.dxu[0] = 0.0
+
+    @property
+    def contact(self) -> float:
+        """Centre distance (m) within which robots touch: the simulator's (rps 2.1's colliders reach
+        further ahead), else the robot's diameter."""
+        simulator = self.world.simulator
+        return self.spec.diameter if simulator is None else simulator.spec.contact
 
     def steer(self, detections: Any, desired_velocity: Any, sidestep_updates: int = 10) -> FloatArray:
         """:meth:`HRVO`, for a robot that must not wait forever.

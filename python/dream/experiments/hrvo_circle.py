@@ -47,7 +47,7 @@ from dream.experiments.result import ExperimentResult
 from dream.experiments.spec import Experiment
 from dream.frames import Frame
 from dream.radios import RangeRadio
-from dream.robot import RobotHRVO
+from dream.robot import GUARD_HORIZON, GUARD_MARGIN, RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec
 from dream.world import create_timer
@@ -404,7 +404,8 @@ def run_batch(
         wanted, sidestep = rules.sidestep_preference(desired, sidestep, side)
         dxi = kernels.hrvo(p, dxi, wanted, radius=1.0, safety=layout.safety, bounds=bounds)
         sidestep, side = rules.sidestep_update(dxi, desired, sidestep, side, SIDESTEP_UPDATES)
-        sim.set_velocities(everyone, kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, x), limits))
+        dxu = kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, x), limits)
+        sim.set_velocities(everyone, _guarded(dxu, x, min(sim.spec.contact + GUARD_MARGIN, layout.safety)))
         sim.step()
         if progress is not None:
             progress(t + 1, cap)
@@ -414,6 +415,21 @@ def run_batch(
     wall = time.perf_counter() - start
     measures = {"circles_completed": int(state.min(initial=CIRCLES)), "circle_radius": layout.semi_axes[0]}
     return ExperimentResult.from_backend(NAME + " (batch)", seed, sim, done_at, wall, measures)
+
+
+def _guarded(dxu: np.ndarray, poses: np.ndarray, near: float) -> np.ndarray:
+    """``dxu`` with no linear speed for the robots whose motion would bring them within ``near`` of
+    another's position in the next :data:`~dream.robot.GUARD_HORIZON` (:meth:`RobotHRVO.guard`
+    for the whole swarm)."""
+    p = poses[:2].T
+    indptr, indices, _ = kernels.neighbours(p, near + GRITSBOT.v_max * GUARD_HORIZON)
+    rows = np.repeat(np.arange(len(p)), np.diff(indptr))
+    moving = dxu[0, rows, None] * np.column_stack((np.cos(poses[2, rows]), np.sin(poses[2, rows])))
+    stop = np.zeros(len(p), dtype=bool)
+    stop[rows[rules.closing_in(p[rows] - p[indices], moving, near, GUARD_HORIZON)]] = True
+    out = dxu.copy()
+    out[0, stop] = 0.0
+    return out
 
 
 def _merge_known(known: np.ndarray, state: np.ndarray, positions: np.ndarray, radio_range: float = 1.0) -> None:
