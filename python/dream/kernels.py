@@ -255,11 +255,9 @@ class HrvoPlanner:
         self.bounds = _checked_bounds(bounds)
         self.candidates = _checked_grid(v_max, n_angles, n_speeds)
         self.include_preferred = include_preferred
-        self._rust = None
-        if _core is not None:
-            self._rust = _core.HrvoPlanner(
-                self.candidates, safety=safety, v_max=v_max, bounds=self.bounds, include_preferred=include_preferred
-            )
+        self._planner = (_reference if _core is None else _core).HrvoPlanner(
+            self.candidates, safety=self.safety, v_max=v_max, bounds=self.bounds, include_preferred=include_preferred
+        )
 
     def velocity(
         self, detections: FloatArray, velocity: FloatArray, preferred: FloatArray, position: FloatArray
@@ -271,21 +269,7 @@ class HrvoPlanner:
         velocity, ``preferred`` the one it wants, ``position`` where it is (all ``(2,)``, finite
         float64: the caller checks).
         """
-        if self._rust is not None:
-            return self._rust.velocity(detections, velocity, preferred, position)
-        return _reference.hrvo_velocity(
-            velocity,
-            preferred,
-            _reference.detection_directions(detections),
-            detections[:, 0],
-            detections[:, 2:4],
-            safety=self.safety,
-            v_max=self.v_max,
-            position=position,
-            bounds=self.bounds,
-            candidates=self.candidates,
-            include_preferred=self.include_preferred,
-        )
+        return self._planner.velocity(detections, velocity, preferred, position)
 
 
 def hrvo(
@@ -335,23 +319,8 @@ def hrvo(
     check_nonnegative(safety, "safety")
     grid = _checked_grid(v_max, n_angles, n_speeds)
     box = _checked_bounds(bounds)
-    csr = None if neighbours is None else _checked_csr(neighbours, n)
-    if _core is None:
-        return _reference.hrvo(
-            p,
-            v,
-            pref,
-            csr,
-            radius=radius,
-            safety=safety,
-            v_max=v_max,
-            bounds=box,
-            n_angles=n_angles,
-            n_speeds=n_speeds,
-            include_preferred=include_preferred,
-        )
-    indptr, indices = (None, None) if csr is None else csr
-    return _core.hrvo(
+    indptr, indices = (None, None) if neighbours is None else _checked_csr(neighbours, n)
+    return (_reference if _core is None else _core).hrvo(
         p,
         v,
         pref,
@@ -434,15 +403,10 @@ def voronoi_cells(
         if indptr.shape != (n + 1,) or indptr[0] != 0 or np.any(np.diff(indptr) < 0) or indptr[-1] != len(points):
             raise ValueError(f"`virtual` indptr must be non-decreasing of shape ({n + 1},) from 0 to len(points)")
         agents = (indptr, points)
-    if _core is None:
-        centroids, areas, vertices, offsets = _reference.voronoi_cells(
-            p, radius=radius, bounds=box, virtual=agents, resolution=resolution
-        )
-    else:
-        vi, vp = (None, None) if agents is None else agents
-        centroids, areas, vertices, offsets = _core.voronoi_cells(
-            p, radius=radius, bounds=box, virtual_indptr=vi, virtual_points=vp, resolution=resolution
-        )
+    vi, vp = (None, None) if agents is None else agents
+    centroids, areas, vertices, offsets = (_reference if _core is None else _core).voronoi_cells(
+        p, radius=radius, bounds=box, virtual_indptr=vi, virtual_points=vp, resolution=resolution
+    )
     return VoronoiCells(centroids, areas, vertices if polygons else None, offsets if polygons else None)
 
 
