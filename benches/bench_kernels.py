@@ -23,6 +23,7 @@ from types import ModuleType
 import numpy as np
 
 from dream import _core, _reference, backends, kernels
+from dream.kernels import _dispatch
 from dream.specs import RPS, ArenaSpec
 from harness import machine, median_seconds, show, table
 from original_hrvo import original_style_hrvo
@@ -52,11 +53,11 @@ def on_baseline(call: Callable[[], object]) -> Callable[[], object]:
     """``call`` with ``dream.kernels`` dispatching to the baseline build instead of this one."""
 
     def swapped() -> object:
-        kernels._core = BASELINE
+        _dispatch._core = BASELINE
         try:
             return call()
         finally:
-            kernels._core = _core
+            _dispatch._core = _core
 
     return swapped
 

@@ -8,6 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
+Bounds = tuple[float, float, float, float]
 
 
 def as_array(value: Any, name: str, shape: tuple[int | None, ...]) -> FloatArray:
@@ -47,6 +48,18 @@ def check_nonnegative(value: float, name: str) -> float:
     if not (np.isfinite(value) and value >= 0):
         raise ValueError(f"`{name}` must be finite and >= 0, got {value}")
     return value
+
+
+def checked_bounds(bounds: Any) -> Bounds | None:
+    """``bounds`` as finite floats ``(xmin, xmax, ymin, ymax)`` with xmin < xmax and ymin < ymax; ``None`` kept."""
+    if bounds is None:
+        return None
+    values = tuple(float(b) for b in bounds)
+    if len(values) != 4 or not all(np.isfinite(values)) or values[0] >= values[1] or values[2] >= values[3]:
+        raise ValueError(
+            f"`bounds` must be finite (xmin, xmax, ymin, ymax) with xmin < xmax and ymin < ymax, got {bounds}"
+        )
+    return values  # type: ignore[return-value]
 
 
 def _show(shape: tuple[int | None, ...]) -> str:

@@ -417,7 +417,7 @@ def test_hrvo_batch_equals_per_robot_calls(rng, n):
     indptr, indices = brute_neighbours(positions, 0.6)
     for batch in (
         kernels.hrvo(positions, velocities, preferred, (indptr, indices), bounds=bounds, safety=0.2),
-        hrvo(positions, velocities, preferred, (indptr, indices), bounds=bounds, safety=0.2),
+        hrvo(positions, velocities, preferred, indptr, indices, bounds=bounds, safety=0.2),
     ):
         assert batch.shape == (n, 2)
         for i in range(n):

@@ -287,7 +287,7 @@ def test_hrvo_batch_stays_within_v_max_and_picks_a_candidate(
         inside = (BOX[0] < ahead[:, 0]) & (ahead[:, 0] < BOX[1]) & (BOX[2] < ahead[:, 1]) & (ahead[:, 1] < BOX[3])
         assert np.all(inside[moving])
     if RUST:
-        assert_array_equal(chosen, _reference.hrvo(p, v, pref, None, n_angles=20, n_speeds=10, **kw))
+        assert_array_equal(chosen, _reference.hrvo(p, v, pref, **kw))
 
 
 @given(

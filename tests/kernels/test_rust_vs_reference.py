@@ -5,6 +5,7 @@ memory-layout independence, determinism under rayon, and the error mapping of th
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 
@@ -59,16 +60,17 @@ HRVO_DEFAULTS = dict(
 )
 
 
-def core_hrvo(p, v, pref, csr=None, **kw):
-    """``dream._core.hrvo`` with the reference's keywords (the grid built from n_angles, n_speeds)."""
+def hrvo_of(module, p, v, pref, csr=None, **kw):
+    """``module.hrvo`` (``dream._core``'s or the reference's: same arguments) with keywords as
+    :func:`dream.kernels.hrvo` takes them (the grid built from n_angles, n_speeds)."""
     kw = {**HRVO_DEFAULTS, **kw}
     grid = _reference.candidate_grid(kw["v_max"], kw.pop("n_angles"), kw.pop("n_speeds"))
     indptr, indices = (None, None) if csr is None else csr
-    return _core.hrvo(p, v, pref, indptr, indices, candidates=grid, **kw)
+    return module.hrvo(p, v, pref, indptr, indices, candidates=grid, **kw)
 
 
-def ref_hrvo(p, v, pref, csr=None, **kw):
-    return _reference.hrvo(p, v, pref, csr, **{**HRVO_DEFAULTS, **kw})
+core_hrvo = functools.partial(hrvo_of, _core)
+ref_hrvo = functools.partial(hrvo_of, _reference)
 
 
 def assert_hrvo_matches(p, v, pref, csr=None, **kw):
@@ -83,15 +85,16 @@ def swarm(rng, n, spread=1.5):
     return rng.uniform(-spread, spread, (n, 2)), rng.uniform(-V_MAX, V_MAX, (n, 2)), rng.uniform(-0.4, 0.4, (n, 2))
 
 
-def core_cells(p, radius, bounds=ARENA, virtual=None, resolution=64):
+def cells_of(module, p, radius, bounds=ARENA, virtual=None, resolution=64):
+    """``module.voronoi_cells`` (``dream._core``'s or the reference's: same arguments), ``virtual`` a CSR pair."""
     vi, vp = (None, None) if virtual is None else virtual
-    return _core.voronoi_cells(
+    return module.voronoi_cells(
         p, radius=radius, bounds=bounds, virtual_indptr=vi, virtual_points=vp, resolution=resolution
     )
 
 
-def ref_cells(p, radius, bounds=ARENA, virtual=None, resolution=64):
-    return _reference.voronoi_cells(p, radius=radius, bounds=bounds, virtual=virtual, resolution=resolution)
+core_cells = functools.partial(cells_of, _core)
+ref_cells = functools.partial(cells_of, _reference)
 
 
 def assert_cells_match(got, want):
@@ -310,7 +313,7 @@ def test_hrvo_public_kernel_matches_reference(rng, n, with_csr):
     p, v, pref = swarm(rng, n)
     csr = _reference.neighbours(p, 0.6)[:2] if with_csr else None
     kw = dict(radius=0.6, bounds=ARENA, n_angles=12, n_speeds=6)
-    assert_array_equal(kernels.hrvo(p, v, pref, csr, **kw), _reference.hrvo(p, v, pref, csr, **kw))
+    assert_array_equal(kernels.hrvo(p, v, pref, csr, **kw), ref_hrvo(p, v, pref, csr, **kw))
 
 
 # -- 3. HRVO, per robot ---------------------------------------------------------------------------

@@ -3,7 +3,8 @@
 Written for clarity, not speed: these functions are the test oracle of the Rust kernels in
 :mod:`dream._core`, and the fallback that lets every experiment run where the compiled
 extension is absent (the Robotarium lab runs scripts with numpy, scipy and matplotlib only).
-They depend on NumPy alone.
+They depend on NumPy alone. Every kernel that :mod:`dream._core` has is here under the same
+name and takes the same arguments, so that :mod:`dream.kernels` calls either one alike.
 """
 
 from dream._reference.dynamics import (
@@ -15,13 +16,21 @@ from dream._reference.dynamics import (
     validate,
     wheel_speeds,
 )
-from dream._reference.hrvo import candidate_grid, detection_directions, hrvo, hrvo_velocity, unit_directions
+from dream._reference.hrvo import (
+    HrvoPlanner,
+    candidate_grid,
+    detection_directions,
+    hrvo,
+    hrvo_velocity,
+    unit_directions,
+)
 from dream._reference.neighbours import neighbours, neighbours_of
 from dream._reference.obstacles import agents_from_closest, virtual_agents
 from dream._reference.raycast import distance_rays
 from dream._reference.voronoi import voronoi_cell, voronoi_cells
 
 __all__ = [
+    "HrvoPlanner",
     "actuator_limit",
     "agents_from_closest",
     "candidate_grid",

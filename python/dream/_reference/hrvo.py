@@ -158,27 +158,26 @@ def hrvo(
     positions: FloatArray,
     velocities: FloatArray,
     preferred: FloatArray,
-    neighbours: tuple[np.ndarray, np.ndarray] | None = None,
+    indptr: np.ndarray | None = None,
+    indices: np.ndarray | None = None,
     *,
     radius: float = 1.0,
     safety: float = 0.24,
     v_max: float = 0.2,
     bounds: tuple[float, float, float, float] | None = None,
-    n_angles: int = 20,
-    n_speeds: int = 10,
+    candidates: FloatArray | None = None,
     include_preferred: bool = True,
 ) -> FloatArray:
     """HRVO velocities ``(n, 2)`` for the whole swarm, one robot at a time.
 
-    ``neighbours`` is a CSR pair ``(indptr, indices)``; ``None`` means every other robot within
-    ``radius``. Neighbour velocities are the rows of ``velocities``.
+    ``indptr``, ``indices`` are CSR neighbour lists (both or neither); without them every other
+    robot within ``radius`` is a neighbour. Neighbour velocities are the rows of ``velocities``.
+    ``candidates`` ``(m, 2)`` default to :func:`candidate_grid` of ``v_max``.
     """
     n = len(positions)
-    if neighbours is None:
+    if indptr is None or indices is None:
         indptr, indices, _ = find_neighbours(positions, radius)
-    else:
-        indptr, indices = neighbours
-    grid = candidate_grid(v_max, n_angles, n_speeds)
+    grid = candidate_grid(v_max) if candidates is None else candidates
     out = np.zeros((n, 2))
     for i in range(n):
         js = np.asarray(indices[indptr[i] : indptr[i + 1]], dtype=np.int64)
@@ -197,3 +196,40 @@ def hrvo(
             include_preferred=include_preferred,
         )
     return out
+
+
+class HrvoPlanner:
+    """One robot's HRVO: parameters and candidates ``(m, 2)`` fixed, one :meth:`velocity` call per decision."""
+
+    def __init__(
+        self,
+        candidates: FloatArray,
+        *,
+        safety: float,
+        v_max: float,
+        bounds: tuple[float, float, float, float] | None,
+        include_preferred: bool,
+    ) -> None:
+        self.candidates = candidates
+        self.safety = safety
+        self.v_max = v_max
+        self.bounds = bounds
+        self.include_preferred = include_preferred
+
+    def velocity(
+        self, detections: FloatArray, velocity: FloatArray, preferred: FloatArray, position: FloatArray
+    ) -> FloatArray:
+        """Velocity ``(2,)`` for seed-format detections ``(k, 4)`` ``[distance, angle, vx, vy]``."""
+        return hrvo_velocity(
+            velocity,
+            preferred,
+            detection_directions(detections),
+            detections[:, 0],
+            detections[:, 2:4],
+            safety=self.safety,
+            v_max=self.v_max,
+            position=position,
+            bounds=self.bounds,
+            candidates=self.candidates,
+            include_preferred=self.include_preferred,
+        )

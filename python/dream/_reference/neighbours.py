@@ -43,7 +43,6 @@ def neighbours_of(
 def neighbours(
     positions: FloatArray,
     radius: float,
-    *,
     headings: FloatArray | None = None,
     direction: float = 0.0,
     fov: float = 2 * np.pi,

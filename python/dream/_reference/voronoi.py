@@ -100,16 +100,16 @@ def cell(
 def voronoi_cell(
     position: FloatArray,
     others: FloatArray,
-    virtual: FloatArray,
+    virtual_points: FloatArray,
     *,
     radius: float,
     bounds: tuple[float, float, float, float],
     resolution: int = 64,
 ) -> tuple[FloatArray, float, FloatArray]:
     """One robot's cell: ``(centroid (2,), area, vertices (m, 2))``, clipped by ``others`` ``(k, 2)``
-    then ``virtual`` ``(j, 2)``."""
+    then ``virtual_points`` ``(j, 2)``."""
     p = (float(position[0]), float(position[1]))
-    agents = [(float(x), float(y)) for x, y in others] + [(float(x), float(y)) for x, y in virtual]
+    agents = [(float(x), float(y)) for x, y in others] + [(float(x), float(y)) for x, y in virtual_points]
     polygon = cell(p, agents, radius, bounds, resolution)
     area, centroid = area_centroid(polygon, p)
     return np.array(centroid), area, np.array(polygon, dtype=np.float64).reshape(-1, 2)
@@ -120,13 +120,14 @@ def voronoi_cells(
     *,
     radius: float,
     bounds: tuple[float, float, float, float],
-    virtual: tuple[np.ndarray, FloatArray] | None = None,
+    virtual_indptr: np.ndarray | None = None,
+    virtual_points: FloatArray | None = None,
     resolution: int = 64,
 ) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray]:
     """Centroids ``(n, 2)``, areas ``(n,)`` and the cells as CSR ``(vertices (m, 2), offsets (n + 1,))``.
 
-    ``virtual`` is CSR ``(indptr (n + 1,), points (k, 2))``: robot i's virtual agents are
-    ``points[indptr[i]:indptr[i + 1]]``.
+    The virtual agents are CSR ``virtual_indptr`` ``(n + 1,)``, ``virtual_points`` ``(k, 2)`` (both
+    or neither): robot i's are ``virtual_points[virtual_indptr[i]:virtual_indptr[i + 1]]``.
     """
     n = len(positions)
     # Robots beyond twice a robot's (shrunk) disc radius cannot clip its cell.
@@ -138,7 +139,11 @@ def voronoi_cells(
     offsets = np.zeros(n + 1, dtype=np.int64)
     vertices: list[tuple[float, float]] = []
     for i in range(n):
-        mine = np.zeros((0, 2)) if virtual is None else virtual[1][virtual[0][i] : virtual[0][i + 1]]
+        mine = (
+            np.zeros((0, 2))
+            if virtual_indptr is None or virtual_points is None
+            else virtual_points[virtual_indptr[i] : virtual_indptr[i + 1]]
+        )
         others, _ = neighbours_of(positions, i, search)
         agents = [points[j] for j in others] + [(float(x), float(y)) for x, y in mine]
         polygon = cell(points[i], agents, radius, bounds, resolution)

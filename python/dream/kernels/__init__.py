@@ -1,0 +1,59 @@
+"""The public vectorised kernels of DREAM: whole-swarm calls that other projects use directly.
+
+Each function checks its input (shapes, NaN/inf, radii) and raises ``ValueError`` naming the
+argument, then runs the Rust kernel of :mod:`dream._core` when it is available, or the NumPy
+reference of :mod:`dream._reference` when the extension is missing or the environment
+variable ``DREAM_PURE_PYTHON=1`` is set. Both give the same results (the test suite checks).
+
+Shapes: poses ``(3, n)``, unicycle commands and single-integrator velocities ``(2, n)`` in the
+Robotarium's layout; positions for geometry kernels ``(n, 2)``. Units: m, s, rad.
+"""
+
+from __future__ import annotations
+
+# The kernels are written in submodules named like those of dream._reference, private so that
+# no module shadows the function of its name (which also hides the function from the API page);
+# each kernel calls its implementation through _dispatch. The public names are this package's.
+from dream import _checks
+from dream.errors import GeometryError
+from dream.kernels._dispatch import IMPLEMENTATION
+from dream.kernels._dynamics import (
+    Violations,
+    actuator_limit,
+    dxi_to_dxu,
+    threshold_velocities,
+    unicycle_step,
+    validate,
+    wheel_speeds,
+)
+from dream.kernels._hrvo import HrvoPlanner, hrvo
+from dream.kernels._neighbours import neighbours, neighbours_of
+from dream.kernels._obstacles import obstacle_agents, virtual_agents
+from dream.kernels._raycast import distance_rays
+from dream.kernels._voronoi import VoronoiCells, voronoi_cell, voronoi_cells
+
+Bounds = _checks.Bounds
+"""``tuple[float, float, float, float]``: ``(xmin, xmax, ymin, ymax)`` (m), the type of ``bounds`` arguments."""
+
+# In the API page's order (docs/api/kernels.md sorts by it): by family, as the sections of the README.
+__all__ = [
+    "IMPLEMENTATION",
+    "GeometryError",
+    "Violations",
+    "unicycle_step",
+    "threshold_velocities",
+    "wheel_speeds",
+    "validate",
+    "dxi_to_dxu",
+    "actuator_limit",
+    "neighbours",
+    "neighbours_of",
+    "HrvoPlanner",
+    "hrvo",
+    "VoronoiCells",
+    "voronoi_cells",
+    "voronoi_cell",
+    "obstacle_agents",
+    "virtual_agents",
+    "distance_rays",
+]

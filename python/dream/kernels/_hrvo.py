@@ -1,0 +1,138 @@
+"""Hybrid Reciprocal Velocity Obstacles: the whole swarm at once (:func:`hrvo`) or one robot (:class:`HrvoPlanner`)."""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+import numpy as np
+
+import dream._reference as _reference
+from dream._checks import Bounds, FloatArray, as_array, check_nonnegative, checked_bounds
+from dream.kernels._dispatch import implementation
+
+
+def _checked_grid(v_max: float, n_angles: int, n_speeds: int) -> FloatArray:
+    check_nonnegative(v_max, "v_max")
+    if n_angles < 1 or n_speeds < 1:
+        raise ValueError(f"`n_angles` and `n_speeds` must be >= 1, got {n_angles} and {n_speeds}")
+    return _grid(float(v_max), int(n_angles), int(n_speeds))
+
+
+@functools.lru_cache(maxsize=16)
+def _grid(v_max: float, n_angles: int, n_speeds: int) -> FloatArray:
+    """The candidate grid, built once per parameter set: building it costs more than a small swarm's HRVO."""
+    grid = _reference.candidate_grid(v_max, n_angles, n_speeds)
+    grid.flags.writeable = False  # shared between calls
+    return grid
+
+
+def _checked_csr(csr: tuple[Any, Any], n: int) -> tuple[np.ndarray, np.ndarray]:
+    indptr = np.ascontiguousarray(csr[0], dtype=np.int64)
+    indices = np.ascontiguousarray(csr[1], dtype=np.int64)
+    if indptr.shape != (n + 1,) or indptr[0] != 0 or np.any(np.diff(indptr) < 0) or indptr[-1] != len(indices):
+        raise ValueError(f"`neighbours` indptr must be non-decreasing of shape ({n + 1},) from 0 to len(indices)")
+    if len(indices) and (indices.min() < 0 or indices.max() >= n):
+        raise ValueError(f"`neighbours` indices must be robot ids in [0, {n})")
+    return indptr, indices
+
+
+class HrvoPlanner:
+    """One robot's HRVO: fixed parameters and candidate grid, one :meth:`velocity` call per decision.
+
+    This is the per-robot path of :class:`dream.RobotHRVO`; see :func:`hrvo` for the algorithm.
+    """
+
+    def __init__(
+        self,
+        *,
+        safety: float = 0.24,
+        v_max: float = 0.2,
+        bounds: Bounds | None = None,
+        n_angles: int = 20,
+        n_speeds: int = 10,
+        include_preferred: bool = True,
+    ) -> None:
+        self.safety = check_nonnegative(safety, "safety")
+        self.v_max = v_max
+        self.bounds = checked_bounds(bounds)
+        self.candidates = _checked_grid(v_max, n_angles, n_speeds)
+        self.include_preferred = include_preferred
+        self._planner = implementation("HrvoPlanner")(
+            self.candidates, safety=self.safety, v_max=v_max, bounds=self.bounds, include_preferred=include_preferred
+        )
+
+    def velocity(
+        self, detections: FloatArray, velocity: FloatArray, preferred: FloatArray, position: FloatArray
+    ) -> FloatArray:
+        """The chosen velocity ``(2,)``.
+
+        ``detections`` ``(k, 4)`` are movement-sensor rows ``[distance, angle, vx, vy]`` (angle
+        from the detected robot towards this one); ``velocity`` is the robot's previous
+        velocity, ``preferred`` the one it wants, ``position`` where it is (all ``(2,)``, finite
+        float64: the caller checks).
+        """
+        return self._planner.velocity(detections, velocity, preferred, position)
+
+
+def hrvo(
+    positions: Any,
+    velocities: Any,
+    preferred: Any,
+    neighbours: tuple[Any, Any] | None = None,
+    *,
+    radius: float = 1.0,
+    safety: float = 0.24,
+    v_max: float = 0.2,
+    bounds: Bounds | None = None,
+    n_angles: int = 20,
+    n_speeds: int = 10,
+    include_preferred: bool = True,
+) -> FloatArray:
+    """HRVO velocities ``(n, 2)`` for the whole swarm (single-integrator, m/s).
+
+    For each robot and neighbour: a cone of half-angle ``asin(safety / max(d, safety))`` towards
+    the neighbour, with the RVO edge (apex ``(v_A + v_B) / 2``) on the side of the robot's
+    velocity and the VO edge (apex ``v_B``) on the other. The result is the candidate closest to
+    the preferred velocity that no neighbour forbids and that keeps ``position + v`` strictly
+    inside ``bounds``; zero if none does.
+
+    Parameters
+    ----------
+    positions, velocities, preferred : (n, 2)
+        Positions, previous velocities (also the velocities neighbours are assumed to keep),
+        and preferred velocities.
+    neighbours : (indptr, indices), optional
+        CSR neighbour lists; ``None``: every other robot within ``radius``.
+    safety : float
+        Combined safety radius of two robots (m).
+    bounds : (xmin, xmax, ymin, ymax), optional
+        Only velocities keeping ``position + v`` strictly inside are chosen.
+    n_angles, n_speeds : int
+        The candidate grid (see :func:`dream._reference.candidate_grid`).
+    include_preferred : bool
+        Try the preferred velocity itself (clamped to ``v_max``) first; the original sampled
+        only the grid, so it could not move exactly along a free preferred direction.
+    """
+    p = as_array(positions, "positions", (None, 2))
+    n = p.shape[0]
+    v = as_array(velocities, "velocities", (n, 2))
+    pref = as_array(preferred, "preferred", (n, 2))
+    check_nonnegative(radius, "radius")
+    check_nonnegative(safety, "safety")
+    grid = _checked_grid(v_max, n_angles, n_speeds)
+    box = checked_bounds(bounds)
+    indptr, indices = (None, None) if neighbours is None else _checked_csr(neighbours, n)
+    return implementation("hrvo")(
+        p,
+        v,
+        pref,
+        indptr,
+        indices,
+        radius=radius,
+        safety=safety,
+        v_max=v_max,
+        bounds=box,
+        candidates=grid,
+        include_preferred=include_preferred,
+    )

@@ -1,0 +1,73 @@
+"""Neighbours within a radius and field of view: positions ``(n, 2)``, results as CSR arrays."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+import dream._reference as _reference
+from dream._checks import FloatArray, as_array, check_nonnegative, check_robot_id
+from dream.kernels._dispatch import implementation
+
+
+def neighbours(
+    positions: Any,
+    radius: float,
+    *,
+    headings: Any = None,
+    direction: float = 0.0,
+    fov: float = 2 * np.pi,
+    max_neighbours: int | None = None,
+) -> tuple[np.ndarray, np.ndarray, FloatArray]:
+    """Each robot's neighbours within ``radius`` (and field of view) as CSR arrays.
+
+    A uniform grid (cells of the radius) makes this O(n k) in Rust.
+
+    Parameters
+    ----------
+    positions : (n, 2)
+    radius : float
+        Inclusive range (m).
+    headings : (n,), optional
+        Robot headings (rad); with them only robots within ``fov / 2`` of
+        ``heading + direction`` are kept (a co-located robot is always kept).
+    max_neighbours : int, optional
+        Keep only the nearest ones (ties: lower index).
+
+    Returns
+    -------
+    indptr : (n + 1,) int64, indices : (m,) int64, distances : (m,) float64
+        Robot i's neighbours are ``indices[indptr[i]:indptr[i+1]]``, in increasing order.
+        A robot is never its own neighbour; co-located robots are neighbours.
+    """
+    p = as_array(positions, "positions", (None, 2))
+    check_nonnegative(radius, "radius")
+    h = None if headings is None else as_array(headings, "headings", (p.shape[0],))
+    if not np.isfinite(direction):
+        raise ValueError(f"`direction` must be finite, got {direction}")
+    check_nonnegative(fov, "fov")
+    if max_neighbours is not None and max_neighbours < 0:
+        raise ValueError(f"`max_neighbours` must be >= 0, got {max_neighbours}")
+    return implementation("neighbours")(p, radius, h, direction, fov, max_neighbours)
+
+
+def neighbours_of(
+    positions: Any,
+    robot_id: int,
+    radius: float,
+    *,
+    heading: float | None = None,
+    direction: float = 0.0,
+    fov: float = 2 * np.pi,
+) -> tuple[np.ndarray, FloatArray]:
+    """One robot's neighbours ``(indices, distances)`` among ``positions`` ``(n, 2)``.
+
+    Same rules as :func:`neighbours` for row ``robot_id`` (``heading`` is that robot's); O(n).
+    Per-robot sensors and radios use :meth:`dream.World.neighbours_of`, which answers from one
+    index per step instead.
+    """
+    p = as_array(positions, "positions", (None, 2))
+    check_robot_id(robot_id, p.shape[0], "positions")
+    check_nonnegative(radius, "radius")
+    return _reference.neighbours_of(p, robot_id, radius, heading=heading, direction=direction, fov=fov)

@@ -1,0 +1,116 @@
+"""Voronoi cells bounded by a disc and the arena: every robot's (:func:`voronoi_cells`) or one robot's."""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from dream._checks import Bounds, FloatArray, as_array, checked_bounds
+from dream._reference.voronoi import MAX_COORDINATE
+from dream.kernels._dispatch import implementation
+from dream.specs import ROBOTARIUM
+
+
+def _within_reach(array: FloatArray, name: str) -> FloatArray:
+    """``array`` unless a coordinate exceeds what the Voronoi kernels compute without overflow."""
+    if array.size and np.abs(array).max() > MAX_COORDINATE:
+        raise ValueError(f"`{name}` must be finite and at most 1e100 in magnitude, got {np.abs(array).max()}")
+    return array
+
+
+def _checked_box(bounds: Any) -> Bounds:
+    """The arena ``bounds`` of a cell, within reach."""
+    box = checked_bounds(bounds)
+    assert box is not None
+    _within_reach(np.array(box), "bounds")
+    return box
+
+
+class VoronoiCells(NamedTuple):
+    """Cells of :func:`voronoi_cells`; ``vertices``/``offsets`` are ``None`` unless requested."""
+
+    centroids: FloatArray  #: (n, 2)
+    areas: FloatArray  #: (n,)
+    vertices: FloatArray | None  #: (m, 2): robot i's polygon is vertices[offsets[i]:offsets[i+1]]
+    offsets: np.ndarray | None  #: (n + 1,) int64
+
+
+def voronoi_cells(
+    positions: Any,
+    *,
+    radius: float = 1.0,
+    bounds: Bounds = ROBOTARIUM.bounds,
+    virtual: tuple[Any, Any] | None = None,
+    resolution: int = 64,
+    polygons: bool = False,
+) -> VoronoiCells:
+    """Each robot's Voronoi cell within a disc: centroid, area and optionally the polygon.
+
+    Robot i's cell is the disc of ``radius`` (a regular polygon of ``resolution`` vertices)
+    intersected with the arena ``bounds``, clipped by the perpendicular bisector of every other
+    robot within ``2 radius`` and of each of its virtual agents (exact polygon clipping). An
+    empty cell (robot outside the arena) has area 0 and the robot's position as centroid. A
+    radius beyond the arena's reach is shrunk to one that still covers it (same cells, no loss
+    of precision), so any finite radius works; coordinates are limited to 1e100 in magnitude.
+
+    Parameters
+    ----------
+    positions : (n, 2)
+    virtual : (indptr (n + 1,), points (m, 2)), optional
+        Virtual agents per robot, e.g. from :func:`virtual_agents`.
+    polygons : bool
+        Also return the cells' vertices (counter-clockwise) as CSR.
+    """
+    p = _within_reach(as_array(positions, "positions", (None, 2)), "positions")
+    n = p.shape[0]
+    if not (np.isfinite(radius) and radius > 0):
+        raise ValueError(f"`radius` must be finite and > 0, got {radius}")
+    if resolution < 3:
+        raise ValueError(f"`resolution` must be >= 3, got {resolution}")
+    box = _checked_box(bounds)
+    indptr, points = None, None
+    if virtual is not None:
+        indptr = np.ascontiguousarray(virtual[0], dtype=np.int64)
+        points = _within_reach(as_array(virtual[1], "virtual points", (None, 2)), "virtual points")
+        if indptr.shape != (n + 1,) or indptr[0] != 0 or np.any(np.diff(indptr) < 0) or indptr[-1] != len(points):
+            raise ValueError(f"`virtual` indptr must be non-decreasing of shape ({n + 1},) from 0 to len(points)")
+    centroids, areas, vertices, offsets = implementation("voronoi_cells")(
+        p, radius=radius, bounds=box, virtual_indptr=indptr, virtual_points=points, resolution=resolution
+    )
+    return VoronoiCells(centroids, areas, vertices if polygons else None, offsets if polygons else None)
+
+
+def voronoi_cell(
+    position: Any,
+    others: Any,
+    *,
+    radius: float = 1.0,
+    bounds: Bounds = ROBOTARIUM.bounds,
+    virtual: Any = None,
+    resolution: int = 64,
+) -> tuple[FloatArray, float, FloatArray]:
+    """One robot's cell, as :func:`voronoi_cells` computes it, from what that robot knows.
+
+    Parameters
+    ----------
+    position : (2,)
+    others : (k, 2)
+        Positions of the other robots it knows of (those beyond ``2 radius`` change nothing).
+    virtual : (j, 2), optional
+        Its virtual agents (see :func:`obstacle_agents`).
+
+    Returns
+    -------
+    centroid : (2,), area : float, vertices : (m, 2)
+        The centroid is ``position`` when the cell is empty.
+    """
+    p = _within_reach(as_array(position, "position", (2,)), "position")
+    q = _within_reach(as_array(others, "others", (None, 2)), "others")
+    v = np.zeros((0, 2)) if virtual is None else _within_reach(as_array(virtual, "virtual", (None, 2)), "virtual")
+    if not (np.isfinite(radius) and radius > 0):
+        raise ValueError(f"`radius` must be finite and > 0, got {radius}")
+    if not 3 <= resolution <= 2**20:
+        raise ValueError(f"`resolution` must be between 3 and 2^20, got {resolution}")
+    box = _checked_box(bounds)
+    return implementation("voronoi_cell")(p, q, v, radius=radius, bounds=box, resolution=resolution)

@@ -1,0 +1,64 @@
+"""Dispatch of :mod:`dream.kernels`: one helper picks :mod:`dream._core` or :mod:`dream._reference`,
+which take the same arguments, and every public kernel goes through it."""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+import pytest
+
+from dream import _core, _reference, kernels
+from dream.kernels import _dispatch
+from dream.specs import RPS2
+
+CORE_KERNELS = sorted(set(_core.__all__) - {"__version__"})
+
+
+@pytest.mark.parametrize("name", CORE_KERNELS)
+def test_reference_takes_the_arguments_of_each_core_kernel(name):
+    core = inspect.signature(getattr(_core, name))
+    reference = inspect.signature(getattr(_reference, name))
+    for parameter in core.parameters.values():
+        assert parameter.name in reference.parameters, parameter.name
+        assert reference.parameters[parameter.name].kind == parameter.kind, parameter.name
+    required = {p.name for p in reference.parameters.values() if p.default is inspect.Parameter.empty}
+    assert required <= set(core.parameters)
+
+
+@pytest.mark.parametrize("core", [None, _core])
+def test_implementation_reads_the_patched_core(monkeypatch, core):
+    monkeypatch.setattr(_dispatch, "_core", core)
+    assert _dispatch.implementation("hrvo") is (_reference if core is None else _core).hrvo
+
+
+class Recorder:
+    """A stand-in for ``dream._core`` that answers with the reference and notes what was asked."""
+
+    def __init__(self) -> None:
+        self.asked: set[str] = set()
+
+    def __getattr__(self, name: str) -> object:
+        self.asked.add(name)
+        return getattr(_reference, name)
+
+
+def test_every_public_kernel_goes_through_the_dispatch(monkeypatch):
+    recorder = Recorder()
+    monkeypatch.setattr(_dispatch, "_core", recorder)
+    poses, commands, points = np.zeros((3, 2)), np.zeros((2, 2)), np.array([[0.0, 0.0], [0.5, 0.0]])
+    kernels.unicycle_step(poses, commands)
+    kernels.threshold_velocities(commands)
+    kernels.threshold_velocities(commands, RPS2)
+    kernels.validate(poses, commands)
+    kernels.dxi_to_dxu(commands, poses)
+    kernels.actuator_limit(commands)
+    kernels.neighbours(points, 1.0)
+    kernels.hrvo(points, points, points)
+    kernels.HrvoPlanner().velocity(np.zeros((0, 4)), np.zeros(2), np.zeros(2), np.zeros(2))
+    kernels.voronoi_cells(points)
+    kernels.voronoi_cell(points[0], points[1:])
+    square = (np.array([[1.0, 0.5], [1.2, 0.5], [1.2, 0.7], [1.0, 0.7]]), np.array([0, 4]))
+    kernels.virtual_agents(points, square)
+    kernels.distance_rays(poses)
+    assert recorder.asked == set(CORE_KERNELS)
