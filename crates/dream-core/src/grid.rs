@@ -128,8 +128,9 @@ impl Grid {
                 if low > high {
                     return;
                 }
-                for dx in -1..=1_i64 {
-                    let column = cx.saturating_add(dx).saturating_sub(*x0);
+                // Distinct columns only: near i64::MAX, cx + 1 saturates to cx itself.
+                for ax in cx.saturating_sub(1)..=cx.saturating_add(1) {
+                    let column = ax.saturating_sub(*x0);
                     if (0..*columns).contains(&column) {
                         let first = (column * rows + low) as usize;
                         let last = (column * rows + high) as usize;
@@ -141,11 +142,9 @@ impl Grid {
                 }
             }
             CellTable::Sparse(index) => {
-                for dx in -1..=1_i64 {
-                    for dy in -1..=1_i64 {
-                        if let Some(&slot) = index.get(&(cx.saturating_add(dx), cy.saturating_add(dy))) {
-                            visit(self.starts[slot]..self.starts[slot + 1]);
-                        }
+                for (ax, ay) in block(cx, cy) {
+                    if let Some(&slot) = index.get(&(ax, ay)) {
+                        visit(self.starts[slot]..self.starts[slot + 1]);
                     }
                 }
             }
@@ -162,11 +161,9 @@ impl Grid {
     /// slice lists point indices in increasing order.
     pub fn for_each_cell_near(&self, x: f64, y: f64, mut visit: impl FnMut(&[usize])) {
         let (cx, cy) = cell_of(x, y, self.cell);
-        for dx in -1..=1_i64 {
-            for dy in -1..=1_i64 {
-                if let Some(slot) = self.slot(cx.saturating_add(dx), cy.saturating_add(dy)) {
-                    visit(&self.members[self.starts[slot]..self.starts[slot + 1]]);
-                }
+        for (ax, ay) in block(cx, cy) {
+            if let Some(slot) = self.slot(ax, ay) {
+                visit(&self.members[self.starts[slot]..self.starts[slot + 1]]);
             }
         }
     }
@@ -190,6 +187,13 @@ impl Grid {
             CellTable::Sparse(index) => index.get(&(cx, cy)).copied(),
         }
     }
+}
+
+/// The distinct cells of the 3x3 block around cell `(cx, cy)`: fewer at the saturated edges of
+/// i64, where `cx + 1` is `cx` itself (listing it twice would report its points twice).
+fn block(cx: i64, cy: i64) -> impl Iterator<Item = (i64, i64)> {
+    (cx.saturating_sub(1)..=cx.saturating_add(1))
+        .flat_map(move |ax| (cy.saturating_sub(1)..=cy.saturating_add(1)).map(move |ay| (ax, ay)))
 }
 
 fn cell_of(x: f64, y: f64, cell: f64) -> (i64, i64) {

@@ -203,12 +203,22 @@ impl<'a> Near<'a> {
                 count += usize::from(squared <= self.radius_squared);
             }
             for &(k, squared) in &scratch[..count] {
-                let (j, distance) = (members[k], squared.sqrt());
+                let (j, distance) = (members[k], length(squared, sx[k] - x, sy[k] - y));
                 if j != i && distance <= self.radius {
                     visit(j, [sx[k] - x, sy[k] - y], distance);
                 }
             }
         });
+    }
+}
+
+/// `sqrt(squared)`, the length of `(dx, dy)` whose `squared` is `dx^2 + dy^2`; `hypot` when the
+/// squares overflowed (beyond ~1.3e154 m), which a huge radius still lets through.
+fn length(squared: f64, dx: f64, dy: f64) -> f64 {
+    if squared.is_finite() {
+        squared.sqrt()
+    } else {
+        dx.hypot(dy)
     }
 }
 
@@ -286,7 +296,7 @@ impl Query<'_> {
         }
         let start = out.indices.len();
         for &(k, squared) in &kept[..count] {
-            let distance = squared.sqrt();
+            let distance = length(squared, xs[k] - x, ys[k] - y);
             if distance > self.radius {
                 continue;
             }

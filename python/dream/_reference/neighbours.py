@@ -26,7 +26,10 @@ def neighbours_of(
     """
     dx = positions[:, 0] - positions[i, 0]
     dy = positions[:, 1] - positions[i, 1]
-    dist = np.sqrt(dx * dx + dy * dy)
+    with np.errstate(over="ignore"):
+        dist = np.sqrt(dx * dx + dy * dy)
+    far = np.isinf(dist)  # the squares overflowed (beyond ~1.3e154 m): hypot scales instead
+    dist[far] = np.hypot(dx[far], dy[far])
     keep = dist <= radius
     keep[i] = False
     if heading is not None:

@@ -11,6 +11,23 @@ import dream._reference as _reference
 from dream._checks import Bounds, FloatArray, as_array, check_nonnegative, checked_bounds
 from dream.kernels._dispatch import implementation
 
+#: Preferred speeds above this (m/s) are scaled down to it, keeping their direction: the choice
+#: ranks candidates by their squared distance to the preferred velocity, which overflows to inf
+#: for every candidate beyond ~1e154 m/s. No candidate is faster than ``v_max``, so a preferred
+#: velocity this far away ranks them by its direction alone, as a farther one would.
+PREFERRED_LIMIT = 1e6
+
+
+def _bounded(preferred: FloatArray) -> FloatArray:
+    """``preferred`` ``(n, 2)`` with each row no longer than :data:`PREFERRED_LIMIT`."""
+    norm = np.hypot(preferred[:, 0], preferred[:, 1])
+    huge = norm > PREFERRED_LIMIT
+    if not huge.any():
+        return preferred
+    out = preferred.copy()
+    out[huge] *= (PREFERRED_LIMIT / norm[huge])[:, None]
+    return out
+
 
 def _checked_grid(v_max: float, n_angles: int, n_speeds: int) -> FloatArray:
     check_nonnegative(v_max, "v_max")
@@ -72,6 +89,8 @@ class HrvoPlanner:
         velocity, ``preferred`` the one it wants, ``position`` where it is (all ``(2,)``, finite
         float64: the caller checks).
         """
+        if abs(preferred[0]) + abs(preferred[1]) > PREFERRED_LIMIT:
+            preferred = _bounded(preferred.reshape(1, 2))[0]
         return self._planner.velocity(detections, velocity, preferred, position)
 
 
@@ -117,7 +136,7 @@ def hrvo(
     p = as_array(positions, "positions", (None, 2))
     n = p.shape[0]
     v = as_array(velocities, "velocities", (n, 2))
-    pref = as_array(preferred, "preferred", (n, 2))
+    pref = _bounded(as_array(preferred, "preferred", (n, 2)))
     check_nonnegative(radius, "radius")
     check_nonnegative(safety, "safety")
     grid = _checked_grid(v_max, n_angles, n_speeds)
