@@ -37,9 +37,13 @@ def as_poses(value: Any, name: str = "poses", n: int | None = None) -> FloatArra
 
 
 def check_robot_id(robot_id: int, n: int, what: str = "poses") -> int:
-    """``robot_id`` as an int, or an IndexError naming it and the number of robots."""
+    """``robot_id`` as an int, or an IndexError naming it, the number of robots and the way out."""
     if not 0 <= robot_id < n:
-        raise IndexError(f"robot id {robot_id} is out of range for {what} of {n} robots")
+        ids = "no robots" if n == 0 else f"ids 0 to {n - 1}"
+        raise IndexError(
+            f"robot id {robot_id} is out of range for {what} of {n} robots ({ids}): a robot, its sensors "
+            "and its radio take the index of its column in the simulator's poses"
+        )
     return int(robot_id)
 
 
@@ -66,3 +70,27 @@ def _show(shape: tuple[int | None, ...]) -> str:
     names = iter("nmk")
     parts = [str(s) if s is not None else next(names) for s in shape]
     return "(" + ", ".join(parts) + ("," if len(parts) == 1 else "") + ")"
+
+
+class RobotCallback:
+    """The ``callback`` attribute of a sensor or radio (an object with ``robot_id`` and ``tag``).
+
+    Refuses, when it is set, a robot's bound method (say ``robot.update_odom``) whose robot has
+    another id than the sensor or radio: that sensor would read, or the radio speak for, another
+    robot than the one it reports to, and nothing would fail.
+    """
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.slot = "_" + name
+
+    def __get__(self, obj: Any, objtype: type | None = None) -> Any:
+        return self if obj is None else getattr(obj, self.slot)
+
+    def __set__(self, obj: Any, callback: Any) -> None:
+        theirs = getattr(getattr(callback, "__self__", None), "robot_id", None)
+        if isinstance(theirs, int) and theirs != obj.robot_id:
+            raise ValueError(
+                f"{type(obj).__name__} {obj.tag!r} has robot id {obj.robot_id} but reports to robot {theirs}'s "
+                f"{getattr(callback, '__name__', 'callback')}: give a robot's sensors and radio its own id"
+            )
+        setattr(obj, self.slot, callback)

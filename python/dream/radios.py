@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from dream._checks import as_array, check_nonnegative, check_robot_id
+from dream._checks import RobotCallback, as_array, check_nonnegative, check_robot_id
 from dream.world import current_world
 
 Callback = Callable[[list[Any]], Any]
@@ -46,6 +46,8 @@ class Radio:
         check_robot_id(self.robot_id, poses.shape[1], "x")
         self.pos_x, self.pos_y, self.rot_w = (float(v) for v in poses[:, self.robot_id])
         self._poses = poses
+
+    callback: Callback = RobotCallback()  # type: ignore[assignment]
 
     def _exchange(self, callback: Callback, senders: np.ndarray) -> None:
         data = callback(self.world.receive((int(j) for j in senders), self.loss, self.robot_id))

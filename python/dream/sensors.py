@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from dream._checks import FloatArray, as_array, check_nonnegative, check_robot_id
+from dream._checks import FloatArray, RobotCallback, as_array, check_nonnegative, check_robot_id
 from dream.world import current_world
 
 if TYPE_CHECKING:
@@ -54,7 +54,7 @@ class Sensor:
             array = array + self.world.rng.normal(0.0, noise, array.shape)
         return array
 
-    callback: Callable[[Any], Any]
+    callback: Callable[[Any], Any] = RobotCallback()  # type: ignore[assignment]
 
     def _report(self, values: Any) -> None:
         """Hand a reading to ``self.callback``: with this sensor's noise, and the world's sensor
