@@ -1,8 +1,9 @@
 """Affine formation manoeuvres, written as a DREAM script in the original explicit-loop style.
 
-Three leaders hold a triangle; four followers come from the corners and take their places by
-the stress control law on radio positions; then two pairs of bars sweep across and the
-leaders compress, then flatten, the formation to pass. Run headless:
+Three leaders hold a triangle (standing a little to the right while they gather the others);
+four followers come from the corners and take their places by the stress control law on radio
+positions; then two pairs of bars sweep across and the leaders compress, then flatten, the
+formation to pass, each shape change at a steady pace (``Leader.head_for``). Run headless:
 
     python examples/affine_formation.py
 """
@@ -14,9 +15,11 @@ import numpy as np
 from dream import *  # the original names: Odometry_sensor, Movement_sensor, create_timer, ...
 from dream import GraphRadio, make_robotarium, reset_default_world
 from dream.experiments.affine_formation import (
+    GATHER,
     LEADERS,
     RECOVER,
     SAFETY,
+    SHIFT,
     WEIGHTS,
     Follower,
     Leader,
@@ -54,10 +57,13 @@ for i in range(N):
 dxu = np.zeros((2, N))
 obstacles = []
 for t in range(steps):
+    if t in (0, GATHER):  # the leaders gather the followers a little to the right, then centre
+        for leader in robots[:LEADERS]:
+            leader.head_for(formation("nominal")[leader.robot_id] + (SHIFT * (t == 0), 0.0))
     for deform, enter, leave, shape, gap in passes:  # the leaders' planned manoeuvres
         if t in (deform, leave):
             for leader in robots[:LEADERS]:
-                leader.goal = formation(shape if t == deform else "nominal")[leader.robot_id]
+                leader.head_for(formation(shape if t == deform else "nominal")[leader.robot_id])
         if t == enter:
             obstacles = bars(gap, r.arena.xmax + 0.15)
         if t == leave:

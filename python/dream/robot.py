@@ -18,7 +18,7 @@ from dream.kernels import Bounds
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec, RobotSpec
 from dream.world import current_world
 
-GUARD_MARGIN = 0.01  #: what :meth:`RobotHRVO.guard` adds to the contact distance (m)
+GUARD_MARGIN = 0.01  #: what :meth:`RobotHRVO.guard` adds to the robot's diameter (m)
 GUARD_HORIZON = 0.25  #: how far ahead :meth:`RobotHRVO.guard` looks (s): beyond the next decision
 
 
@@ -274,13 +274,15 @@ class RobotHRVO(Robot):
             )
 
     def guard(self) -> None:
-        """Drive no further (turn only) when the unicycle's motion would bring it within contact
-        distance (the simulator's, plus :data:`GUARD_MARGIN`, at most the safety radius) of where a
-        detected robot is, in the next :data:`GUARD_HORIZON` seconds.
+        """Drive no further (turn only) when the unicycle's motion would bring its body within
+        :data:`GUARD_MARGIN` of where a detected robot's is (at most the safety radius apart), in
+        the next :data:`GUARD_HORIZON` seconds.
 
         HRVO chooses a safe ``dxi``, but a unicycle moves along its heading, not along ``dxi``:
         while it turns, the part of ``dxi`` it carries out can close in on a neighbour that
-        ``dxi`` itself avoided. The neighbours are taken as standing still: the sensor's
+        ``dxi`` itself avoided. It guards the bodies only: rps 2.1's colliders, which reach
+        further ahead, are the safety radius's business (a guard that wide stops robots in
+        tight formations for good). The neighbours are taken as standing still: the sensor's
         velocities are those of a point ahead of each robot, which a robot turning in place
         moves sideways, and each robot's own guard checks its own motion.
         """
@@ -289,17 +291,9 @@ class RobotHRVO(Robot):
         rows = np.asarray(self.detections)
         offsets = rows[:, :1] * np.column_stack((np.cos(rows[:, 1]), np.sin(rows[:, 1])))
         moving = self.dxu[0] * np.array([math.cos(self.rot_w), math.sin(self.rot_w)])
-        if rules.closing_in(
-            offsets, np.broadcast_to(moving, offsets.shape), self.contact + GUARD_MARGIN, GUARD_HORIZON
-        ).any():
+        near = min(self.spec.diameter + GUARD_MARGIN, self.safety)
+        if rules.closing_in(offsets, np.broadcast_to(moving, offsets.shape), near, GUARD_HORIZON).any():
             self.dxu[0] = 0.0
-
-    @property
-    def contact(self) -> float:
-        """Centre distance (m) within which robots touch: the simulator's (rps 2.1's colliders reach
-        further ahead), else the robot's diameter."""
-        simulator = self.world.simulator
-        return self.spec.diameter if simulator is None else simulator.spec.contact
 
     def steer(self, detections: Any, desired_velocity: Any, sidestep_updates: int = 10) -> FloatArray:
         """:meth:`HRVO`, for a robot that must not wait forever.

@@ -8,10 +8,14 @@ not run into the leaders, who ignore them. The nominal configuration (formation 
 the followers converge to the affine image of it that the leaders span:
 ``-Omega_ff^-1 Omega_fl p_leaders``.
 
-The leaders start in their triangle at the centre, the followers at the arena's corners. Then
-two pairs of bars sweep from right to left: for the wide gap the leaders compress the
-formation, for the narrow gap they make it collinear (sheared, so that no two robots meet),
-and after each they return to the nominal shape.
+The leaders start in their triangle at the centre, the followers at the arena's corners.
+While the followers gather, the leaders stand ``SHIFT`` to the right and come back (see
+:data:`SHIFT`). Then two pairs of bars sweep from right to left: for the wide gap the leaders
+compress the formation, for the narrow gap they make it collinear (sheared, so that
+neighbours on the line are 0.375 m apart), and after each they return to the nominal shape.
+A leader moves its place from one shape to the next at a steady pace over ``MORPH`` of its
+decisions, so that the leaders keep an affine image of the nominal shape on the way and the
+followers, tracking it, do not cut across each other.
 
 Success: follower error below 0.05 m before the first bars arrive, no robot touching a bar,
 zero collisions.
@@ -52,9 +56,23 @@ WEIGHTS = np.array(
 NOMINAL = np.array([[2, 0], [1, 1], [1, -1], [0, 1], [0, -1], [-1, 1], [-1, -1]], dtype=np.float64)
 SCALE = 0.3  #: metres per formation unit
 GAIN = 8.0  #: the followers' stress gain k (1/s)
+# The same under rps 2.1's rules, whose colliders touch at 0.185 m: with the gathering and the
+# steady changes of shape below, no two robots came closer than 0.175 m (seeds 0-39, both
+# rules); a safety of 0.2 m made the followers lag, and a leader, which does not avoid them,
+# ran into one (rps 2.1, seed 24).
 SAFETY = 0.15  #: the followers' HRVO safety radius (m): the formation's robots are 0.3 m apart
 FINE = 0.03  #: below this desired speed (m/s) a follower moves without HRVO
 SETTLE = 1200  #: steps for the followers to take their places before the first manoeuvre
+#: How far (m) to the right the leaders stand while the followers gather from the corners, until
+#: step ``GATHER``. The followers from the right-hand corners have the longer way and must pass
+#: the leaders; with the formation centred, the left-hand followers, pulled towards them, got
+#: there first, into the places meant for them, and walled them in beside a leader (a
+#: follower and its stress neighbours then drifted round the formation: the tangles at the
+#: start, and under rps 2.1 collisions with the leader). Standing closer to the right-hand
+#: corners, the leaders let those followers arrive first.
+SHIFT = 0.3
+GATHER = 300  #: step at which the leaders return from their gathering places to the nominal ones
+MORPH = 75  #: decisions (one every 4 steps: 10 s) over which a leader moves to its next place
 LEAD = 600  #: steps between the leaders' change of shape and the bars' entry
 RECOVER = 450  #: steps back in the nominal shape between two passes
 ENTRY = 0.15  #: the bars enter and leave this far beyond the walls (m)
@@ -63,11 +81,13 @@ BAR_WIDTH = 0.1  #: thickness of a bar (m)
 TOLERANCE = 0.05  #: largest follower error of a formed formation (m)
 GAPS = (0.55, 0.3)  #: the wide and the narrow gap between a pair of bars (m)
 #: Affine maps (formation units -> formation units) the leaders use: nominal, for the wide gap
-#: (compressed), for the narrow gap (collinear; the shear keeps the robots 1/3 unit apart).
+#: (compressed), for the narrow gap (collinear: ``x -> 4 a x + a y`` spaces the robots evenly,
+#: 2 a = 1.25 units apart, leader 0 further; ``a = 5/6`` left two pairs 0.25 m apart, whose
+#: robots met while the followers caught up with the leaders, under rps 2.1's rules in most runs).
 SHAPES = {
     "nominal": np.eye(2),
     "compressed": np.diag([1.0, 0.5]),
-    "collinear": np.array([[2.5, 2.5 / 3], [0.0, 0.0]]),
+    "collinear": np.array([[2.5, 0.625], [0.0, 0.0]]),
 }
 
 
@@ -134,19 +154,37 @@ def follower_positions(positions: np.ndarray, leader: np.ndarray) -> np.ndarray:
 
 
 class Leader(RobotHRVO):
-    """A leader: goes to its place in the planned shape; ignores the followers."""
+    """A leader: goes to its place in the planned shape; ignores the followers.
+
+    A new place (:meth:`head_for`) is not taken at once: the leader's aim moves from the old
+    place to the new one at a steady pace over its next ``MORPH`` decisions (its own clock), so
+    the three leaders, which all plan the same shapes, stay (nearly) an affine image of the
+    nominal shape while they change it, and the followers keep up with them.
+    """
 
     def __init__(self, robot_id: int, tag: str, **kwargs: Any) -> None:
         super().__init__(robot_id, tag, **kwargs)
         self.goal = formation("nominal")[robot_id % 7]
+        self.start = self.goal  # the place the leader's aim left from
+        self.decisions = MORPH  # decisions since then
+
+    def head_for(self, place: np.ndarray) -> None:
+        """Move the aim from where it is now to ``place`` ``(2,)`` (m) over the next ``MORPH`` decisions."""
+        self.start, self.goal, self.decisions = self.aim, np.asarray(place, dtype=np.float64), 0
+
+    @property
+    def aim(self) -> np.ndarray:
+        """The point ``(2,)`` (m) the leader heads for now, on its way from ``start`` to ``goal``."""
+        return self.start + min(self.decisions / MORPH, 1.0) * (self.goal - self.start)
 
     def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
         return (self.robot_id, self.pos_x, self.pos_y) if self.has_pose else None
 
     def update(self, dxu: np.ndarray) -> None:
+        self.decisions += 1
         desired = np.zeros(2)
         if self.has_pose:
-            desired = 1.5 * (self.goal - (self.pos_x, self.pos_y))
+            desired = 1.5 * (self.aim - (self.pos_x, self.pos_y))
             speed = math.hypot(desired[0], desired[1])
             if speed > self.v_max:
                 desired *= self.v_max / speed
@@ -228,7 +266,8 @@ class AffineFormation(Experiment):
             robot: Leader | Follower
             if self.leader[i]:
                 robot = Leader(i, f"leader_{i}", arena=self.arena)
-                robot.goal = formation("nominal")[i % 7] + self.centres[i // 7]
+                robot.goal = robot.start = formation("nominal")[i % 7] + self.centres[i // 7]
+                robot.head_for(robot.goal + (SHIFT, 0.0))
             else:
                 robot = Follower(i, f"follower_{i}", self.weights, safety=SAFETY, arena=self.arena)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
@@ -254,16 +293,21 @@ class AffineFormation(Experiment):
         return self.passes[-1][2] + 2 * RECOVER
 
     def before_step(self, step: int) -> None:
+        if step == GATHER:
+            self._lead("nominal")
         for deform, enter, leave, shape, gap in self.passes:
             if step in (deform, leave):
-                for robot in self.robots:
-                    if isinstance(robot, Leader):
-                        place = formation(shape if step == deform else "nominal")[robot.robot_id % 7]
-                        robot.goal = place + self.centres[robot.robot_id // 7]
+                self._lead(shape if step == deform else "nominal")
             if step == enter:
                 self.bars = [bar for centre in self.centres for bar in bars(gap, ROBOTARIUM.xmax + ENTRY, centre)]
             if step == leave:
                 self.bars = []
+
+    def _lead(self, shape: str) -> None:
+        """Send every leader towards its place in ``shape`` (the leaders know the plan)."""
+        for robot in self.robots:
+            if isinstance(robot, Leader):
+                robot.head_for(formation(shape)[robot.robot_id % 7] + self.centres[robot.robot_id // 7])
 
     def after_step(self, step: int, poses: np.ndarray) -> None:
         for bar in self.bars:
