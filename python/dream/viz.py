@@ -29,6 +29,7 @@ Units: metres in the world (the axes are in metres), pixels in images. Images ar
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import functools
 import math
@@ -1068,6 +1069,54 @@ class Recorder:
                 )
         else:
             self.renderer = Renderer(arena, size=self.size, focus=self.focus)
+
+    @staticmethod
+    def add_arguments(parser: argparse.ArgumentParser) -> None:
+        """Add a script's drawing options to ``parser``: ``--video PATH`` (a ``.gif`` or ``.mp4``),
+        ``--show`` (a live window) and ``--every K`` (draw one step in K); :meth:`from_args` reads
+        them back."""
+        parser.add_argument("--video", metavar="PATH", help="record the run to a video: .gif (Pillow) or .mp4 (H.264)")
+        parser.add_argument("--show", action="store_true", help="show the run in a live window")
+        parser.add_argument("--every", metavar="K", type=int, default=1, help="draw one step in K (default: 1)")
+
+    @classmethod
+    def from_args(cls, args: argparse.Namespace, parser: argparse.ArgumentParser | None = None) -> Recorder | None:
+        """The recorder that a script's options (:meth:`add_arguments`) ask for, or ``None`` when
+        they ask for neither a video nor a window.
+
+        With ``--show`` the window outlives :meth:`close`: call :meth:`hold` after it to keep the
+        last frame on screen until the user closes the window.
+
+        Parameters
+        ----------
+        args : argparse.Namespace
+            Parsed options with ``video``, ``show`` and, optionally, ``every``.
+        parser : argparse.ArgumentParser, optional
+            If given, a bad ``--video`` path or ``--every`` ends the script through
+            ``parser.error`` (one line, exit code 2) instead of raising.
+
+        Raises
+        ------
+        ValueError, FileNotFoundError
+            Without ``parser``: an unsupported video suffix or missing folder, or ``every < 1``.
+
+        Examples
+        --------
+        >>> parser = argparse.ArgumentParser()
+        >>> Recorder.add_arguments(parser)
+        >>> Recorder.from_args(parser.parse_args([])) is None
+        True
+        >>> Recorder.from_args(parser.parse_args(["--video", "run.gif", "--every", "2"])).every
+        2
+        """
+        if args.video is None and not args.show:
+            return None
+        try:
+            return cls(video=args.video, show=args.show, every=getattr(args, "every", 1), hold=args.show)
+        except (ValueError, OSError) as err:
+            if parser is None:
+                raise
+            parser.error(str(err))
 
     @property
     def video(self) -> Path | None:

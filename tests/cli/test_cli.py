@@ -50,3 +50,45 @@ def test_example_script_runs(script):
     )
     assert done.returncode == 0, done.stderr
     assert "120 iterations" in done.stdout
+
+
+EXPLICIT_LOOP = ["hrvo_circle.py", "line_consensus.py", "voronoi_coverage.py", "affine_formation.py"]
+
+
+def run_example(script: str, *options: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, str(ROOT / "examples" / script), "--backend", "fast", *options],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+
+
+@pytest.mark.parametrize("script", EXPLICIT_LOOP)
+def test_example_script_succeeds_at_its_default_size(script):
+    # Each example holds its own robot classes; at its default size it must reach its success measure.
+    done = run_example(script)
+    assert done.returncode == 0, done.stderr
+    last = done.stdout.strip().splitlines()[-1]
+    assert last.startswith("success: "), done.stdout
+    assert " 0 collisions" in last
+
+
+def test_example_script_says_failure_and_exits_0():
+    done = run_example("hrvo_circle.py", "--steps", "30")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip().splitlines()[-1] == "failure: 0 circles in 30 steps, 0 collisions"
+
+
+def test_example_script_writes_a_video(tmp_path):
+    video = tmp_path / "x.gif"
+    done = run_example("line_consensus.py", "--steps", "20", "--every", "5", "--video", str(video))
+    assert done.returncode == 0, done.stderr
+    assert video.is_file() and video.stat().st_size > 0
+
+
+def test_example_script_refuses_a_bad_video_path(tmp_path):
+    done = run_example("affine_formation.py", "--steps", "5", "--video", str(tmp_path / "missing" / "x.gif"))
+    assert done.returncode == 2
+    assert "does not exist" in done.stderr and "Traceback" not in done.stderr

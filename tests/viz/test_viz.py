@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import os
 import subprocess
 import sys
@@ -255,6 +256,31 @@ def test_recorder_takes_its_arena_from_the_first_frame():
 def test_recorder_rejects_bad_every(every):
     with pytest.raises(ValueError, match="every"):
         Recorder(every=every)
+
+
+def test_recorder_from_args_makes_what_the_options_ask_for(tmp_path):
+    parser = argparse.ArgumentParser()
+    Recorder.add_arguments(parser)
+    assert Recorder.from_args(parser.parse_args([])) is None  # no drawing asked for: nothing to draw
+    path = tmp_path / "run.gif"
+    recorder = Recorder.from_args(parser.parse_args(["--video", str(path), "--every", "2"]))
+    assert recorder.video == path and recorder.every == 2 and not recorder.show and not recorder.keep_open
+    shown = Recorder.from_args(argparse.Namespace(video=None, show=True))  # --every is optional
+    assert shown.video is None and shown.show and shown.keep_open and shown.every == 1
+
+
+@pytest.mark.parametrize(
+    ("options", "message"), [(["--video", "run.avi"], "suffix"), (["--show", "--every", "0"], "every")]
+)
+def test_recorder_from_args_refuses_bad_options(capsys, options, message):
+    parser = argparse.ArgumentParser()
+    Recorder.add_arguments(parser)
+    args = parser.parse_args(options)
+    with pytest.raises(ValueError, match=message):
+        Recorder.from_args(args)
+    with pytest.raises(SystemExit) as exit_info:  # through the parser: one line, exit code 2
+        Recorder.from_args(args, parser)
+    assert exit_info.value.code == 2 and message in capsys.readouterr().err
 
 
 def test_recorder_show_without_display_warns_and_still_records(tmp_path):
