@@ -131,3 +131,14 @@ def test_load_file_refuses_files_without_exactly_one_experiment(tmp_path, text, 
 def test_load_file_refuses_a_missing_file(tmp_path):
     with pytest.raises(ExperimentFileError, match="no such file"):
         load_file(tmp_path / "absent.py")
+
+
+@pytest.mark.parametrize("name", sorted(EXPERIMENTS))
+def test_every_experiment_succeeds_at_its_default_size_under_each_labs_rules(name):
+    """What the lab's verifier checks: rps 2.1's colliders (0.135 m, 0.025 m ahead), its wheel
+    base and its actuator test on the commands as given; and rps 0.0.0's."""
+    for rules in ("rps0", "rps2"):
+        result = dream.run(name, seed=0, backend="fast", rules=rules)
+        assert result.rules == rules
+        assert result.success, (rules, result.summary())
+        assert (result.collisions, result.boundary, result.actuator) == (0, 0, 0)
