@@ -110,6 +110,17 @@ class Robot:
     def guard(self) -> None:
         """The last check of ``dxu`` before it is sent: nothing here (see :meth:`RobotHRVO.guard`)."""
 
+    def stop_short(self, offsets: Any, near: float) -> None:
+        """Set the linear speed to 0 (the robot still turns) when driving along its heading would
+        bring it within ``near`` (m) of a robot at ``offsets`` ``(k, 2)`` (its own position less
+        theirs, taken as standing still) in the next :data:`GUARD_HORIZON` seconds."""
+        offsets = np.asarray(offsets, dtype=np.float64).reshape(-1, 2)
+        if self.dxu[0] == 0.0 or not len(offsets):
+            return
+        moving = self.dxu[0] * np.array([math.cos(self.rot_w), math.sin(self.rot_w)])
+        if rules.closing_in(offsets, np.broadcast_to(moving, offsets.shape), near, GUARD_HORIZON).any():
+            self.dxu[0] = 0.0
+
     def actuator_limit(self) -> None:
         """Keep ``dxu`` within the robot's limits, slowing down rather than turning less.
 
@@ -286,14 +297,11 @@ class RobotHRVO(Robot):
         velocities are those of a point ahead of each robot, which a robot turning in place
         moves sideways, and each robot's own guard checks its own motion.
         """
-        if self.dxu[0] == 0.0 or not len(self.detections) or not self.has_pose:
+        if not self.has_pose or not len(self.detections):
             return
         rows = np.asarray(self.detections)
         offsets = rows[:, :1] * np.column_stack((np.cos(rows[:, 1]), np.sin(rows[:, 1])))
-        moving = self.dxu[0] * np.array([math.cos(self.rot_w), math.sin(self.rot_w)])
-        near = min(self.spec.diameter + GUARD_MARGIN, self.safety)
-        if rules.closing_in(offsets, np.broadcast_to(moving, offsets.shape), near, GUARD_HORIZON).any():
-            self.dxu[0] = 0.0
+        self.stop_short(offsets, min(self.spec.diameter + GUARD_MARGIN, self.safety))
 
     def steer(self, detections: Any, desired_velocity: Any, sidestep_updates: int = 10) -> FloatArray:
         """:meth:`HRVO`, for a robot that must not wait forever.

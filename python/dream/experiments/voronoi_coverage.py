@@ -27,7 +27,7 @@ from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
 from dream.obstacles import Obstacle, touching
 from dream.radios import RangeRadio
-from dream.robot import Robot
+from dream.robot import GUARD_MARGIN, Robot
 from dream.sensors import MovementSensor, ObstacleSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec
 from dream.world import create_timer
@@ -139,6 +139,13 @@ class CoverageRobot(Robot):
         # `angle` points from the detected robot to this one.
         d, angle = detections[:, 0], detections[:, 1]
         self.seen = np.column_stack((self.pos_x - d * np.cos(angle), self.pos_y - d * np.sin(angle)))
+
+    def guard(self) -> None:
+        """Cells keep the robots apart, but a unicycle drives along its heading, not straight to
+        its centroid: it drives no further when that would bring it within a centimetre of a
+        robot it sees (:meth:`~dream.Robot.stop_short`)."""
+        if self.has_pose and len(self.seen):
+            self.stop_short(np.array([self.pos_x, self.pos_y]) - self.seen, self.spec.diameter + GUARD_MARGIN)
 
     def silent(self) -> np.ndarray:
         """Positions ``(k, 2)`` of the robots seen that no message accounts for."""
