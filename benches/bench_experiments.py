@@ -19,7 +19,10 @@ CASES = [
         "hrvo-circle n=1000, fast, per-robot API, 300 steps",
         lambda seed: hrvo_circle.run(n=1000, seed=seed, backend="fast", steps=300),
     ),
-    ("hrvo-circle n=10000, batch mode, 100 steps", lambda seed: hrvo_circle.run_batch(n=10_000, seed=seed, steps=100)),
+    (
+        "hrvo-circle n=10000, swarm mode, 100 steps",
+        lambda seed: hrvo_circle.run(n=10_000, seed=seed, backend="fast", steps=100, swarm=True),
+    ),
 ]
 
 

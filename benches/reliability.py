@@ -4,13 +4,14 @@
     python benches/reliability.py --quick              # fewer seeds, no N = 1,000 (minutes)
     python benches/reliability.py --resilience         # N = 10 and 100 under each fault (Fast)
     python benches/reliability.py --case hrvo-circle:20:robotarium:0-29 --case line-consensus:100:fast:0-9
-    python benches/reliability.py --case hrvo-circle:10000:batch:0 --workers 2
+    python benches/reliability.py --case hrvo-circle:10000:swarm:0 --workers 2
 
 A case is ``EXPERIMENT:N:BACKEND:SEEDS[:FAULTS]``: BACKEND is ``robotarium``, ``fast`` or
-``batch`` (hrvo-circle's whole-swarm mode), SEEDS ``a-b`` (inclusive) or one seed, FAULTS
-``--fault`` settings joined by ``+`` (``loss=0.3+latency=5``). Runs go to each experiment's own
-step cap and, but for ``batch``, through :func:`dream.sweep` on a local Dask cluster of
-``--workers`` processes. Every table is printed with the machine, its load and the date.
+``swarm`` (Fast, in the experiment's swarm mode: ``dream.run(..., swarm=True)``), SEEDS ``a-b``
+(inclusive) or one seed, FAULTS ``--fault`` settings joined by ``+`` (``loss=0.3+latency=5``).
+Runs go to each experiment's own step cap and, but for ``swarm``, through :func:`dream.sweep` on
+a local Dask cluster of ``--workers`` processes. Every table is printed with the machine, its
+load and the date.
 """
 
 from __future__ import annotations
@@ -20,7 +21,8 @@ import statistics
 import time
 
 import dream
-from dream.experiments import hrvo_circle
+from dream.experiments import find
+from dream.faults import Faults
 from harness import machine, table
 
 LARGE = ((100, "0-9"), (1000, "0-2"))  #: sizes and seeds of the experiments whose arena grows
@@ -31,7 +33,7 @@ SIZES = [
     "hrvo-circle:30:robotarium:0-9",
     "hrvo-circle:100:fast:0-9",
     "hrvo-circle:1000:fast:0-2",
-    "hrvo-circle:10000:batch:0",
+    "hrvo-circle:10000:swarm:0",
     *(f"{name}:{n}:fast:{seeds}" for name in ("line-consensus", "voronoi-coverage") for n, seeds in LARGE),
     "affine-formation:98:fast:0-9",
     "affine-formation:1001:fast:0-2",
@@ -64,18 +66,24 @@ def parse_case(text: str) -> tuple[str, int, str, range, str]:
         span = range(int(first), int(last or first) + 1)
     except ValueError:
         raise argparse.ArgumentTypeError(f"a case is EXPERIMENT:N:BACKEND:SEEDS[:FAULTS], got {text!r}") from None
-    if backend not in ("robotarium", "fast", "batch") or (backend == "batch" and name != "hrvo-circle"):
-        raise argparse.ArgumentTypeError(f"BACKEND is robotarium, fast, or batch for hrvo-circle, got {text!r}")
+    if backend not in ("robotarium", "fast", "swarm") or (backend == "swarm" and not find(name).has_swarm_mode):
+        raise argparse.ArgumentTypeError(
+            f"BACKEND is robotarium, fast, or swarm for an experiment with a swarm mode, got {text!r}"
+        )
     return name, int(n), backend, span, faults[0] if faults else ""
 
 
 def measure(name: str, n: int, backend: str, seeds: range, faults: str, workers: int) -> list[object]:
     """One row: successes, summed violations, and min/median/max steps of the successful runs."""
     start = time.perf_counter()
-    if backend == "batch":
-        results = [hrvo_circle.run_batch(n=n, seed=seed).to_dict() for seed in seeds]
+    options = [option for option in faults.split("+") if option]
+    if backend == "swarm":
+        broken = Faults.parse(options) if options else None
+        results = [
+            dream.run(name, n=n, seed=seed, backend="fast", swarm=True, faults=broken).to_dict() for seed in seeds
+        ]
     else:
-        grid = {kind: [value] for kind, _, value in (option.partition("=") for option in faults.split("+") if option)}
+        grid = {kind: [value] for kind, _, value in (option.partition("=") for option in options)}
         results = dream.sweep(name, seeds, [n], backend=backend, faults=grid, workers=workers, progress=False)
     done = [row["completed_step"] for row in results if row["success"]]
     failed = [row["seed"] for row in results if not row["success"]]

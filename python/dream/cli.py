@@ -4,6 +4,7 @@
     dream list line-consensus                            # its success test and parameters
     dream run hrvo-circle -n 10 --seed 0 --json metrics.json
     dream run my_experiment.py --param gain=2 --video run.mp4 --every 2
+    dream run hrvo-circle -n 2000 --swarm --backend fast   # the whole swarm decides in one call
     dream new my_experiment                              # a starter file that runs as is
     dream bench                                          # the repository's benches/
 
@@ -75,6 +76,11 @@ def _parser() -> argparse.ArgumentParser:
     runner.add_argument("--backend", choices=BACKENDS, default="auto")
     runner.add_argument("--rules", choices=RULES, help="the rps generation to follow (default: the installed rps's)")
     runner.add_argument("--steps", type=_whole(1), default=None, help="step cap (default: what the run needs)")
+    runner.add_argument(
+        "--swarm",
+        action="store_true",
+        help="swarm mode: the whole swarm decides every step in one call (if it has one)",
+    )
     runner.add_argument(
         "--param", action="append", default=[], metavar="NAME=VALUE", help="set a parameter (repeatable)"
     )
@@ -195,6 +201,7 @@ def _list(source: str | None) -> int:
     print(f"{cls.label()}: {_summary(cls)}")
     print(f"robots by default: {cls.default_n}")
     print(f"success: {cls.success}")
+    print(f"swarm mode: yes (dream run {source} --swarm)" if cls.has_swarm_mode else "swarm mode: no")
     declared = cls.parameters()
     print("parameters:" if declared else "parameters: none")
     for name, spec in declared.items():
@@ -283,7 +290,7 @@ def _run(args: argparse.Namespace) -> int:
     progress = _progress(not args.no_progress)
     try:
         result = run(cls, n=n, seed=args.seed, backend=args.backend, steps=args.steps, progress=progress, faults=faults,
-                     rules=args.rules,
+                     rules=args.rules, swarm=args.swarm,
                      **({"record": recorder} if recorder is not None else {}), **params)  # fmt: skip
     except ValueError as err:  # an experiment's refusal (a size it cannot do), said before any step
         raise UsageError(str(err)) from None

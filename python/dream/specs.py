@@ -92,13 +92,6 @@ class SimulatorSpec:
     boundary_per_iteration: bool = False  #: count 1 per iteration with a robot outside, not each robot
     validates_requested: bool = False  #: check the actuator limit on commands before clipping
 
-    @property
-    def contact(self) -> float:
-        """The centre distance (m) within which two robots' colliders can touch, whatever their
-        headings: the collider's diameter plus twice its offset (0.11 m for rps 0.0.0, 0.185 m
-        for 2.1, whose colliders sit ahead of the centres)."""
-        return self.diameter + 2 * abs(self.collider_offset)
-
     def __post_init__(self) -> None:
         positive = ("time_step", "max_linear", "max_angular", "max_wheel", "wheel_radius", "base_length", "diameter")
         for name in positive:

@@ -113,3 +113,26 @@ def test_new_writes_a_starter_that_succeeds(tmp_path, capsys):
 def test_check_exits_1_when_the_run_fails(capsys):
     assert main(["run", "line-consensus", "--steps", "5", "--backend", "fast", "--check"]) == 1
     assert re.search(r"^success\s+no$", capsys.readouterr().out, re.M)
+
+
+def test_swarm_mode_runs_from_the_command_line(tmp_path, capsys):
+    out = tmp_path / "swarm.json"
+    argv = ["run", "hrvo-circle", "-n", "2000", "--swarm", "--backend", "fast", "--steps", "100"]
+    assert main([*argv, "--json", str(out), "--no-progress"]) == 0
+    metrics = json.loads(out.read_text())
+    assert metrics["swarm"] and metrics["experiment"] == "hrvo-circle" and metrics["backend"] == "fast"
+    assert metrics["n"] == 2000 and metrics["steps"] == 100 and metrics["collisions"] == 0
+    assert re.search(r"^mode\s+swarm", capsys.readouterr().out, re.M)
+
+
+def test_list_says_which_experiments_have_a_swarm_mode(capsys):
+    assert main(["list", "hrvo-circle"]) == 0
+    assert "swarm mode: yes (dream run hrvo-circle --swarm)" in capsys.readouterr().out
+    assert main(["list", "line-consensus"]) == 0
+    assert "swarm mode: no" in capsys.readouterr().out
+
+
+def test_swarm_mode_of_an_experiment_without_one_is_refused(capsys):
+    assert main(["run", "line-consensus", "--swarm", "--steps", "5"]) == 2
+    err = capsys.readouterr().err
+    assert "line-consensus has no swarm mode" in err and err.count("\n") == 1 and "Traceback" not in err

@@ -69,14 +69,15 @@ def test_hrvo_circle_thousand_robots_on_fast_do_not_collide():
 
 
 @pytest.mark.parametrize("seed", range(3))
-def test_hrvo_circle_batch_mode_completes_three_circles(seed):
-    result = hrvo_circle.run_batch(n=10, seed=seed)
+def test_hrvo_circle_swarm_mode_completes_three_circles(seed):
+    result = hrvo_circle.run(n=10, seed=seed, backend="fast", swarm=True)
+    assert result.swarm and result.experiment == "hrvo-circle"
     assert result.measures["circles_completed"] == 3
     assert result.completed_step is not None and result.collisions == 0 and result.boundary == 0
 
 
-def test_hrvo_circle_batch_mode_runs_large_swarms_without_collision():
-    result = hrvo_circle.run_batch(n=3000, seed=0, steps=60)
+def test_hrvo_circle_swarm_mode_runs_large_swarms_without_collision():
+    result = hrvo_circle.run(n=3000, seed=0, steps=60, backend="fast", swarm=True)
     assert result.n == 3000 and result.steps == 60
     assert result.collisions == 0
 

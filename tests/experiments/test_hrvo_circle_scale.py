@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+import dream
 from dream import rules
 from dream.experiments import hrvo_circle
+
+DATA = Path(__file__).parent / "data"
 
 
 def assert_clean_completion(result):
@@ -31,8 +35,41 @@ def test_hrvo_circle_hundred_robots_complete_on_fast():
     assert_clean_completion(result)
 
 
-def test_hrvo_circle_batch_mode_completes_a_large_swarm():
-    assert_clean_completion(hrvo_circle.run_batch(n=40, seed=0))
+@pytest.fixture(scope="module")
+def swarm_of_40():
+    return dream.run("hrvo-circle", n=40, seed=0, backend="fast", swarm=True, trace=True)
+
+
+def test_hrvo_circle_swarm_mode_completes_a_large_swarm(swarm_of_40):
+    assert swarm_of_40.swarm and swarm_of_40.n == 40
+    assert_clean_completion(swarm_of_40)
+
+
+def test_hrvo_circle_swarm_mode_moves_as_the_hand_written_batch_loop_did(swarm_of_40):
+    # Poses recorded with hrvo_circle.run_batch, the second loop that swarm mode replaced: every
+    # 500 steps of n=40 (seed 0, done at step 6046) and every 150 steps of n=200 (seed 1, 300 steps).
+    expected = np.load(DATA / "hrvo_circle_batch_loop.npz")
+    assert swarm_of_40.completed_step == 6046
+    np.testing.assert_allclose(swarm_of_40.trace[::500], expected["n40_seed0"], rtol=0, atol=1e-9)
+    wide = dream.run("hrvo-circle", n=200, seed=1, steps=300, backend="fast", swarm=True, trace=True)
+    assert (wide.completed_step, wide.collisions, wide.boundary, wide.actuator) == (None, 0, 0, 0)
+    np.testing.assert_allclose(wide.trace[::150], expected["n200_seed1_steps300"], rtol=0, atol=1e-9)
+
+
+def test_hrvo_circle_swarm_mode_frames_and_measures_come_from_its_arrays():
+    frames = []
+    result = dream.run("hrvo-circle", n=12, seed=2, steps=40, backend="fast", swarm=True, record=frames.append)
+    assert len(frames) == 40 and result.measures["circles_completed"] == 0
+    last = frames[-1]
+    assert last.goals.shape == last.velocities.shape == (12, 2)
+    np.testing.assert_array_equal(last.goals, hrvo_circle.circle_goals(12)[:, 0])  # no robot has arrived yet
+    assert np.abs(last.velocities).max() > 0  # the robots move
+    assert last.title.startswith("hrvo-circle: circles 0/3")
+
+
+def test_hrvo_circle_refuses_a_radio_gap_below_one_step():
+    with pytest.raises(ValueError, match="radio_gap must be at least 1 step, got 0"):
+        hrvo_circle.run(n=4, backend="fast", swarm=True, radio_gap=0)
 
 
 def test_hrvo_circle_refuses_more_robots_than_the_robotarium_ring_holds():
@@ -107,8 +144,8 @@ def test_rules_decide_the_same_for_one_robot_and_for_the_swarm(rng):
 
 
 def test_circle_robot_decides_as_the_swarm_rules_do(rng):
-    # The per-robot and batch modes differ by design in timing (robots decide on their own
-    # timers; the batch decides every step) and in what a robot knows of its neighbours'
+    # The per-robot and swarm modes differ by design in timing (robots decide on their own
+    # timers; the swarm decides every step) and in what a robot knows of its neighbours'
     # velocities, so their trajectories part. What they share is every decision rule: given the
     # same pose, goal and counters, a CircleRobot asks HRVO for what the swarm rules give.
     n = 6

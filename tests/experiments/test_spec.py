@@ -142,3 +142,69 @@ def test_every_experiment_succeeds_at_its_default_size_under_each_labs_rules(nam
         assert result.rules == rules
         assert result.success, (rules, result.summary())
         assert (result.collisions, result.boundary, result.actuator) == (0, 0, 0)
+
+
+class Drive(Experiment):
+    """Robots that all drive forward; in swarm mode one call decides for all of them."""
+
+    name = "drive"
+    default_n = 4
+    has_swarm_mode = True
+    speed: float = param(0.05, "forward speed (m/s)")
+
+    def build(self, n):
+        self.calls = []
+
+    def build_swarm(self, n):
+        self.calls = ["build_swarm"]
+
+    def before_step(self, step):
+        self.calls.append(("before_step", step))
+
+    def swarm_step(self, step, x):
+        assert x.shape == (3, self.n)
+        self.calls.append(("swarm_step", step))
+        return np.vstack((np.full(self.n, self.speed), np.zeros(self.n)))
+
+    def measures(self):
+        return {"swarm": self.swarm, "calls": len(self.calls)}
+
+
+def test_swarm_mode_calls_build_swarm_and_swarm_step_in_the_one_runner():
+    result = dream.run(Drive, backend="fast", steps=3, swarm=True, trace=True)
+    assert result.swarm and result.experiment == "drive" and result.steps == 3
+    assert result.measures == {"swarm": True, "calls": 7}
+    travelled = np.hypot(*(result.trace[-1, :2] - result.trace[0, :2]))
+    assert np.all(travelled > 0.0)
+    per_robot = dream.run(Drive, backend="fast", steps=3)
+    assert not per_robot.swarm and per_robot.measures == {"swarm": False, "calls": 3}  # no timers: nobody moves
+
+
+def test_swarm_mode_commands_go_through_the_faulty_wheels():
+    # Half the robots crash at step 2: from then on their commands are not carried out.
+    result = dream.run(
+        Drive, n=4, backend="fast", steps=10, swarm=True, trace=True, faults=dream.Faults(crash=0.5, crash_at=2)
+    )
+    crashed = [event["robot"] for event in result.faults["events"] if event["kind"] == "crash"]
+    assert len(crashed) == 2
+    still = np.zeros(4, dtype=bool)
+    still[crashed] = True
+    moved = np.hypot(*(result.trace[-1, :2] - result.trace[3, :2]))
+    assert np.all(moved[still] == 0.0) and np.all(moved[~still] > 0.0)
+
+
+@pytest.mark.parametrize("experiment", [Still, "line-consensus"])
+def test_swarm_mode_is_refused_by_an_experiment_without_one(experiment):
+    with pytest.raises(ValueError, match=r"(still|line-consensus) has no swarm mode"):
+        dream.run(experiment, backend="fast", steps=2, swarm=True)
+
+
+def test_swarm_step_must_return_one_command_column_per_robot():
+    class Short(Drive):
+        def swarm_step(self, step, x):
+            return np.zeros((2, self.n - 1))
+
+    with pytest.raises(
+        ValueError, match=r"drive.swarm_step returned commands of shape \(2, 3\), expected \(2, n\) = \(2, 4\)"
+    ):
+        dream.run(Short, backend="fast", steps=2, swarm=True)

@@ -7,8 +7,8 @@ states equal its own, it heads for its next goal. Robots avoid each other with H
 movement sensor. Success: every robot finishes the third circle with zero collisions.
 
 Robots choose their preferred velocity, step aside and count arrivals with the shared rules
-of :mod:`dream.rules` (the per-robot :class:`CircleRobot` and the swarm loop :func:`run_batch`
-call the same functions):
+of :mod:`dream.rules` (the per-robot :class:`CircleRobot` and the swarm mode,
+:meth:`HrvoCircle.swarm_step`, call the same functions):
 
 - Roundabout. HRVO alone leaves the robots that cross through the centre from every side
   circling or frozen there: each meets a wall of robots head-on, and symmetric crowds have no
@@ -35,16 +35,13 @@ the largest ellipse, 0.155 m apart) the robots that park first wall in the other
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from dream import kernels, rules
-from dream.backends import make_robotarium
-from dream.experiments.result import ExperimentResult
-from dream.experiments.spec import Experiment
+from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
 from dream.radios import RangeRadio
 from dream.robot import GUARD_HORIZON, GUARD_MARGIN, RobotHRVO
@@ -256,21 +253,33 @@ class CircleRobot(RobotHRVO):
         self.command(dxu)
 
 
-def circle_frame(step: int, sim: Any, robots: list[CircleRobot], radio_range: float = 1.0) -> Frame:
-    """What a renderer shows of the circle experiment: goals, HRVO velocities, radio links."""
+def circle_frame(
+    step: int,
+    sim: Any,
+    goals: np.ndarray,
+    velocities: np.ndarray,
+    states: np.ndarray,
+    radio_range: float = 1.0,
+) -> Frame:
+    """What a renderer shows of the circle experiment: goals, HRVO velocities, radio links.
+
+    ``goals`` and ``velocities`` ``(n, 2)``: each robot's current goal (m) and chosen velocity
+    (m/s); ``states`` ``(n,)``: the goals each has reached.
+    """
     poses = sim.poses
+    n = poses.shape[1]
     indptr, indices, _ = kernels.neighbours(poses[:2].T, radio_range)
-    links = np.column_stack((np.repeat(np.arange(len(robots)), np.diff(indptr)), indices))
-    circles = min((r.state for r in robots), default=0)
+    links = np.column_stack((np.repeat(np.arange(n), np.diff(indptr)), indices))
     return Frame(
         step,
         sim.arena,
         poses,
-        goals=np.array([r.current_goal for r in robots]).reshape(-1, 2),
-        velocities=np.array([r.dxi for r in robots]).reshape(-1, 2),
+        goals=np.asarray(goals, dtype=np.float64).reshape(-1, 2),
+        velocities=np.asarray(velocities, dtype=np.float64).reshape(-1, 2),
         links=links[links[:, 0] < links[:, 1]],
         ranges={"sensing": 1.0, "radio": radio_range},
-        title=f"{NAME}: circles {circles}/{CIRCLES}, collisions {sim.violations.collision}",
+        title=f"{NAME}: circles {int(np.min(states, initial=CIRCLES))}/{CIRCLES}, "
+        f"collisions {sim.violations.collision}",
     )
 
 
@@ -285,14 +294,86 @@ def default_steps(n: int) -> int:
     return 4000 + int(1500 * (a + b))
 
 
+@dataclass
+class CircleSwarm:
+    """Every robot's decision state in swarm mode, one row each (see :meth:`HrvoCircle.swarm_step`).
+
+    The per-robot progress vector becomes a bitset: row i of ``known`` holds the robots that
+    robot i knows to have reached at least its own number of goals (n^2 / 8 bytes in all, merged
+    by bitwise OR over radio links, reset when the robot reaches its next goal); a robot moves on
+    when its set is full, which is when every entry of the per-robot vector equals its own state.
+
+    Attributes
+    ----------
+    goals : (n, 3, 2) ndarray
+        Each robot's goals in order (m).
+    state : (n,) int ndarray
+        Goals reached.
+    heading_for : (n,) int ndarray
+        Index of the goal being approached...
+    unreached : (n,) bool ndarray
+        ...which has not been reached yet.
+    known : (n, ceil(n / 8)) uint8 ndarray
+        The bitsets.
+    sidestep, side : (n,) ndarrays
+        Decisions left stepping aside, and to which side (1.0: right, -1.0: left).
+    dxi : (n, 2) ndarray
+        The velocities HRVO chose last (m/s): what the neighbours' velocities are taken to be.
+    """
+
+    goals: np.ndarray
+    state: np.ndarray
+    heading_for: np.ndarray
+    unreached: np.ndarray
+    known: np.ndarray
+    sidestep: np.ndarray
+    side: np.ndarray
+    dxi: np.ndarray
+
+    @classmethod
+    def start(cls, goals: np.ndarray) -> CircleSwarm:
+        """Robots that have reached nothing yet and know only themselves, heading for ``goals[:, 0]``."""
+        n = len(goals)
+        everyone = np.arange(n)
+        known = np.zeros((n, (n + 7) // 8), dtype=np.uint8)
+        known[everyone, everyone // 8] = 128 >> (everyone % 8)
+        return cls(
+            goals=goals,
+            state=np.zeros(n, dtype=np.int64),
+            heading_for=np.zeros(n, dtype=np.int64),
+            unreached=np.ones(n, dtype=bool),
+            known=known,
+            sidestep=np.zeros(n, dtype=np.int64),
+            side=np.ones(n),
+            dxi=np.zeros((n, 2)),
+        )
+
+    @property
+    def goal(self) -> np.ndarray:
+        """The goal each robot heads for ``(n, 2)`` (m)."""
+        return self.goals[np.arange(len(self.goals)), self.heading_for]
+
+
 class HrvoCircle(Experiment):
-    """The circle experiment (see the module docs)."""
+    """The circle experiment (see the module docs).
+
+    Swarm mode (``swarm=True``) keeps the behaviour of the per-robot mode (the same layout and
+    HRVO parameters, and the decision rules of :mod:`dream.rules` that :class:`CircleRobot`
+    calls: arrival, roundabout, settling, stepping aside; progress spread by range radio every
+    ``radio_gap`` steps), but every robot decides every step through one
+    :func:`dream.kernels.hrvo` call, with its state in a :class:`CircleSwarm`.
+    """
 
     name = NAME
     default_n = 10
     success = "every robot finishes the third circle with zero collisions, boundary and actuator violations"
+    has_swarm_mode = True
+
+    radio_gap: int = param(30, "steps between two radio exchanges of progress (both modes)")
 
     def check(self, n: int, backend: str) -> None:
+        if self.radio_gap < 1:
+            raise ValueError(f"radio_gap must be at least 1 step, got {self.radio_gap}")
         # On the real Robotarium the arena cannot grow: the goals close up instead (circle_layout,
         # which refuses more robots than the ring holds).
         self.grow = backend != "robotarium"
@@ -322,99 +403,69 @@ class HrvoCircle(Experiment):
                 [
                     {"delay": 2 + i % 2, "tag": "odom", "call": odometry.update},
                     {"delay": 3 + i % 2, "tag": "movement", "call": movement.update},
-                    {"delay": 30, "tag": "radio", "call": radio.update},
+                    {"delay": self.radio_gap, "tag": "radio", "call": radio.update},
                     {"delay": 4 + i % 2, "tag": "robot", "call": robot.update},
                 ],
             )
             self.robots.append(robot)
 
+    def build_swarm(self, n: int) -> None:
+        self.team = CircleSwarm.start(circle_goals(n, self.grow))
+        self.bounds = self.arena.shrunk(GRITSBOT.radius)
+
+    def swarm_step(self, step: int, x: np.ndarray) -> np.ndarray:
+        """Every robot's decision: count arrivals, exchange progress by radio every
+        ``radio_gap`` steps (and move on), aim around the roundabout, step aside when blocked,
+        one HRVO call, then the unicycle commands within the wheel limits and the motion guard."""
+        team, everyone = self.team, np.arange(self.n)
+        p = x[:2].T
+        goal = team.goal
+        arrived, reached = rules.arrival(p, goal, team.unreached, ARRIVAL)
+        team.state += reached
+        team.unreached &= ~arrived
+        team.known[reached] = 0  # a new level: start over from itself
+        team.known[reached, everyone[reached] // 8] = 128 >> (everyone[reached] % 8)
+        if step % self.radio_gap == 0:
+            _merge_known(team.known, team.state, p)
+            full = (team.known == np.packbits(np.ones(self.n, dtype=bool))).all(axis=1)
+            moving_on = rules.moves_on(team.state, full, team.unreached, CIRCLES)
+            team.heading_for[moving_on] = team.state[moving_on]
+            team.unreached |= moving_on
+            goal = team.goal
+        aim = rules.roundabout_aim(p, goal, self.layout.semi_axes, ISLAND)
+        desired = rules.preferred_velocity(p, aim, goal, GRITSBOT.v_max, APPROACH_GAIN)
+        wanted, team.sidestep = rules.sidestep_preference(desired, team.sidestep, team.side)
+        team.dxi = kernels.hrvo(p, team.dxi, wanted, radius=1.0, safety=self.layout.safety, bounds=self.bounds)
+        team.sidestep, team.side = rules.sidestep_update(team.dxi, desired, team.sidestep, team.side, SIDESTEP_UPDATES)
+        dxu = kernels.actuator_limit(kernels.dxi_to_dxu(team.dxi.T, x), GRITSBOT.within(self.sim.spec))
+        return _guarded(dxu, x, min(GRITSBOT.diameter + GUARD_MARGIN, self.layout.safety))
+
     def steps(self, n: int) -> int:
         return default_steps(n)
 
+    def states(self) -> np.ndarray:
+        """The goals each robot has reached ``(n,)``, in either mode."""
+        if self.swarm:
+            return self.team.state
+        return np.array([robot.state for robot in self.robots], dtype=np.int64)
+
     def done(self, step: int, poses: np.ndarray) -> bool:
-        return all(robot.state >= CIRCLES for robot in self.robots)
+        return bool(np.all(self.states() >= CIRCLES))
 
     def measures(self) -> dict[str, Any]:
         """``circles_completed`` (by every robot) and ``circle_radius``, the ring's larger semi-axis (m)."""
-        circles = min((r.state for r in self.robots), default=CIRCLES)
+        circles = int(np.min(self.states(), initial=CIRCLES))
         return {"circles_completed": circles, "circle_radius": self.layout.semi_axes[0]}
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
-        return circle_frame(step, self.sim, self.robots)
+        if self.swarm:
+            return circle_frame(step, self.sim, self.team.goal, self.team.dxi, self.team.state)
+        goals = [robot.current_goal for robot in self.robots]
+        velocities = [robot.dxi for robot in self.robots]
+        return circle_frame(step, self.sim, goals, velocities, self.states())
 
 
 run = HrvoCircle.run
-
-
-def run_batch(
-    n: int = 10_000,
-    seed: int = 0,
-    steps: int | None = None,
-    *,
-    radio_gap: int = 30,
-    progress: Any = None,
-) -> ExperimentResult:
-    """The circle experiment for very large swarms: whole-swarm kernel calls every step.
-
-    The same behaviour as :func:`run` (the same layout and HRVO parameters, and the decision
-    rules of :mod:`dream.rules` that :class:`CircleRobot` calls: arrival, roundabout, settling,
-    stepping aside; progress spread by range radio every ``radio_gap`` steps), on the Fast
-    backend, but every robot decides every step through one :func:`dream.kernels.hrvo` call.
-    Each robot's progress vector becomes a bitset: the robots it knows to have reached at
-    least its own number of goals (n^2 / 8 bytes in all, merged by bitwise OR over radio
-    links, reset when the robot reaches its next goal); a robot moves on when its set is full,
-    which is when every entry of the original's vector equals its own state. Neighbours'
-    velocities are their last chosen velocities.
-    """
-    cap = default_steps(n) if steps is None else steps
-    layout = circle_layout(n)
-    goals = circle_goals(n)
-    bounds = layout.arena.shrunk(GRITSBOT.radius)
-    sim = make_robotarium(n, "fast", arena=layout.arena, seed=seed)
-    limits = GRITSBOT.within(sim.spec)
-    everyone = np.arange(n)
-    state = np.zeros(n, dtype=np.int64)  # goals reached
-    heading_for = np.zeros(n, dtype=np.int64)  # index of the goal being approached
-    unreached = np.ones(n, dtype=bool)  # ...which has not been reached yet
-    known = np.zeros((n, (n + 7) // 8), dtype=np.uint8)  # robots known to have state >= own state
-    known[everyone, everyone // 8] = 128 >> (everyone % 8)
-    full = np.packbits(np.ones(n, dtype=bool))
-    sidestep = np.zeros(n, dtype=np.int64)
-    side = np.ones(n)
-    dxi = np.zeros((n, 2))
-    done_at = None
-    start = time.perf_counter()
-    for t in range(cap):
-        x = sim.get_poses()
-        p = x[:2].T
-        goal = goals[everyone, heading_for]
-        arrived, reached = rules.arrival(p, goal, unreached, ARRIVAL)
-        state += reached
-        unreached &= ~arrived
-        known[reached] = 0  # a new level: start over from itself
-        known[reached, everyone[reached] // 8] = 128 >> (everyone[reached] % 8)
-        if t % radio_gap == 0:
-            _merge_known(known, state, p)
-            moving_on = rules.moves_on(state, (known == full).all(axis=1), unreached, CIRCLES)
-            heading_for[moving_on] = state[moving_on]
-            unreached |= moving_on
-            goal = goals[everyone, heading_for]
-        aim = rules.roundabout_aim(p, goal, layout.semi_axes, ISLAND)
-        desired = rules.preferred_velocity(p, aim, goal, GRITSBOT.v_max, APPROACH_GAIN)
-        wanted, sidestep = rules.sidestep_preference(desired, sidestep, side)
-        dxi = kernels.hrvo(p, dxi, wanted, radius=1.0, safety=layout.safety, bounds=bounds)
-        sidestep, side = rules.sidestep_update(dxi, desired, sidestep, side, SIDESTEP_UPDATES)
-        dxu = kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, x), limits)
-        sim.set_velocities(everyone, _guarded(dxu, x, min(sim.spec.contact + GUARD_MARGIN, layout.safety)))
-        sim.step()
-        if progress is not None:
-            progress(t + 1, cap)
-        if np.all(state >= CIRCLES):
-            done_at = t + 1
-            break
-    wall = time.perf_counter() - start
-    measures = {"circles_completed": int(state.min(initial=CIRCLES)), "circle_radius": layout.semi_axes[0]}
-    return ExperimentResult.from_backend(NAME + " (batch)", seed, sim, done_at, wall, measures)
 
 
 def _guarded(dxu: np.ndarray, poses: np.ndarray, near: float) -> np.ndarray:

@@ -19,6 +19,7 @@ class ExperimentResult:
     iterations with a command beyond the wheel limit). ``completed_step`` is the step at which
     the experiment reached its goal (``None`` if it did not). ``measures`` holds the
     experiment's own figures; ``trace``, when recorded, the poses ``(steps + 1, 3, n)``.
+    ``swarm`` says whether the run was in the experiment's swarm mode.
     """
 
     experiment: str
@@ -38,6 +39,7 @@ class ExperimentResult:
     signal: int | None = field(default=None, repr=False)  #: the signal that interrupted the run
     faults: dict[str, Any] = field(default_factory=dict)
     rules: str = "rps0"  #: the rps generation whose rules counted the violations
+    swarm: bool = False  #: run in swarm mode (the whole swarm decided each step in one call)
 
     @property
     def completed(self) -> bool:
@@ -100,6 +102,7 @@ class ExperimentResult:
             ("robots", self.n),
             ("seed", self.seed),
             ("backend", f"{self.backend} (rules {self.rules})"),
+            *((("mode", "swarm (one decision for the whole swarm per step)"),) if self.swarm else ()),
             *((f"  {key}", value) for key, value in self.params.items()),
             ("steps run", self.steps),
             ("completed at step", "not completed" if self.completed_step is None else self.completed_step),

@@ -35,6 +35,7 @@ def run(
     trace: bool = False,
     faults: Faults | None = None,
     rules: str | None = None,
+    swarm: bool = False,
     **params: Any,
 ) -> ExperimentResult:
     """Run ``experiment`` until it is done or ``steps`` have run.
@@ -64,6 +65,10 @@ def run(
     rules : {"rps0", "rps2"}, optional
         The rps generation whose dynamics and validation the run follows, i.e. the lab it
         targets (default: the installed rps's, else "rps0"); see :func:`dream.make_robotarium`.
+    swarm : bool
+        Run the experiment's swarm mode (:meth:`~Experiment.build_swarm`,
+        :meth:`~Experiment.swarm_step`: the whole swarm decides every step in one call) instead
+        of robot objects and timers.
     **params
         Values of the experiment's declared parameters.
 
@@ -72,6 +77,12 @@ def run(
     ExperimentResult
         A run stopped by Ctrl-C (SIGINT) or SIGTERM finishes its step and returns what it has
         measured so far, with ``interrupted`` set (a second Ctrl-C raises ``KeyboardInterrupt``).
+
+    Raises
+    ------
+    ValueError
+        Bad arguments, a size the experiment refuses, or ``swarm=True`` for an experiment
+        without a swarm mode.
     """
     exp = _instance(experiment, params)
     n = exp.default_n if n is None else _count(n, "n", 1)
@@ -80,7 +91,7 @@ def run(
         raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
     exp.check(n, backend)
     with World(seed) as world:
-        stepper = Stepper(exp, n, world, rules_named(rules))
+        stepper = Stepper(exp, n, world, rules_named(rules), swarm=swarm)
         sim = make_robotarium(n, backend, stepper.initial_conditions, arena=exp.arena, rules=exp.rules.rules)
         stepper.attach(sim, faults)
         cap = exp.steps(n) if steps is None else _count(steps, "steps", 1)
@@ -140,12 +151,28 @@ class Stepper:
     rules : SimulatorSpec
         The rules of the simulator the run will have (the experiment may size its safety
         distances by them).
+    swarm : bool
+        Swarm mode: the experiment's :meth:`~Experiment.build_swarm` instead of its
+        :meth:`~Experiment.build`, and its :meth:`~Experiment.swarm_step` instead of the timers.
+
+    Raises
+    ------
+    ValueError
+        ``swarm`` for an experiment without a swarm mode.
     """
 
-    def __init__(self, exp: Experiment, n: int, world: World, rules: SimulatorSpec = RPS) -> None:
-        exp.n, exp.world, exp.rules, exp.arena = n, world, rules, exp.arena_for(n)
-        exp.build(n)
-        self.exp, self.world = exp, world
+    def __init__(self, exp: Experiment, n: int, world: World, rules: SimulatorSpec = RPS, swarm: bool = False) -> None:
+        if swarm and not exp.has_swarm_mode:
+            raise ValueError(
+                f"{exp.label()} has no swarm mode (swarm=True, --swarm): run it robot by robot, or give it "
+                "has_swarm_mode = True, build_swarm(n) and swarm_step(step, x) (see dream.Experiment)"
+            )
+        exp.n, exp.world, exp.rules, exp.arena, exp.swarm = n, world, rules, exp.arena_for(n), bool(swarm)
+        if swarm:
+            exp.build_swarm(n)
+        else:
+            exp.build(n)
+        self.exp, self.world, self.swarm = exp, world, bool(swarm)
         #: ``(3, n)`` poses the simulator starts from (m, m, rad).
         self.initial_conditions = exp.initial_poses(n, world.rng)
         self.state: FaultState | None = None
@@ -163,12 +190,26 @@ class Stepper:
 
         ``x`` ``(3, n)`` holds the poses that this step's ``get_poses()`` returned. Runs the
         experiment's :meth:`~Experiment.before_step`, then every robot's timers (sensors, radios,
-        controllers, which write ``exp.dxu``); faulty wheels then change what is carried out.
+        controllers, which write ``exp.dxu``), or in swarm mode its
+        :meth:`~Experiment.swarm_step` (whose commands become ``exp.dxu``); faulty wheels then
+        change what is carried out.
         """
         exp = self.exp
         exp.before_step(step)
+        # In swarm mode there are no timers: this moves the world's clock and the robots' faults.
         self.world.update_timers(step, exp.timer_params(x, exp.dxu))
+        if self.swarm:
+            exp.dxu = self._commands(exp.swarm_step(step, x))
         return exp.dxu if self.state is None else self.state.actuate(exp.dxu, self._limits)
+
+    def _commands(self, dxu: Any) -> np.ndarray:
+        """A swarm step's commands, checked: ``(2, n)`` float64."""
+        out, n = np.asarray(dxu, dtype=np.float64), self.exp.n
+        if out.shape != (2, n):
+            raise ValueError(
+                f"{self.exp.label()}.swarm_step returned commands of shape {out.shape}, expected (2, n) = (2, {n})"
+            )
+        return out
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
         """The experiment's frame of this step, with the simulated time and who is faulty."""
@@ -191,6 +232,7 @@ class Stepper:
             exp.label(), self.world.seed or 0, exp.sim, done_at, wall, exp.measures(), trace, exp.params
         )
         result.faults = {} if self.state is None else self.state.summary()
+        result.swarm = self.swarm
         return result
 
 

@@ -22,6 +22,19 @@ progress bar, CLI (``dream run my_experiment.py --param gain=2``) and sweeps::
             return bool((poses[0] > 1.0).all())
 
 A run creates a fresh instance, so an experiment keeps its run's state on ``self``.
+
+An experiment may also have a swarm mode (``has_swarm_mode = True``, and the hooks
+:meth:`~Experiment.build_swarm` and :meth:`~Experiment.swarm_step`): the whole swarm decides every
+step through one call, for swarms too large for robot objects and timers. The same runner runs it
+(``dream.run(GoRight, swarm=True)``, ``dream run go-right --swarm``); GoRight would add::
+
+        has_swarm_mode = True
+
+        def build_swarm(self, n):
+            pass  # nothing to keep: every robot drives at the same speed
+
+        def swarm_step(self, step, x):
+            return np.vstack((np.full(self.n, self.speed), np.zeros(self.n)))  # (2, n): v and w
 """
 
 from __future__ import annotations
@@ -103,6 +116,9 @@ class Experiment:
         Number of robots when the run does not say.
     success : str
         One sentence: what counts as success (``dream list NAME`` prints it).
+    has_swarm_mode : bool
+        Whether the experiment also runs in swarm mode (default False): it defines
+        :meth:`build_swarm` and :meth:`swarm_step`.
 
     Hooks, in the order the runner calls them (all but :meth:`build` optional)
     --------------------------------------------------------------------------
@@ -111,19 +127,30 @@ class Experiment:
     :meth:`timer_params`, the simulator's step, :meth:`after_step`, :meth:`frame` (when recording)
     and :meth:`done`; at the end :meth:`measures`.
 
+    Swarm mode (``dream.run(..., swarm=True)``) calls :meth:`build_swarm` instead of :meth:`build`
+    (the swarm's arrays instead of robot objects and timers) and, every step,
+    :meth:`swarm_step` (every robot's command at once, from the poses) instead of the timers;
+    every other hook is called as in the per-robot mode, so :meth:`done`, :meth:`measures` and
+    :meth:`frame` look at :attr:`swarm` to know where the robots' state is. Faults reach a swarm
+    through its wheels only (crashed and stuck robots, actuator noise): it has no radios or
+    sensors to lose messages or readings.
+
     Attributes the runner sets
     --------------------------
-    n, world, rules (the :class:`~dream.specs.SimulatorSpec` the run follows), arena (before
-    :meth:`build`); sim, dxu (the swarm's command array, ``(2, n)``,
-    that controllers write into) once the simulator exists. ``robots`` is a list for
-    :meth:`build` to fill (used by the default :meth:`frame`).
+    n, world, rules (the :class:`~dream.specs.SimulatorSpec` the run follows), arena, swarm
+    (whether the run is in swarm mode) before :meth:`build` or :meth:`build_swarm`; sim, dxu (the
+    swarm's command array, ``(2, n)``, that controllers write into; in swarm mode the last
+    :meth:`swarm_step`'s) once the simulator exists. ``robots`` is a list for :meth:`build` to
+    fill (used by the default :meth:`frame`).
     """
 
     name: ClassVar[str] = ""
     default_n: ClassVar[int] = 10
     success: ClassVar[str] = "the run reaches done() with zero collisions, boundary and actuator violations"
+    has_swarm_mode: ClassVar[bool] = False
 
     n: int
+    swarm: bool = False
     world: World
     rules: SimulatorSpec
     arena: ArenaSpec
@@ -184,6 +211,17 @@ class Experiment:
         Draw anything random from ``self.world.rng`` (the run's only generator).
         """
         raise NotImplementedError(f"{self.label()} must define build(self, n)")
+
+    def build_swarm(self, n: int) -> None:
+        """Swarm mode's :meth:`build`: set up the swarm's arrays (one row or column per robot)
+        instead of robot objects and timers. Draw anything random from ``self.world.rng``."""
+        raise NotImplementedError(f"{self.label()} has has_swarm_mode set but no build_swarm(self, n)")
+
+    def swarm_step(self, step: int, x: np.ndarray) -> np.ndarray:
+        """Swarm mode's decision at step ``step`` (0-based): every robot's command ``(2, n)``
+        ``[v; w]`` (m/s, rad/s) from the poses ``x`` ``(3, n)`` that this step's ``get_poses()``
+        returned; called after :meth:`before_step`, where the per-robot mode runs the timers."""
+        raise NotImplementedError(f"{self.label()} has has_swarm_mode set but no swarm_step(self, step, x)")
 
     def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """Initial poses ``(3, n)`` (default: random grid points in the arena's centre, as rps)."""
