@@ -42,3 +42,26 @@ def test_coverage_survivors_cover_without_touching_the_crashed():
     crashed = [event["robot"] for event in result.faults["events"] if event["kind"] == "crash"]
     assert len(crashed) == 6 and {event["step"] for event in result.faults["events"]} == {200}
     assert result.success and result.collisions == 0 and result.measures["static_contacts"] == 0
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_circle_survivors_stop_waiting_for_the_crashed(seed):
+    # Seed 0: robot 7 crashes on robot 2's second goal, which then counts as reached from beside it.
+    result = dream.run("hrvo-circle", backend="fast", seed=seed, faults=dream.Faults(crash=0.2, crash_at=300))
+    assert len(result.faults["events"]) == 2
+    assert result.success and result.measures["circles_completed"] == 3
+    assert (result.collisions, result.boundary, result.actuator) == (0, 0, 0)
+
+
+def test_heartbeats_take_a_silent_robot_for_crashed_after_the_silence():
+    from dream.experiments.hrvo_circle import SILENCE, CircleRobot
+
+    robot = CircleRobot(0, "robot_0", np.zeros((3, 2)), 3)
+    robot.state, robot.change_state = 1, False  # it reached its first goal
+    heard = [(np.array([1, 1, 0]), np.array([0, 1, 1]))]  # robot 2 is behind, robot 1's news is fresh
+    robot.update_radio(heard)
+    for beat in range(2, SILENCE + 2):  # robot 1 keeps beating, robot 2 falls silent at 1
+        assert not robot.suspects and robot.change_state is False
+        robot.update_radio([(np.array([1, 1, 0]), np.array([0, beat, 1]))])
+    robot.update_radio([(np.array([1, 1, 0]), np.array([0, SILENCE + 2, 1]))])
+    assert robot.suspects and robot.change_state  # robot 2 is taken for crashed: robot 0 moves on

@@ -62,6 +62,8 @@ CORRIDOR = 2 * SAFETY  #: free width between the ring and the walls of a grown a
 ISLAND = 0.5  #: the roundabout's island, as a fraction of the ring (see dream.rules.roundabout_aim)
 APPROACH_GAIN = 1.0  #: preferred speed per metre left to the goal near it (1/s)
 SIDESTEP_UPDATES = 10  #: decisions a blocked robot steps aside for
+SILENCE = 20  #: radio rounds without a heartbeat after which a robot is taken for crashed
+STILL = 1e-3  #: a detected robot slower than this (m/s) stands still
 
 
 @dataclass(frozen=True)
@@ -221,27 +223,60 @@ class CircleRobot(RobotHRVO):
         super().__init__(robot_id, tag, **kwargs)
         self.goals = np.asarray(goals, dtype=np.float64)
         self.current_goal = self.goals[0]
-        self.robot_states = [0] * n  # what this robot knows of every robot's state
+        self.robot_states = np.zeros(n, dtype=np.int64)  # what this robot knows of every robot's state
+        self.beats = np.zeros(n, dtype=np.int64)  # the latest heartbeat it knows of each robot (0: none yet)
+        self.news = np.zeros(n, dtype=np.int64)  # its own radio round in which each heartbeat last rose
+        self.rounds = 0  # its radio rounds so far: its own heartbeat
+        self.suspects = False  # whether it takes some robot for crashed
         self.state = 0  # goals reached so far
         self.change_state = True  # the current goal has not been reached yet
         self.desired_velocity = np.zeros(2)
         self.semi_axes = circle_layout(n).semi_axes if semi_axes is None else semi_axes
         self.island = island
 
-    def update_radio(self, messages: list[list[int]]) -> list[int]:
-        for states in messages:
-            self.robot_states = [max(mine, theirs) for mine, theirs in zip(self.robot_states, states)]
+    def update_radio(self, messages: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+        """Merge the states and heartbeats heard (element-wise max); move on when every robot not
+        taken for crashed has reached this robot's state. Sends ``(states, heartbeats)``.
+
+        A heartbeat failure detector, so that survivors stop waiting for crashed robots: each
+        robot counts its radio rounds as its heartbeat, and the highest heartbeat of each robot
+        spreads like the states. A robot heard from once whose heartbeat has not risen for
+        :data:`SILENCE` of this robot's rounds is taken for crashed (its radio fell silent).
+        Rounds are local, so no clock is shared.
+        """
+        self.rounds += 1
+        if messages:
+            np.maximum(self.robot_states, np.max([states for states, _ in messages], axis=0), out=self.robot_states)
+            latest = np.max([beats for _, beats in messages], axis=0)
+            rose = latest > self.beats
+            self.beats[rose], self.news[rose] = latest[rose], self.rounds
         self.robot_states[self.robot_id] = self.state
-        level = all(s == self.state for s in self.robot_states)
+        self.beats[self.robot_id], self.news[self.robot_id] = self.rounds, self.rounds
+        alive = (self.beats == 0) | (self.rounds - self.news <= SILENCE)
+        self.suspects = not alive.all()
+        level = bool(np.all(self.robot_states[alive] == self.state))
         if rules.moves_on(self.state, level, self.change_state, len(self.goals)):
             self.current_goal = self.goals[self.state]
             self.change_state = True
-        return self.robot_states
+        return self.robot_states, self.beats
+
+    def goal_taken(self, position: np.ndarray) -> bool:
+        """Whether a robot standing still (one taken for crashed stops where it is) sits within
+        the safety radius of this robot's goal while this robot is as close as HRVO lets it come:
+        the goal then counts as reached, else a crash on a goal would stop the circles for good."""
+        rows = np.asarray(self.detections)
+        if not len(rows) or math.dist(position, self.current_goal) > self.safety + ARRIVAL:
+            return False
+        others = position - rows[:, :1] * np.column_stack((np.cos(rows[:, 1]), np.sin(rows[:, 1])))
+        still = np.hypot(rows[:, 2], rows[:, 3]) < STILL
+        return bool(np.any(still & (np.hypot(*(others - self.current_goal).T) < self.safety)))
 
     def update(self, dxu: np.ndarray) -> None:
         if self.has_pose:
             position = np.array([self.pos_x, self.pos_y])
             _, reached = rules.arrival(position, self.current_goal, self.change_state, ARRIVAL)
+            if self.change_state and self.suspects and self.goal_taken(position):
+                reached = True
             if reached:
                 self.state += 1
                 self.change_state = False
@@ -450,11 +485,12 @@ class HrvoCircle(Experiment):
         return np.array([robot.state for robot in self.robots], dtype=np.int64)
 
     def done(self, step: int, poses: np.ndarray) -> bool:
-        return bool(np.all(self.states() >= CIRCLES))
+        return bool(np.all(self.states()[self.correct] >= CIRCLES))
 
     def measures(self) -> dict[str, Any]:
-        """``circles_completed`` (by every robot) and ``circle_radius``, the ring's larger semi-axis (m)."""
-        circles = int(np.min(self.states(), initial=CIRCLES))
+        """``circles_completed`` (by every correct robot: crashed, stuck or lying ones are left
+        out) and ``circle_radius``, the ring's larger semi-axis (m)."""
+        circles = int(np.min(self.states()[self.correct], initial=CIRCLES))
         return {"circles_completed": circles, "circle_radius": self.layout.semi_axes[0]}
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:

@@ -200,7 +200,10 @@ class Stepper:
         self.world.update_timers(step, exp.timer_params(x, exp.dxu))
         if self.swarm:
             exp.dxu = self._commands(exp.swarm_step(step, x))
-        return exp.dxu if self.state is None else self.state.actuate(exp.dxu, self._limits)
+        if self.state is None:
+            return exp.dxu
+        exp.dxu[:, self.state.crashed] = 0.0  # a crashed robot commands nothing: sensors see it stand
+        return self.state.actuate(exp.dxu, self._limits)
 
     def _commands(self, dxu: Any) -> np.ndarray:
         """A swarm step's commands, checked: ``(2, n)`` float64."""
