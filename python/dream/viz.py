@@ -853,6 +853,10 @@ class VideoWriter:
                 fps=self.fps,
                 pix_fmt_in="rgba" if image.shape[2] == 4 else "rgb24",
                 codec="libx264",
+                # One encoder thread at the veryfast preset keeps up with drawing and leaves the
+                # other cores to the simulation: on 2 cores, x264's default threads and preset
+                # slowed the drawing process itself by half (benches/bench_viz.py).
+                output_params=["-preset", "veryfast", "-threads", "1"],
                 macro_block_size=2,
                 ffmpeg_log_level="error",
             )
