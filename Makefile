@@ -29,5 +29,5 @@ docs:  ## site/: the documentation, warnings as errors (needs the docs extra: pi
 docs-serve:  ## the documentation on http://127.0.0.1:8000, rebuilt on every edit
 	mkdocs serve
 
-lint:  ## format and lint gates of CI: cargo fmt, clippy -D warnings, ruff format, ruff check
+lint:  ## format and lint gates of CI: cargo fmt, clippy -D warnings, ruff format, ruff check, mypy
 	bash .ci/lint

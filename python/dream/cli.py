@@ -290,8 +290,7 @@ def _run(args: argparse.Namespace) -> int:
     progress = _progress(not args.no_progress)
     try:
         result = run(cls, n=n, seed=args.seed, backend=args.backend, steps=args.steps, progress=progress, faults=faults,
-                     rules=args.rules, swarm=args.swarm,
-                     **({"record": recorder} if recorder is not None else {}), **params)  # fmt: skip
+                     rules=args.rules, swarm=args.swarm, record=recorder, **params)  # fmt: skip
     except ValueError as err:  # an experiment's refusal (a size it cannot do), said before any step
         raise UsageError(str(err)) from None
     finally:

@@ -229,7 +229,7 @@ class FaultState:
             self.events += [{"kind": "stuck", "robot": int(i), "step": step} for i in np.flatnonzero(sticking)]
         return crashing
 
-    def clock(self, robot: int, step: int) -> float:
+    def clock(self, robot: int, step: float) -> float:
         """What robot ``robot``'s clock reads at the world's ``step``."""
         reading = self.rates[robot] * step
         if self.faults.clock_jitter:

@@ -13,7 +13,7 @@ import math
 import numbers
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 
 @dataclass
@@ -85,4 +85,4 @@ class Timer:
 def _steps(value: Any, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value) or value < 0:
         raise ValueError(f"{what} must be a finite number of steps >= 0, got {value!r}")
-    return value
+    return cast(float, value)  # an int stays an int: timers count whole steps exactly

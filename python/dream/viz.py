@@ -321,8 +321,9 @@ class Renderer:
         # The frame's artists are "animated": drawn over a cached image of the rest (axes,
         # ticks, arena, legend), which is redrawn only when something else changed.
         self._dynamic = list(layers)
-        for artist in (*self._dynamic, ax.title):
-            artist.set_animated(True)
+        for layer in self._dynamic:
+            layer.set_animated(True)
+        ax.title.set_animated(True)
         self._title_text: str | None = None
         self._title_pixels = np.empty((0, 0, 4), dtype=np.uint8)
         self._background: Any = None
@@ -396,9 +397,9 @@ class Renderer:
         self._marks_for = pixels
         small = min(1.0, pixels / 20)  # 1 from 20 pixels a robot up
         self._goals.set_sizes([(12 * small * self._text) ** 2])
-        self._goals.set_linewidths(0.5 + small)
-        self._robots.set_linewidths(0.2 + 0.5 * small)
-        self._velocities.set_linewidths(0.4 * small)
+        self._goals.set_linewidth(0.5 + small)
+        self._robots.set_linewidth(0.2 + 0.5 * small)
+        self._velocities.set_linewidth(0.4 * small)
         self._notches.set_visible(pixels >= 8)  # smaller, a notch is a smudge
 
     def robot_pixels(self) -> float:
@@ -644,7 +645,7 @@ class Renderer:
 
     def render(self) -> None:
         """Draw the current frame into the canvas: the frame's artists over the cached rest."""
-        canvas = self.figure.canvas
+        canvas: Any = self.figure.canvas  # an Agg canvas (headless or under a window): it blits
         if not hasattr(canvas, "copy_from_bbox"):  # a closed window leaves a bare canvas: draw headless
             from matplotlib.backends.backend_agg import FigureCanvasAgg
 
@@ -667,13 +668,13 @@ class Renderer:
         """Paint the title into the strip above the axes with Pillow: matplotlib's text drawing
         would be most of a frame's cost (~5 ms), and the title changes every frame."""
         text = self.axes.title.get_text()
-        buffer = np.asarray(self.figure.canvas.buffer_rgba())
+        buffer = np.asarray(self.figure.canvas.buffer_rgba())  # type: ignore[attr-defined]  # Agg's
         height, width = buffer.shape[:2]
         strip = int(height * (1 - AXES_RECT[1] - AXES_RECT[3])) - 2  # rows above the axes
         if text != self._title_text or self._title_pixels.shape[:2] != (strip, width):
             from PIL import Image, ImageDraw
 
-            points = self.axes.title.get_fontsize() * self.figure.dpi / 72  # the pixels matplotlib would use
+            points = float(self.axes.title.get_fontsize()) * self.figure.dpi / 72  # the pixels matplotlib would use
             font = _font(round(points))
             image = Image.new("RGBA", (width, strip), (255, 255, 255, 255))
             centre = width * (AXES_RECT[0] + AXES_RECT[2] / 2)
@@ -708,7 +709,7 @@ class Renderer:
         """Redraw and return the canvas' own buffer, ``(H, W, 4)`` uint8: no copy, so valid only
         until the next redraw."""
         self.render()
-        return np.asarray(self.figure.canvas.buffer_rgba())
+        return np.asarray(self.figure.canvas.buffer_rgba())  # type: ignore[attr-defined]  # Agg's
 
     def show_all(self) -> None:
         """Make the frame's artists ordinary ones, so that a full redraw (a resized window, a
@@ -894,9 +895,9 @@ def _signals_deferred() -> Iterator[None]:
     if threading.current_thread() is not threading.main_thread():  # only it can set handlers
         yield
         return
-    received: list[int] = []
+    received: list[signal.Signals] = []
     previous = {
-        signum: signal.signal(signum, lambda number, _frame: received.append(number))
+        signum: signal.signal(signum, lambda number, _frame: received.append(signal.Signals(number)))
         for signum in (signal.SIGINT, signal.SIGTERM)
     }
     try:

@@ -46,11 +46,11 @@ class World:
         self.seed = seed
         self.rng = np.random.default_rng(seed)
         self.fault_state: FaultState | None = None  #: the run's faults as drawn (see :meth:`inject`)
-        self.time = 0  #: the ``current_time`` of the last ``update_timers`` call
+        self.time: float = 0  #: the ``current_time`` of the last ``update_timers`` call
         self.timers: list[Timer] = []
         self.simulator: Backend | None = None  #: the simulator made last in this world
         self._board: dict[int, Any] = {}
-        self._in_flight: list[tuple[int, int, Any]] = []  # (visible at, sender, data)
+        self._in_flight: list[tuple[float, int, Any]] = []  # (visible at, sender, data)
         self._indexed_poses: np.ndarray | None = None  # the pose array the indexes were built for
         self._indexed_xy = np.zeros((2, 0))  # ...and its positions then, to notice in-place changes
         self._indexes: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
@@ -201,8 +201,8 @@ class World:
             for timer in self.timers:
                 timer.update(current_time, param)
             return
-        for robot in np.flatnonzero(state.advance(int(current_time))):
-            self._silence(int(robot))
+        for crashed in np.flatnonzero(state.advance(int(current_time))):
+            self._silence(int(crashed))
         clocked = bool(state.faults.drift or state.faults.clock_jitter)
         for timer in self.timers:
             robot = timer.robot_id

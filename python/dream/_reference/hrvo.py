@@ -22,6 +22,7 @@ bounds; the zero velocity if no candidate qualifies.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
 from dream._checks import FloatArray
 from dream._reference.neighbours import neighbours as find_neighbours
@@ -75,7 +76,7 @@ def _forbidden(
     distances: FloatArray,
     neighbour_velocities: FloatArray,
     safety: float,
-) -> FloatArray:
+) -> NDArray[np.bool_]:
     """Boolean ``(m,)``: candidates inside the HRVO of at least one neighbour."""
     if len(directions) == 0:
         return np.zeros(len(candidates), dtype=bool)

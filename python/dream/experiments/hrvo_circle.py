@@ -275,9 +275,7 @@ class CircleRobot(RobotHRVO):
         if self.has_pose:
             position = np.array([self.pos_x, self.pos_y])
             _, reached = rules.arrival(position, self.current_goal, self.change_state, ARRIVAL)
-            if self.change_state and self.suspects and self.goal_taken(position):
-                reached = True
-            if reached:
+            if reached or (self.change_state and self.suspects and self.goal_taken(position)):
                 self.state += 1
                 self.change_state = False
             aim = rules.roundabout_aim(position, self.current_goal, self.semi_axes, self.island)
@@ -291,14 +289,14 @@ class CircleRobot(RobotHRVO):
 def circle_frame(
     step: int,
     sim: Any,
-    goals: np.ndarray,
-    velocities: np.ndarray,
+    goals: Any,
+    velocities: Any,
     states: np.ndarray,
     radio_range: float = 1.0,
 ) -> Frame:
     """What a renderer shows of the circle experiment: goals, HRVO velocities, radio links.
 
-    ``goals`` and ``velocities`` ``(n, 2)``: each robot's current goal (m) and chosen velocity
+    ``goals`` and ``velocities``, array_like ``(n, 2)``: each robot's current goal (m) and chosen velocity
     (m/s); ``states`` ``(n,)``: the goals each has reached.
     """
     poses = sim.poses
