@@ -19,6 +19,30 @@ followers, tracking it, do not cut across each other.
 
 Success: follower error below 0.05 m before the first bars arrive, no robot touching a bar,
 zero collisions.
+
+Under faults (:mod:`dream.faults`) success is the same for the correct robots, in the formation
+of the survivors: the followers' error is that of the correct followers, to the affine image that
+the leaders span, a crashed leader counting at its place in the plan (where the surviving
+leaders have it); bar contacts are those of the correct robots (a crashed robot is an obstacle
+where it stopped, which the bars sweep through); every collision counts, with the crashed
+robots too. Each robot decides from its own radio, sensors and clock:
+
+- Every robot hears its whole formation (the law still uses the weighted neighbours only) and
+  keeps a heartbeat failure detector (:class:`~dream.heartbeats.Heartbeats`).
+- A crash: the leaders send, with their position, where the plan has the other leaders now;
+  the followers put that in the law for a leader taken for crashed, and for a crashed follower
+  its place in the affine image of the nominal shape that the leaders span, so the survivors
+  keep the planned formation with one place empty. The leaders, who ignore the followers, steer
+  clear of the robots taken for crashed (movement sensor) and shift the formation along the
+  bars' way (x) until no survivor's place lies within :data:`CLEAR` of one.
+- A liar (its radio values replaced by an adversary's): a follower checks every claimed position
+  within reach of its movement sensor (:data:`VERIFY`); a robot whose claims match no robot seen
+  :data:`STRIKES` decisions in a row is taken for a liar, its radio values are ignored from then
+  on, and the follower puts in the law where it sees it (the one robot seen that no other claim
+  accounts for), or, out of sight, its place in the plan (a leader) or in the affine image.
+  The liar itself moves as a correct robot (it decides from true inputs) but is not judged.
+
+Without faults every decision is as before: runs are the same to the last bit.
 """
 
 from __future__ import annotations
@@ -68,6 +92,11 @@ VERIFY = 1.0  #: a follower's movement sensor sees this far (m), to check claime
 MATCH = 0.15  #: a claimed position this close (m) to a robot seen matches it (radio lag, latency)
 STRIKES = 3  #: decisions in a row whose claims match no robot seen make a liar
 SILENCE = 20  #: radio rounds without a heartbeat after which a robot is taken for crashed
+#: A place closer than this (m) to a crashed robot is taken: the follower's HRVO (safety 0.15 m)
+#: would keep it off. The leaders then shift the formation along the bars' way (x) until no
+#: survivor's place is, within the tile less ``WALL`` (m).
+CLEAR = 0.2
+WALL = 0.15
 SETTLE = 1200  #: steps for the followers to take their places before the first manoeuvre
 #: How far (m) to the right the leaders stand while the followers gather from the corners, until
 #: step ``GATHER``. The followers from the right-hand corners have the longer way and must pass
@@ -188,6 +217,26 @@ def _near(points: np.ndarray, others: np.ndarray, distance: float) -> np.ndarray
     return gaps.min(axis=1) < distance
 
 
+def clearing_shift(places: np.ndarray, crashed: np.ndarray, centre: float) -> float:
+    """The shift along x (m) of least size that leaves every place of ``places`` ``(k, 2)`` at least
+    :data:`CLEAR` from every crashed robot at ``crashed`` ``(m, 2)`` and within the tile centred at
+    x = ``centre`` (less :data:`WALL`); 0 when none does."""
+    room = ROBOTARIUM.width / 2 - WALL
+    shifts = [0.0]
+    for dx, dy in (crashed[:, None, :] - places[None, :, :]).reshape(-1, 2):
+        if abs(dy) < CLEAR:
+            half = math.sqrt(CLEAR**2 - dy**2)
+            shifts += [dx - half, dx + half]
+    for shift in sorted(shifts, key=abs):
+        x = places[:, 0] + shift
+        clear = (
+            not len(crashed) or np.hypot(*(crashed[:, None, :] - places[None] - (shift, 0.0)).T).min() >= CLEAR - 1e-9
+        )
+        if clear and x.min() >= centre - room and x.max() <= centre + room:
+            return shift
+    return 0.0
+
+
 #: A robot's radio message: its id, position (m), the heartbeats it knows of its formation and
 #: (leaders only) where the plan has the other leaders head now, ``{id: (x, y)}``.
 Message = tuple[int, float, float, np.ndarray, dict[int, tuple[float, float]]]
@@ -216,6 +265,8 @@ class Leader(RobotHRVO):
         self.heartbeats = Heartbeats(7, self.index, SILENCE)
         self.heard: dict[int, np.ndarray] = {}  # the last position heard from each robot of its formation
         self.silent: list[int] = []  # the robots it takes for crashed
+        self.plan = formation("nominal")  # the planned formation's places (7, 2) (m)
+        self.shift = 0.0  # how far (m) along x it shifts them clear of crashed robots
 
     @property
     def goal(self) -> np.ndarray:
@@ -223,9 +274,15 @@ class Leader(RobotHRVO):
         return self.goals[self.index]
 
     def head_for(self, places: np.ndarray) -> None:
-        """Move the aims from where they are now to ``places`` ``(3, 2)`` (m, the formation's
-        leaders) over the next ``MORPH`` decisions."""
-        self.start, self.goals, self.decisions = self.aims, np.asarray(places, dtype=np.float64), 0
+        """Move the aims from where they are now to the leaders' places of the planned formation
+        ``places`` ``(7, 2)`` (m), shifted clear of the robots taken for crashed (:func:`clearing_shift`),
+        over the next ``MORPH`` decisions."""
+        self.plan = np.asarray(places, dtype=np.float64)
+        survivors = np.ones(7, dtype=bool)
+        survivors[[j % 7 for j in self.silent]] = False
+        crashed = np.array([self.heard[j] for j in self.silent]).reshape(-1, 2)
+        self.shift = clearing_shift(self.plan[survivors], crashed, self.plan.mean(axis=0)[0])
+        self.start, self.goals, self.decisions = self.aims, self.plan[:LEADERS] + (self.shift, 0.0), 0
 
     @property
     def aims(self) -> np.ndarray:
@@ -242,7 +299,10 @@ class Leader(RobotHRVO):
         for j, x, y, _, _ in messages:
             self.heard[j] = np.array([x, y])
         alive = self.heartbeats.alive
-        self.silent = [j for j in self.heard if not alive[j % 7]]
+        silent = [j for j in self.heard if not alive[j % 7]]
+        if silent != self.silent:
+            self.silent = silent
+            self.head_for(self.plan)
         first = self.robot_id - self.index
         plan = {first + k: (float(x), float(y)) for k, (x, y) in enumerate(self.aims) if k != self.index}
         return (self.robot_id, self.pos_x, self.pos_y, self.heartbeats.beats, plan) if self.has_pose else None
@@ -407,7 +467,9 @@ class AffineFormation(Experiment):
     default_n = 7
     success = (
         "follower error below 0.05 m before the first bars, no robot touching a bar, zero violations, "
-        "through both passes and back to the nominal shape"
+        "through both passes and back to the nominal shape; under faults, the correct robots hold the "
+        "formation of the survivors (a crashed leader counts at its planned place), no correct robot "
+        "touches a bar, and a crashed robot is an obstacle where it stopped (collisions with it count)"
     )
 
     def check(self, n: int, backend: str) -> None:
@@ -432,8 +494,9 @@ class AffineFormation(Experiment):
             robot: Leader | Follower
             if self.leader[i]:
                 robot = Leader(i, f"leader_{i}", safety=SAFETY, arena=self.arena)
-                robot.goals = robot.start = formation("nominal")[:LEADERS] + self.centres[i // 7]
-                robot.head_for(robot.goals + (SHIFT, 0.0))
+                robot.plan = formation("nominal") + self.centres[i // 7]
+                robot.goals = robot.start = robot.plan[:LEADERS]
+                robot.head_for(robot.plan + (SHIFT, 0.0))
             else:
                 robot = Follower(i, f"follower_{i}", self.weights, safety=SAFETY, arena=self.arena)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
@@ -473,7 +536,7 @@ class AffineFormation(Experiment):
         """Send every leader towards its place in ``shape`` (the leaders know the plan)."""
         for robot in self.robots:
             if isinstance(robot, Leader):
-                robot.head_for(formation(shape)[:LEADERS] + self.centres[robot.robot_id // 7])
+                robot.head_for(formation(shape) + self.centres[robot.robot_id // 7])
 
     def after_step(self, step: int, poses: np.ndarray) -> None:
         for bar in self.bars:
@@ -507,9 +570,9 @@ class AffineFormation(Experiment):
         return step >= self.steps(self.n) and self.contacts == 0 and self.settled_error < TOLERANCE
 
     def measures(self) -> dict[str, Any]:
-        """The followers' error to their affine target just before the first bars set off and at
-        the end (m, largest over the formations), the iterations in which a robot touched a bar,
-        and the largest error while bars are on the arena."""
+        """The correct followers' error to their affine target just before the first bars set off
+        and at the end (m, largest over the formations), the iterations in which a correct robot
+        touched a bar, and the largest error while bars are on the arena."""
         return {
             "error_before_bars": self.settled_error,
             "error_end": self.error,
