@@ -44,6 +44,10 @@ class Heartbeats:
             self.beats[rose], self.news[rose] = latest[rose], self.rounds
         self.beats[self.me], self.news[self.me] = self.rounds, self.rounds
 
+    def sent(self) -> tuple[int, ...]:
+        """The heartbeats to send, as plain integers (many times faster to copy than an array)."""
+        return tuple(self.beats.tolist())
+
     @property
     def alive(self) -> np.ndarray:
         """``(n,)`` bool: robots not taken for crashed (never heard of, or heard of lately)."""

@@ -52,6 +52,7 @@ from typing import Any
 
 import numpy as np
 
+from dream import rules
 from dream.experiments.line_consensus import settle_or_steer
 from dream.experiments.spec import Experiment
 from dream.frames import Frame
@@ -202,21 +203,6 @@ def affine_image(known: dict[int, np.ndarray], indices: list[int]) -> dict[int, 
     return {k: np.append(NOMINAL[k], 1.0) @ fit for k in indices}
 
 
-def seen_positions(robot: RobotHRVO, detections: np.ndarray) -> np.ndarray:
-    """World positions ``(k, 2)`` of the robots in movement-sensor ``detections`` ``(k, 4)``
-    (``angle`` points from the detected robot to this one)."""
-    d, angle = detections[:, 0], detections[:, 1]
-    return np.column_stack((robot.pos_x - d * np.cos(angle), robot.pos_y - d * np.sin(angle)))
-
-
-def _near(points: np.ndarray, others: np.ndarray, distance: float) -> np.ndarray:
-    """``(k,)`` bool: which of ``points`` ``(k, 2)`` lie within ``distance`` of one of ``others`` ``(m, 2)``."""
-    if not len(others):
-        return np.zeros(len(points), dtype=bool)
-    gaps = np.hypot(*(points[:, None, :] - others[None, :, :]).transpose(2, 0, 1))
-    return gaps.min(axis=1) < distance
-
-
 def clearing_shift(places: np.ndarray, crashed: np.ndarray, centre: float) -> float:
     """The shift along x (m) of least size that leaves every place of ``places`` ``(k, 2)`` at least
     :data:`CLEAR` from every crashed robot at ``crashed`` ``(m, 2)`` and within the tile centred at
@@ -239,7 +225,7 @@ def clearing_shift(places: np.ndarray, crashed: np.ndarray, centre: float) -> fl
 
 #: A robot's radio message: its id, position (m), the heartbeats it knows of its formation and
 #: (leaders only) where the plan has the other leaders head now, ``{id: (x, y)}``.
-Message = tuple[int, float, float, np.ndarray, dict[int, tuple[float, float]]]
+Message = tuple[int, float, float, tuple[int, ...], dict[int, tuple[float, float]]]
 
 
 class Leader(RobotHRVO):
@@ -267,6 +253,7 @@ class Leader(RobotHRVO):
         self.silent: list[int] = []  # the robots it takes for crashed
         self.plan = formation("nominal")  # the planned formation's places (7, 2) (m)
         self.shift = 0.0  # how far (m) along x it shifts them clear of crashed robots
+        self.sensor: MovementSensor | None = None  # its movement sensor, read by `watch`
 
     @property
     def goal(self) -> np.ndarray:
@@ -305,15 +292,24 @@ class Leader(RobotHRVO):
             self.head_for(self.plan)
         first = self.robot_id - self.index
         plan = {first + k: (float(x), float(y)) for k, (x, y) in enumerate(self.aims) if k != self.index}
-        return (self.robot_id, self.pos_x, self.pos_y, self.heartbeats.beats, plan) if self.has_pose else None
+        return (self.robot_id, self.pos_x, self.pos_y, self.heartbeats.sent(), plan) if self.has_pose else None
+
+    def watch(self, x: Any, v: Any) -> None:
+        """The movement sensor's timer call (poses ``x``, commands ``v``): a leader reads its sensor
+        only while it takes some robot for crashed, the only robots it avoids."""
+        if self.silent and self.sensor is not None:
+            self.sensor.update(x, v)
+        else:
+            self.detections = self.detections[:0]
 
     def update_sensor(self, detections: Any) -> None:
-        """Keep the detections of robots taken for crashed (where they were heard last): the only
-        robots a leader avoids."""
+        """Keep the detections of robots taken for crashed (where they were heard last)."""
         rows = np.asarray(detections, dtype=np.float64).reshape(-1, 4)
         if self.silent and self.has_pose:
             crashed = np.array([self.heard[j] for j in self.silent])
-            self.detections = rows[_near(seen_positions(self, rows), crashed, MATCH)]
+            self.detections = rows[
+                ~rules.far_from(rules.seen_positions((self.pos_x, self.pos_y), rows), crashed, MATCH)
+            ]
         else:
             self.detections = rows[:0]
 
@@ -360,13 +356,13 @@ class Follower(RobotHRVO):
             self.heard[j] = np.array([x, y])
             if plan:
                 self.plans[j] = plan
-        return (self.robot_id, self.pos_x, self.pos_y, self.heartbeats.beats, {}) if self.has_pose else None
+        return (self.robot_id, self.pos_x, self.pos_y, self.heartbeats.sent(), {}) if self.has_pose else None
 
     def update_sensor(self, detections: Any) -> None:
         """HRVO avoids the robots within ``RANGE``; claims are checked against all detected."""
         rows = np.asarray(detections, dtype=np.float64).reshape(-1, 4)
         self.detections = rows[rows[:, 0] <= RANGE]
-        self.seen = seen_positions(self, rows)
+        self.seen = rules.seen_positions((self.pos_x, self.pos_y), rows)
 
     def check_claims(self, here: np.ndarray) -> None:
         """Take for a liar a robot whose claimed positions, close enough to be checked, matched no
@@ -375,7 +371,7 @@ class Follower(RobotHRVO):
             if j in self.liars:
                 continue
             checkable = math.dist(claim, here) < VERIFY - MATCH
-            missed = checkable and not _near(claim[None], self.seen, MATCH)[0]
+            missed = checkable and bool(rules.far_from(claim, self.seen, MATCH)[0])
             self.strikes[j] = self.strikes.get(j, 0) + 1 if missed else 0
             if self.strikes[j] >= STRIKES:
                 self.liars[j] = None
@@ -383,7 +379,7 @@ class Follower(RobotHRVO):
         if not self.liars:
             return
         claims = np.array([claim for j, claim in self.heard.items() if j not in self.liars]).reshape(-1, 2)
-        unclaimed = self.seen[~_near(self.seen, claims, MATCH)]
+        unclaimed = self.seen[rules.far_from(self.seen, claims, MATCH)]
         for j, last in self.liars.items():
             if last is None and len(unclaimed) == 1 and len(self.liars) == 1:
                 self.liars[j] = self.sensed[j] = unclaimed[0]
@@ -501,11 +497,14 @@ class AffineFormation(Experiment):
                 robot = Follower(i, f"follower_{i}", self.weights, safety=SAFETY, arena=self.arena)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             radio = GraphRadio(i, f"radio_{i}", robot.update_radio, adjacency)
-            sight = RANGE if isinstance(robot, Leader) else VERIFY
-            movement = MovementSensor(i, f"movement_{i}", robot.update_sensor, range=sight)
+            # One range for all, so that the world builds one neighbour index per step.
+            movement = MovementSensor(i, f"movement_{i}", robot.update_sensor, range=VERIFY)
+            look = movement.update
+            if isinstance(robot, Leader):
+                robot.sensor, look = movement, robot.watch
             entries = [
                 {"delay": 2, "tag": "odom", "call": odometry.update},
-                {"delay": 3, "tag": "movement", "call": movement.update},
+                {"delay": 3, "tag": "movement", "call": look},
                 {"delay": 4, "tag": "radio", "call": radio.update},
                 {"delay": 4, "tag": "robot", "call": robot.update},
             ]

@@ -259,7 +259,7 @@ class CircleRobot(RobotHRVO):
         rows = np.asarray(self.detections)
         if not len(rows) or math.dist(position, self.current_goal) > self.safety + ARRIVAL:
             return False
-        others = position - rows[:, :1] * np.column_stack((np.cos(rows[:, 1]), np.sin(rows[:, 1])))
+        others = rules.seen_positions(position, rows)
         still = np.hypot(rows[:, 2], rows[:, 3]) < STILL
         return bool(np.any(still & (np.hypot(*(others - self.current_goal).T) < self.safety)))
 
