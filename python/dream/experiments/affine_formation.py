@@ -265,11 +265,15 @@ class Leader(RobotHRVO):
         ``places`` ``(7, 2)`` (m), shifted clear of the robots taken for crashed (:func:`clearing_shift`),
         over the next ``MORPH`` decisions."""
         self.plan = np.asarray(places, dtype=np.float64)
+        self.shift = self.clearing()
+        self.start, self.goals, self.decisions = self.aims, self.plan[:LEADERS] + (self.shift, 0.0), 0
+
+    def clearing(self) -> float:
+        """The shift (m) along x of the plan clear of the robots taken for crashed (:func:`clearing_shift`)."""
         survivors = np.ones(7, dtype=bool)
         survivors[[j % 7 for j in self.silent]] = False
         crashed = np.array([self.heard[j] for j in self.silent]).reshape(-1, 2)
-        self.shift = clearing_shift(self.plan[survivors], crashed, self.plan.mean(axis=0)[0])
-        self.start, self.goals, self.decisions = self.aims, self.plan[:LEADERS] + (self.shift, 0.0), 0
+        return clearing_shift(self.plan[survivors], crashed, self.plan.mean(axis=0)[0])
 
     @property
     def aims(self) -> np.ndarray:
@@ -289,7 +293,8 @@ class Leader(RobotHRVO):
         silent = [j for j in self.heard if not alive[j % 7]]
         if silent != self.silent:
             self.silent = silent
-            self.head_for(self.plan)
+            if self.clearing() != self.shift:  # else the aims keep their pace
+                self.head_for(self.plan)
         first = self.robot_id - self.index
         plan = {first + k: (float(x), float(y)) for k, (x, y) in enumerate(self.aims) if k != self.index}
         return (self.robot_id, self.pos_x, self.pos_y, self.heartbeats.sent(), plan) if self.has_pose else None
@@ -484,7 +489,7 @@ class AffineFormation(Experiment):
         self.leader = np.arange(n) % 7 < LEADERS
         self.passes = schedule()
         # Every robot hears its whole formation (the law uses the weighted neighbours only): the
-        # heartbeats, the leaders' stand-ins and the claims a follower checks come from all.
+        # heartbeats, the leaders' plans and the claims a follower checks come from all.
         adjacency = np.kron(np.eye(n // 7), np.ones((7, 7)))
         for i in range(n):
             robot: Leader | Follower
