@@ -37,9 +37,11 @@ robots too. Each robot decides from its own radio, sensors and clock:
   bars' way (x) until no survivor's place lies within :data:`CLEAR` of one.
 - A liar (its radio values replaced by an adversary's): a follower checks every claimed position
   within reach of its movement sensor (:data:`VERIFY`); a robot whose claims match no robot seen
-  :data:`STRIKES` decisions in a row is taken for a liar, its radio values are ignored from then
-  on, and the follower puts in the law where it sees it (the one robot seen that no other claim
-  accounts for), or, out of sight, its place in the plan (a leader) or in the affine image.
+  (or, when the follower sees close by a robot that no claim accounts for, the one robot whose
+  claim lies out of its sight) :data:`STRIKES` decisions in a row is taken for a liar, its radio
+  values are ignored from then on, and the follower puts in the law where it sees it (the one
+  robot seen that no other claim accounts for), or, out of sight, its place in the plan (a
+  leader) or in the affine image.
   The liar itself moves as a correct robot (it decides from true inputs) but is not judged.
 
 Without faults every decision is as before: runs are the same to the last bit.
@@ -337,8 +339,8 @@ class Follower(RobotHRVO):
     it puts, for a neighbour it takes for crashed, the leader's place in the plan (sent by the
     other leaders) or, for a follower, its place in the affine image of the nominal shape that
     the leaders span. It checks every claimed position within reach of its movement sensor: a
-    robot whose claims match no robot it sees, :data:`STRIKES` decisions in a row, is taken for
-    a liar; from then on its radio values are ignored, and the follower uses where it sees it
+    robot blamed :data:`STRIKES` decisions in a row (:meth:`check_claims`) is taken for a liar;
+    from then on its radio values are ignored, and the follower uses where it sees it
     (the one robot it sees that no other claim accounts for), else, out of sight, its place in
     the plan (a leader) or in the affine image (a follower).
     """
@@ -370,28 +372,39 @@ class Follower(RobotHRVO):
         self.seen = rules.seen_positions((self.pos_x, self.pos_y), rows)
 
     def check_claims(self, here: np.ndarray) -> None:
-        """Take for a liar a robot whose claimed positions, close enough to be checked, matched no
-        robot seen :data:`STRIKES` times in a row; find the liars among the robots seen now."""
-        for j, claim in self.heard.items():
-            if j in self.liars:
-                continue
-            checkable = math.dist(claim, here) < VERIFY - MATCH
-            missed = checkable and bool(rules.far_from(claim, self.seen, MATCH)[0])
-            self.strikes[j] = self.strikes.get(j, 0) + 1 if missed else 0
+        """Take for a liar a robot blamed :data:`STRIKES` decisions in a row; find the liars among
+        the robots seen now.
+
+        Blamed: a robot whose claimed position, close enough to be checked, matches no robot seen;
+        else, when it sees within ``RANGE`` a robot that no claim accounts for, the one robot whose
+        claim lies out of its sight, if only one does (a liar that claims to be far away).
+        """
+        trusted = [j for j in self.heard if j not in self.liars]
+        claims = np.array([self.heard[j] for j in trusted]).reshape(-1, 2)
+        checkable = np.hypot(*(claims - here).T) < VERIFY - MATCH
+        missed = checkable & rules.far_from(claims, self.seen, MATCH)
+        if not missed.any() and (~checkable).sum() == 1 and all(last is not None for last in self.liars.values()):
+            # Robots seen nearby that neither a claim nor a liar found before accounts for.
+            accounted = np.vstack([claims, *self.liars.values()]) if self.liars else claims
+            near = np.hypot(*(self.seen - here).T) <= RANGE
+            if (near & rules.far_from(self.seen, accounted, MATCH)).any():
+                missed = ~checkable
+        for j, blamed in zip(trusted, missed):
+            self.strikes[j] = self.strikes.get(j, 0) + 1 if blamed else 0
             if self.strikes[j] >= STRIKES:
                 self.liars[j] = None
         self.sensed = {}
         if not self.liars:
             return
         claims = np.array([claim for j, claim in self.heard.items() if j not in self.liars]).reshape(-1, 2)
-        unclaimed = self.seen[rules.far_from(self.seen, claims, MATCH)]
+        unclaimed_seen = self.seen[rules.far_from(self.seen, claims, MATCH)]
         for j, last in self.liars.items():
-            if last is None and len(unclaimed) == 1 and len(self.liars) == 1:
-                self.liars[j] = self.sensed[j] = unclaimed[0]
-            elif last is not None and len(unclaimed):
-                gaps = np.hypot(*(unclaimed - last).T)
+            if last is None and len(unclaimed_seen) == 1 and len(self.liars) == 1:
+                self.liars[j] = self.sensed[j] = unclaimed_seen[0]
+            elif last is not None and len(unclaimed_seen):
+                gaps = np.hypot(*(unclaimed_seen - last).T)
                 if gaps.min() < 2 * MATCH:  # the same robot, moved on a little
-                    self.liars[j] = self.sensed[j] = unclaimed[np.argmin(gaps)]
+                    self.liars[j] = self.sensed[j] = unclaimed_seen[np.argmin(gaps)]
 
     def positions(self) -> dict[int, np.ndarray]:
         """Where it takes the robots of its formation to be ``{id: (2,)}`` (m), for the law: what
