@@ -215,3 +215,22 @@ def closing_in(offsets: Any, closing: Any, distance: float, horizon: float) -> n
     when = np.clip(-np.einsum("ij,ij->i", offsets, closing) / np.where(speed2 > 0, speed2, 1.0), 0.0, horizon)
     nearest = np.hypot(*(offsets + closing * when[:, None]).T)
     return nearest < np.minimum(distance, np.hypot(*offsets.T))
+
+
+def seen_positions(position: Any, detections: Any) -> FloatArray:
+    """World positions ``(k, 2)`` of the robots in movement-sensor ``detections`` ``(k, 4)`` (rows
+    ``[distance, angle, vx, vy]``, ``angle`` pointing from the robot seen to the one at
+    ``position`` ``(2,)``, m)."""
+    rows = np.asarray(detections, dtype=np.float64).reshape(-1, 4)
+    d, angle = rows[:, 0], rows[:, 1]
+    return np.column_stack((position[0] - d * np.cos(angle), position[1] - d * np.sin(angle)))
+
+
+def far_from(points: Any, others: Any, distance: float) -> np.ndarray:
+    """``(k,)`` bool: which of ``points`` ``(k, 2)`` lie farther than ``distance`` (m) from every one
+    of ``others`` ``(m, 2)`` (all of them when there are none): robots seen that no claimed
+    position accounts for, or claims that match no robot seen."""
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    others = np.asarray(others, dtype=np.float64).reshape(-1, 2)
+    gaps = np.hypot(*(points[:, None, :] - others[None, :, :]).transpose(2, 0, 1))
+    return gaps.min(axis=1, initial=np.inf) > distance

@@ -73,14 +73,16 @@ def test_affine_formation_succeeds_under_rps2_rules(seed):
 def test_leaders_change_places_at_a_steady_pace():
     leader = af.Leader(0, "leader_0")
     leader.update_odom([0.0, 0.0, 0.0])
-    leader.head_for(np.array([1.0, 0.0]))
-    aims = [leader.aim.copy()]
+    places = af.formation("compressed") + (0.2, 0.0)  # the planned formation, leaders first
+    leader.head_for(places)
+    aims = [leader.aims.copy()]
     for _ in range(af.MORPH + 5):
         leader.update(np.zeros((2, 1)))
-        aims.append(leader.aim.copy())
+        aims.append(leader.aims.copy())
     steps = np.diff(np.array(aims)[: af.MORPH + 1], axis=0)
-    assert_allclose(steps, np.broadcast_to(steps[0], steps.shape), atol=1e-12)  # a straight line, steady...
-    assert_allclose(aims[-1], [1.0, 0.0])  # ...that ends at the new place
+    assert_allclose(steps, np.broadcast_to(steps[0], steps.shape), atol=1e-12)  # straight lines, steady...
+    assert_allclose(aims[-1], places[: af.LEADERS])  # ...that end at the new places
+    assert_allclose(leader.aim, places[0])
 
 
 def test_affine_formation_has_seven_robots():

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
 
 import dream
 from dream import rules
@@ -65,3 +67,52 @@ def test_heartbeats_take_a_silent_robot_for_crashed_after_the_silence():
         robot.update_radio([(np.array([1, 1, 0]), np.array([0, beat, 1]))])
     robot.update_radio([(np.array([1, 1, 0]), np.array([0, SILENCE + 2, 1]))])
     assert robot.suspects and robot.change_state  # robot 2 is taken for crashed: robot 0 moves on
+
+
+@pytest.mark.parametrize(
+    ("seed", "crashed"),
+    [(8, 6), (1, 0)],  # follower 6 stops 0.07 m from follower 4's place; leader 0 on the collinear line
+)
+def test_affine_survivors_hold_their_formation_around_the_crashed(seed, crashed):
+    result = dream.run("affine-formation", backend="fast", seed=seed, faults=dream.Faults(crash=0.1, crash_at=300))
+    assert [(e["kind"], e["robot"]) for e in result.faults["events"]] == [("crash", crashed)]
+    assert result.success, result.summary()
+    assert (result.collisions, result.boundary, result.actuator) == (0, 0, 0)
+    assert result.measures["error_before_bars"] < 0.05 and result.measures["bar_contacts"] == 0
+
+
+@pytest.mark.parametrize(("seed", "liar"), [(1, 0), (3, 4)])
+def test_affine_formation_ignores_a_liar_it_sees_through(seed, liar):
+    result = dream.run("affine-formation", backend="fast", seed=seed, faults=dream.Faults(byzantine=1))
+    assert [(e["kind"], e["robot"]) for e in result.faults["events"]] == [("byzantine", liar)]
+    assert result.success, result.summary()
+    assert (result.collisions, result.boundary, result.actuator) == (0, 0, 0)
+    assert result.measures["error_end"] < 0.05  # back in the nominal shape, led by the liar's true place
+
+
+def test_affine_follower_takes_a_claim_that_matches_no_robot_seen_for_a_lie():
+    from dream.experiments import affine_formation as af
+
+    follower = af.Follower(3, "follower_3")
+    follower.update_odom([0.0, 0.0, 0.0])
+    beats = np.ones(7, dtype=np.int64)
+    truth = {0: (0.5, 0.0), 1: (0.2, 0.3)}  # robot 1 is there, robot 0 lies it is at the origin
+    follower.update_radio([(0, 0.0, 0.0, beats, {}), (1, *truth[1], beats, {})])
+    # Rows [distance, angle from the robot seen to this one, vx, vy].
+    follower.update_sensor(np.array([[math.hypot(*p), math.atan2(-p[1], -p[0]), 0.0, 0.0] for p in truth.values()]))
+    for _ in range(af.STRIKES):
+        assert 0 not in follower.liars
+        follower.check_claims(np.zeros(2))
+    assert list(follower.liars) == [0]  # robot 1's claim matches a robot seen
+    assert_allclose(follower.positions()[0], truth[0], atol=1e-12)  # the one robot no claim accounts for
+
+
+def test_clearing_shift_moves_places_off_a_crashed_robot_along_x():
+    from dream.experiments import affine_formation as af
+
+    places = af.formation("nominal")
+    assert af.clearing_shift(places, np.zeros((0, 2)), 0.0) == 0.0
+    crashed = places[4:5] + (-0.07, 0.0)  # on follower 4's place, which it no longer holds
+    shift = af.clearing_shift(np.delete(places, 6, axis=0), crashed, 0.0)
+    gaps = np.hypot(*(np.delete(places, 6, axis=0) + (shift, 0.0) - crashed).T)
+    assert gaps.min() == pytest.approx(af.CLEAR) and 0 < abs(shift) < 2 * af.CLEAR

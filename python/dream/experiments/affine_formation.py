@@ -19,6 +19,32 @@ followers, tracking it, do not cut across each other.
 
 Success: follower error below 0.05 m before the first bars arrive, no robot touching a bar,
 zero collisions.
+
+Under faults (:mod:`dream.faults`) success is the same for the correct robots, in the formation
+of the survivors: the followers' error is that of the correct followers, to the affine image that
+the leaders span, a crashed leader counting at its place in the plan (where the surviving
+leaders have it); bar contacts are those of the correct robots (a crashed robot is an obstacle
+where it stopped, which the bars sweep through); every collision counts, with the crashed
+robots too. Each robot decides from its own radio, sensors and clock:
+
+- Every robot hears its whole formation (the law still uses the weighted neighbours only) and
+  keeps a heartbeat failure detector (:class:`~dream.heartbeats.Heartbeats`).
+- A crash: the leaders send, with their position, where the plan has the other leaders now;
+  the followers put that in the law for a leader taken for crashed, and for a crashed follower
+  its place in the affine image of the nominal shape that the leaders span, so the survivors
+  keep the planned formation with one place empty. The leaders, who ignore the followers, steer
+  clear of the robots taken for crashed (movement sensor) and shift the formation along the
+  bars' way (x) until no survivor's place lies within :data:`CLEAR` of one.
+- A liar (its radio values replaced by an adversary's): a follower checks every claimed position
+  within reach of its movement sensor (:data:`VERIFY`); a robot whose claims match no robot seen
+  (or, when the follower sees close by a robot that no claim accounts for, the one robot whose
+  claim lies out of its sight) :data:`STRIKES` decisions in a row is taken for a liar, its radio
+  values are ignored from then on, and the follower puts in the law where it sees it (the one
+  robot seen that no other claim accounts for), or, out of sight, its place in the plan (a
+  leader) or in the affine image.
+  The liar itself moves as a correct robot (it decides from true inputs) but is not judged.
+
+Without faults every decision is as before: runs are the same to the last bit.
 """
 
 from __future__ import annotations
@@ -28,9 +54,11 @@ from typing import Any
 
 import numpy as np
 
+from dream import rules
 from dream.experiments.line_consensus import settle_or_steer
 from dream.experiments.spec import Experiment
 from dream.frames import Frame
+from dream.heartbeats import Heartbeats
 from dream.obstacles import Obstacle, touching
 from dream.radios import GraphRadio
 from dream.robot import RobotHRVO
@@ -62,6 +90,16 @@ GAIN = 8.0  #: the followers' stress gain k (1/s)
 # ran into one (rps 2.1, seed 24).
 SAFETY = 0.15  #: the followers' HRVO safety radius (m): the formation's robots are 0.3 m apart
 FINE = 0.03  #: below this desired speed (m/s) a follower moves without HRVO
+RANGE = 0.6  #: robots within this distance (m) are the ones a follower's HRVO avoids
+VERIFY = 1.0  #: a follower's movement sensor sees this far (m), to check claimed positions
+MATCH = 0.15  #: a claimed position this close (m) to a robot seen matches it (radio lag, latency)
+STRIKES = 3  #: decisions in a row whose claims match no robot seen make a liar
+SILENCE = 20  #: radio rounds without a heartbeat after which a robot is taken for crashed
+#: A place closer than this (m) to a crashed robot is taken: the follower's HRVO (safety 0.15 m)
+#: would keep it off. The leaders then shift the formation along the bars' way (x) until no
+#: survivor's place is, within the tile less ``WALL`` (m).
+CLEAR = 0.2
+WALL = 0.15
 SETTLE = 1200  #: steps for the followers to take their places before the first manoeuvre
 #: How far (m) to the right the leaders stand while the followers gather from the corners, until
 #: step ``GATHER``. The followers from the right-hand corners have the longer way and must pass
@@ -146,39 +184,141 @@ def bars(gap: float, x: float, centre: np.ndarray | None = None) -> list[Obstacl
     ]
 
 
-def follower_positions(positions: np.ndarray, leader: np.ndarray) -> np.ndarray:
-    """Each formation's follower targets ``(4 g, 2)`` for robots at ``positions`` ``(7 g, 2)``."""
-    groups = len(positions) // 7
-    blocks = positions.reshape(groups, 7, 2)
+def follower_positions(anchors: np.ndarray) -> np.ndarray:
+    """Each formation's follower targets ``(4 g, 2)`` for leaders at ``anchors`` ``(7 g, 2)`` (rows
+    of followers unused)."""
+    blocks = anchors.reshape(len(anchors) // 7, 7, 2)
     return np.vstack([follower_targets(block[:LEADERS]) for block in blocks])
+
+
+def affine_image(known: dict[int, np.ndarray], indices: list[int]) -> dict[int, np.ndarray]:
+    """Where robots ``indices`` (0-6) belong ``{index: (2,)}`` in the affine image of the nominal
+    configuration that the robots ``known`` ``{index: (2,)}`` span: from the three leaders when
+    known (three points fix the map), else the least-squares fit to all known (none when those
+    do not fix it)."""
+    base = {k: known[k] for k in range(LEADERS)} if all(k in known for k in range(LEADERS)) else known
+    rows = list(base)
+    nominal = np.column_stack((NOMINAL[rows], np.ones(len(rows))))
+    if np.linalg.matrix_rank(nominal) < 3:
+        return {}
+    fit = np.linalg.lstsq(nominal, np.array([base[k] for k in rows]), rcond=None)[0]
+    return {k: np.append(NOMINAL[k], 1.0) @ fit for k in indices}
+
+
+def clearing_shift(places: np.ndarray, crashed: np.ndarray, centre: float) -> float:
+    """The shift along x (m) of least size that leaves every place of ``places`` ``(k, 2)`` at least
+    :data:`CLEAR` from every crashed robot at ``crashed`` ``(m, 2)`` and within the tile centred at
+    x = ``centre`` (less :data:`WALL`); 0 when none does."""
+    room = ROBOTARIUM.width / 2 - WALL
+    shifts = [0.0]
+    for dx, dy in (crashed[:, None, :] - places[None, :, :]).reshape(-1, 2):
+        if abs(dy) < CLEAR:
+            half = math.sqrt(CLEAR**2 - dy**2)
+            shifts += [dx - half, dx + half]
+    for shift in sorted(shifts, key=abs):
+        x = places[:, 0] + shift
+        clear = (
+            not len(crashed) or np.hypot(*(crashed[:, None, :] - places[None] - (shift, 0.0)).T).min() >= CLEAR - 1e-9
+        )
+        if clear and x.min() >= centre - room and x.max() <= centre + room:
+            return shift
+    return 0.0
+
+
+#: A robot's radio message: its id, position (m), the heartbeats it knows of its formation and
+#: (leaders only) where the plan has the other leaders head now, ``{id: (x, y)}``.
+Message = tuple[int, float, float, tuple[int, ...], dict[int, tuple[float, float]]]
 
 
 class Leader(RobotHRVO):
     """A leader: goes to its place in the planned shape; ignores the followers.
 
-    A new place (:meth:`head_for`) is not taken at once: the leader's aim moves from the old
-    place to the new one at a steady pace over its next ``MORPH`` decisions (its own clock), so
-    the three leaders, which all plan the same shapes, stay (nearly) an affine image of the
-    nominal shape while they change it, and the followers keep up with them.
+    A new shape (:meth:`head_for`) is not taken at once: the aims of the formation's three
+    leaders move from the old places to the new ones at a steady pace over the leader's next
+    ``MORPH`` decisions (its own clock), so the three leaders, which all plan the same shapes,
+    stay (nearly) an affine image of the nominal shape while they change it, and the followers
+    keep up with them. A leader knows where the plan puts every leader and sends the other
+    leaders' aims with its position: a follower puts them in the law for a leader that has
+    crashed or lies out of its sight, so the formation keeps three leaders. A leader steers
+    clear of the robots it takes for crashed, which stand where they stopped (it sees them with
+    its movement sensor); it ignores the others.
     """
 
     def __init__(self, robot_id: int, tag: str, **kwargs: Any) -> None:
         super().__init__(robot_id, tag, **kwargs)
-        self.goal = formation("nominal")[robot_id % 7]
-        self.start = self.goal  # the place the leader's aim left from
+        self.index = robot_id % 7  # its place in its formation
+        self.goals = formation("nominal")[:LEADERS]  # the planned places of its formation's leaders
+        self.start = self.goals  # the places the aims left from
         self.decisions = MORPH  # decisions since then
+        self.heartbeats = Heartbeats(7, self.index, SILENCE)
+        self.heard: dict[int, np.ndarray] = {}  # the last position heard from each robot of its formation
+        self.silent: list[int] = []  # the robots it takes for crashed
+        self.plan = formation("nominal")  # the planned formation's places (7, 2) (m)
+        self.shift = 0.0  # how far (m) along x it shifts them clear of crashed robots
+        self.sensor: MovementSensor | None = None  # its movement sensor, read by `watch`
 
-    def head_for(self, place: np.ndarray) -> None:
-        """Move the aim from where it is now to ``place`` ``(2,)`` (m) over the next ``MORPH`` decisions."""
-        self.start, self.goal, self.decisions = self.aim, np.asarray(place, dtype=np.float64), 0
+    @property
+    def goal(self) -> np.ndarray:
+        """Its own planned place ``(2,)`` (m)."""
+        return self.goals[self.index]
+
+    def head_for(self, places: np.ndarray) -> None:
+        """Move the aims from where they are now to the leaders' places of the planned formation
+        ``places`` ``(7, 2)`` (m), shifted clear of the robots taken for crashed (:func:`clearing_shift`),
+        over the next ``MORPH`` decisions."""
+        self.plan = np.asarray(places, dtype=np.float64)
+        self.shift = self.clearing()
+        self.start, self.goals, self.decisions = self.aims, self.plan[:LEADERS] + (self.shift, 0.0), 0
+
+    def clearing(self) -> float:
+        """The shift (m) along x of the plan clear of the robots taken for crashed (:func:`clearing_shift`)."""
+        survivors = np.ones(7, dtype=bool)
+        survivors[[j % 7 for j in self.silent]] = False
+        crashed = np.array([self.heard[j] for j in self.silent]).reshape(-1, 2)
+        return clearing_shift(self.plan[survivors], crashed, self.plan.mean(axis=0)[0])
+
+    @property
+    def aims(self) -> np.ndarray:
+        """The points ``(3, 2)`` (m) the plan has the formation's leaders head for now."""
+        return self.start + min(self.decisions / MORPH, 1.0) * (self.goals - self.start)
 
     @property
     def aim(self) -> np.ndarray:
-        """The point ``(2,)`` (m) the leader heads for now, on its way from ``start`` to ``goal``."""
-        return self.start + min(self.decisions / MORPH, 1.0) * (self.goal - self.start)
+        """The point ``(2,)`` (m) this leader heads for now."""
+        return self.aims[self.index]
 
-    def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
-        return (self.robot_id, self.pos_x, self.pos_y) if self.has_pose else None
+    def update_radio(self, messages: list[Message]) -> Message | None:
+        self.heartbeats.round([beats for _, _, _, beats, _ in messages])
+        for j, x, y, _, _ in messages:
+            self.heard[j] = np.array([x, y])
+        alive = self.heartbeats.alive
+        silent = [j for j in self.heard if not alive[j % 7]]
+        if silent != self.silent:
+            self.silent = silent
+            if self.clearing() != self.shift:  # else the aims keep their pace
+                self.head_for(self.plan)
+        first = self.robot_id - self.index
+        plan = {first + k: (float(x), float(y)) for k, (x, y) in enumerate(self.aims) if k != self.index}
+        return (self.robot_id, self.pos_x, self.pos_y, self.heartbeats.sent(), plan) if self.has_pose else None
+
+    def watch(self, x: Any, v: Any) -> None:
+        """The movement sensor's timer call (poses ``x``, commands ``v``): a leader reads its sensor
+        only while it takes some robot for crashed, the only robots it avoids."""
+        if self.silent and self.sensor is not None:
+            self.sensor.update(x, v)
+        else:
+            self.detections = self.detections[:0]
+
+    def update_sensor(self, detections: Any) -> None:
+        """Keep the detections of robots taken for crashed (where they were heard last)."""
+        rows = np.asarray(detections, dtype=np.float64).reshape(-1, 4)
+        if self.silent and self.has_pose:
+            crashed = np.array([self.heard[j] for j in self.silent])
+            self.detections = rows[
+                ~rules.far_from(rules.seen_positions((self.pos_x, self.pos_y), rows), crashed, MATCH)
+            ]
+        else:
+            self.detections = rows[:0]
 
     def update(self, dxu: np.ndarray) -> None:
         self.decisions += 1
@@ -188,28 +328,126 @@ class Leader(RobotHRVO):
             speed = math.hypot(desired[0], desired[1])
             if speed > self.v_max:
                 desired *= self.v_max / speed
-        self.HRVO(np.zeros((0, 4)), desired)
+        self.HRVO(self.detections, desired)
         self.command(dxu)
 
 
 class Follower(RobotHRVO):
-    """A follower: the stress control law on the positions received by radio, through HRVO."""
+    """A follower: the stress control law on the positions received by radio, through HRVO.
+
+    It hears every robot of its formation and keeps a heartbeat failure detector. In the law
+    it puts, for a neighbour it takes for crashed, the leader's place in the plan (sent by the
+    other leaders) or, for a follower, its place in the affine image of the nominal shape that
+    the leaders span. It checks every claimed position within reach of its movement sensor: a
+    robot blamed :data:`STRIKES` decisions in a row (:meth:`check_claims`) is taken for a liar;
+    from then on its radio values are ignored, and the follower uses where it sees it
+    (the one robot it sees that no other claim accounts for), else, out of sight, its place in
+    the plan (a leader) or in the affine image (a follower).
+    """
 
     def __init__(self, robot_id: int, tag: str, weights: np.ndarray = WEIGHTS, **kwargs: Any) -> None:
         super().__init__(robot_id, tag, **kwargs)
         self.weights = weights[robot_id]
-        self.heard: dict[int, np.ndarray] = {}
+        self.first = robot_id - robot_id % 7  # the first robot of its formation
+        self.heard: dict[int, np.ndarray] = {}  # the last position each robot of its formation claimed
+        self.plans: dict[int, dict[int, tuple[float, float]]] = {}  # each leader's last word on the others' places
+        self.heartbeats = Heartbeats(7, robot_id % 7, SILENCE)
+        self.seen = np.zeros((0, 2))  # robots detected within VERIFY (m)
+        self.strikes: dict[int, int] = {}  # decisions in a row in which a robot's claim matched nothing seen
+        self.liars: dict[int, np.ndarray | None] = {}  # robots taken for liars, and where last seen
+        self.sensed: dict[int, np.ndarray] = {}  # where it sees liars at this decision
 
-    def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
-        for j, x, y in messages:
+    def update_radio(self, messages: list[Message]) -> Message | None:
+        self.heartbeats.round([beats for _, _, _, beats, _ in messages])
+        for j, x, y, _, plan in messages:
             self.heard[j] = np.array([x, y])
-        return (self.robot_id, self.pos_x, self.pos_y) if self.has_pose else None
+            if plan:
+                self.plans[j] = plan
+        return (self.robot_id, self.pos_x, self.pos_y, self.heartbeats.sent(), {}) if self.has_pose else None
+
+    def update_sensor(self, detections: Any) -> None:
+        """HRVO avoids the robots within ``RANGE``; claims are checked against all detected."""
+        rows = np.asarray(detections, dtype=np.float64).reshape(-1, 4)
+        self.detections = rows[rows[:, 0] <= RANGE]
+        self.seen = rules.seen_positions((self.pos_x, self.pos_y), rows)
+
+    def check_claims(self, here: np.ndarray) -> None:
+        """Take for a liar a robot blamed :data:`STRIKES` decisions in a row; find the liars among
+        the robots seen now.
+
+        Blamed: a robot whose claimed position, close enough to be checked, matches no robot seen;
+        else, when it sees within ``RANGE`` a robot that no claim accounts for, the one robot whose
+        claim lies out of its sight, if only one does (a liar that claims to be far away).
+        """
+        trusted = [j for j in self.heard if j not in self.liars]
+        claims = np.array([self.heard[j] for j in trusted]).reshape(-1, 2)
+        checkable = np.hypot(*(claims - here).T) < VERIFY - MATCH
+        missed = checkable & rules.far_from(claims, self.seen, MATCH)
+        if not missed.any() and (~checkable).sum() == 1 and all(last is not None for last in self.liars.values()):
+            # Robots seen nearby that neither a claim nor a liar found before accounts for.
+            accounted = np.vstack([claims, *self.liars.values()]) if self.liars else claims
+            near = np.hypot(*(self.seen - here).T) <= RANGE
+            if (near & rules.far_from(self.seen, accounted, MATCH)).any():
+                missed = ~checkable
+        for j, blamed in zip(trusted, missed):
+            self.strikes[j] = self.strikes.get(j, 0) + 1 if blamed else 0
+            if self.strikes[j] >= STRIKES:
+                self.liars[j] = None
+        self.sensed = {}
+        if not self.liars:
+            return
+        claims = np.array([claim for j, claim in self.heard.items() if j not in self.liars]).reshape(-1, 2)
+        unclaimed_seen = self.seen[rules.far_from(self.seen, claims, MATCH)]
+        for j, last in self.liars.items():
+            if last is None and len(unclaimed_seen) == 1 and len(self.liars) == 1:
+                self.liars[j] = self.sensed[j] = unclaimed_seen[0]
+            elif last is not None and len(unclaimed_seen):
+                gaps = np.hypot(*(unclaimed_seen - last).T)
+                if gaps.min() < 2 * MATCH:  # the same robot, moved on a little
+                    self.liars[j] = self.sensed[j] = unclaimed_seen[np.argmin(gaps)]
+
+    def positions(self) -> dict[int, np.ndarray]:
+        """Where it takes the robots of its formation to be ``{id: (2,)}`` (m), for the law: what
+        they claim; liars where it sees them; crashed leaders, and lying ones out of sight, where
+        the plan has them (the correct leaders say); the others (crashed followers, lying ones
+        out of sight) at their places in the affine image of the nominal shape that the rest span."""
+        alive = self.heartbeats.alive
+        planned = {
+            k: np.array(place)
+            for j, plan in self.plans.items()
+            if alive[j % 7] and j not in self.liars
+            for k, place in plan.items()
+        }
+        known: dict[int, np.ndarray] = {}
+        for j, claim in self.heard.items():
+            if j in self.liars:
+                if j in self.sensed:
+                    known[j] = self.sensed[j]
+                elif j in planned:
+                    known[j] = planned[j]
+            elif alive[j % 7]:
+                known[j] = claim
+            elif j % 7 < LEADERS:
+                known[j] = planned.get(j, claim)  # a crashed robot stands where it last said
+        unknown = [j for j in self.heard if j not in known]
+        if unknown:
+            image = affine_image({j % 7: p for j, p in known.items()}, [j % 7 for j in unknown])
+            for j in unknown:
+                if j % 7 in image:
+                    known[j] = image[j % 7]
+                elif j not in self.liars:
+                    known[j] = self.heard[j]  # too few to span the image: where it last said
+        return known
 
     def update(self, dxu: np.ndarray) -> None:
         desired = np.zeros(2)
         if self.has_pose:
             here = np.array([self.pos_x, self.pos_y])
-            pull = sum((self.weights[j] * (here - there) for j, there in self.heard.items()), np.zeros(2))
+            self.check_claims(here)
+            pull = sum(
+                (self.weights[j] * (here - there) for j, there in self.positions().items() if self.weights[j]),
+                np.zeros(2),
+            )
             desired = -GAIN * pull
             speed = math.hypot(desired[0], desired[1])
             if speed > self.v_max:
@@ -243,7 +481,9 @@ class AffineFormation(Experiment):
     default_n = 7
     success = (
         "follower error below 0.05 m before the first bars, no robot touching a bar, zero violations, "
-        "through both passes and back to the nominal shape"
+        "through both passes and back to the nominal shape; under faults, the correct robots hold the "
+        "formation of the survivors (a crashed leader counts at its planned place), no correct robot "
+        "touches a bar, and a crashed robot is an obstacle where it stopped (collisions with it count)"
     )
 
     def check(self, n: int, backend: str) -> None:
@@ -261,25 +501,31 @@ class AffineFormation(Experiment):
         self.weights = np.kron(np.eye(n // 7), WEIGHTS)
         self.leader = np.arange(n) % 7 < LEADERS
         self.passes = schedule()
-        adjacency = (self.weights != 0).astype(float)
+        # Every robot hears its whole formation (the law uses the weighted neighbours only): the
+        # heartbeats, the leaders' plans and the claims a follower checks come from all.
+        adjacency = np.kron(np.eye(n // 7), np.ones((7, 7)))
         for i in range(n):
             robot: Leader | Follower
             if self.leader[i]:
-                robot = Leader(i, f"leader_{i}", arena=self.arena)
-                robot.goal = robot.start = formation("nominal")[i % 7] + self.centres[i // 7]
-                robot.head_for(robot.goal + (SHIFT, 0.0))
+                robot = Leader(i, f"leader_{i}", safety=SAFETY, arena=self.arena)
+                robot.plan = formation("nominal") + self.centres[i // 7]
+                robot.goals = robot.start = robot.plan[:LEADERS]
+                robot.head_for(robot.plan + (SHIFT, 0.0))
             else:
                 robot = Follower(i, f"follower_{i}", self.weights, safety=SAFETY, arena=self.arena)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             radio = GraphRadio(i, f"radio_{i}", robot.update_radio, adjacency)
+            # One range for all, so that the world builds one neighbour index per step.
+            movement = MovementSensor(i, f"movement_{i}", robot.update_sensor, range=VERIFY)
+            look = movement.update
+            if isinstance(robot, Leader):
+                robot.sensor, look = movement, robot.watch
             entries = [
                 {"delay": 2, "tag": "odom", "call": odometry.update},
+                {"delay": 3, "tag": "movement", "call": look},
                 {"delay": 4, "tag": "radio", "call": radio.update},
                 {"delay": 4, "tag": "robot", "call": robot.update},
             ]
-            if isinstance(robot, Follower):
-                movement = MovementSensor(i, f"movement_{i}", robot.update_sensor, range=0.6)
-                entries.insert(1, {"delay": 3, "tag": "movement", "call": movement.update})
             create_timer(i, 10 + i % 7, entries)
             self.robots.append(robot)
         self.bars: list[Obstacle] = []
@@ -307,26 +553,43 @@ class AffineFormation(Experiment):
         """Send every leader towards its place in ``shape`` (the leaders know the plan)."""
         for robot in self.robots:
             if isinstance(robot, Leader):
-                robot.head_for(formation(shape)[robot.robot_id % 7] + self.centres[robot.robot_id // 7])
+                robot.head_for(formation(shape) + self.centres[robot.robot_id // 7])
 
     def after_step(self, step: int, poses: np.ndarray) -> None:
         for bar in self.bars:
             bar.step(self.sim.time_step)
-        self.targets = follower_positions(poses[:2].T, self.leader)
-        self.error = float(np.linalg.norm(poses[:2, ~self.leader].T - self.targets, axis=1).max())
+        correct = self.correct
+        self.targets = follower_positions(self.anchors(poses))
+        errors = np.linalg.norm(poses[:2, ~self.leader].T - self.targets, axis=1)
+        self.error = float(errors[correct[~self.leader]].max(initial=0.0))
         if step == self.passes[0][0]:
             self.settled_error = self.error
         if self.bars:
             self.deformed_error = max(self.deformed_error, self.error)
-            self.contacts += bool(touching(self.bars, poses[:2].T, GRITSBOT.radius).any())
+            self.contacts += bool(touching(self.bars, poses[:2, correct].T, GRITSBOT.radius).any())
+
+    def anchors(self, poses: np.ndarray) -> np.ndarray:
+        """The leaders' positions ``(n, 2)`` (rows of followers unused) that the survivors' formation
+        is the affine image of: where the leaders are, and for a crashed leader its place in the
+        plan (what the surviving leaders of its formation stand in for)."""
+        anchors = poses[:2].T.copy()
+        state = self.world.fault_state
+        if state is None:
+            return anchors
+        for robot in self.robots:
+            if isinstance(robot, Leader) and not state.crashed[robot.robot_id]:
+                first = robot.robot_id - robot.index
+                crashed = state.crashed[first : first + LEADERS]
+                anchors[first : first + LEADERS][crashed] = robot.aims[crashed]
+        return anchors
 
     def done(self, step: int, poses: np.ndarray) -> bool:
         return step >= self.steps(self.n) and self.contacts == 0 and self.settled_error < TOLERANCE
 
     def measures(self) -> dict[str, Any]:
-        """The followers' error to their affine target just before the first bars set off and at
-        the end (m, largest over the formations), the iterations in which a robot touched a bar,
-        and the largest error while bars are on the arena."""
+        """The correct followers' error to their affine target just before the first bars set off
+        and at the end (m, largest over the formations), the iterations in which a correct robot
+        touched a bar, and the largest error while bars are on the arena."""
         return {
             "error_before_bars": self.settled_error,
             "error_end": self.error,

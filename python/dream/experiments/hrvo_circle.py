@@ -43,6 +43,7 @@ import numpy as np
 from dream import kernels, rules
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
+from dream.heartbeats import Heartbeats
 from dream.radios import RangeRadio
 from dream.robot import GUARD_HORIZON, GUARD_MARGIN, RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
@@ -224,9 +225,7 @@ class CircleRobot(RobotHRVO):
         self.goals = np.asarray(goals, dtype=np.float64)
         self.current_goal = self.goals[0]
         self.robot_states = np.zeros(n, dtype=np.int64)  # what this robot knows of every robot's state
-        self.beats = np.zeros(n, dtype=np.int64)  # the latest heartbeat it knows of each robot (0: none yet)
-        self.news = np.zeros(n, dtype=np.int64)  # its own radio round in which each heartbeat last rose
-        self.rounds = 0  # its radio rounds so far: its own heartbeat
+        self.heartbeats = Heartbeats(n, robot_id, SILENCE)
         self.suspects = False  # whether it takes some robot for crashed
         self.state = 0  # goals reached so far
         self.change_state = True  # the current goal has not been reached yet
@@ -238,27 +237,20 @@ class CircleRobot(RobotHRVO):
         """Merge the states and heartbeats heard (element-wise max); move on when every robot not
         taken for crashed has reached this robot's state. Sends ``(states, heartbeats)``.
 
-        A heartbeat failure detector, so that survivors stop waiting for crashed robots: each
-        robot counts its radio rounds as its heartbeat, and the highest heartbeat of each robot
-        spreads like the states. A robot heard from once whose heartbeat has not risen for
-        :data:`SILENCE` of this robot's rounds is taken for crashed (its radio fell silent).
-        Rounds are local, so no clock is shared.
+        A heartbeat failure detector (:class:`~dream.heartbeats.Heartbeats`, silent for
+        :data:`SILENCE` of this robot's rounds) lets the survivors stop waiting for crashed robots.
         """
-        self.rounds += 1
         if messages:
             np.maximum(self.robot_states, np.max([states for states, _ in messages], axis=0), out=self.robot_states)
-            latest = np.max([beats for _, beats in messages], axis=0)
-            rose = latest > self.beats
-            self.beats[rose], self.news[rose] = latest[rose], self.rounds
+        self.heartbeats.round([beats for _, beats in messages])
         self.robot_states[self.robot_id] = self.state
-        self.beats[self.robot_id], self.news[self.robot_id] = self.rounds, self.rounds
-        alive = (self.beats == 0) | (self.rounds - self.news <= SILENCE)
+        alive = self.heartbeats.alive
         self.suspects = not alive.all()
         level = bool(np.all(self.robot_states[alive] == self.state))
         if rules.moves_on(self.state, level, self.change_state, len(self.goals)):
             self.current_goal = self.goals[self.state]
             self.change_state = True
-        return self.robot_states, self.beats
+        return self.robot_states, self.heartbeats.beats
 
     def goal_taken(self, position: np.ndarray) -> bool:
         """Whether a robot standing still (one taken for crashed stops where it is) sits within
@@ -267,7 +259,7 @@ class CircleRobot(RobotHRVO):
         rows = np.asarray(self.detections)
         if not len(rows) or math.dist(position, self.current_goal) > self.safety + ARRIVAL:
             return False
-        others = position - rows[:, :1] * np.column_stack((np.cos(rows[:, 1]), np.sin(rows[:, 1])))
+        others = rules.seen_positions(position, rows)
         still = np.hypot(rows[:, 2], rows[:, 3]) < STILL
         return bool(np.any(still & (np.hypot(*(others - self.current_goal).T) < self.safety)))
 

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from dream import kernels
+from dream import kernels, rules
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
 from dream.obstacles import Obstacle, touching
@@ -136,9 +136,7 @@ class CoverageRobot(Robot):
         self.obstacle_points = closest_points
 
     def update_sensor(self, detections: np.ndarray) -> None:
-        # `angle` points from the detected robot to this one.
-        d, angle = detections[:, 0], detections[:, 1]
-        self.seen = np.column_stack((self.pos_x - d * np.cos(angle), self.pos_y - d * np.sin(angle)))
+        self.seen = rules.seen_positions((self.pos_x, self.pos_y), detections)
 
     def guard(self) -> None:
         """Cells keep the robots apart, but a unicycle drives along its heading, not straight to
@@ -149,10 +147,7 @@ class CoverageRobot(Robot):
 
     def silent(self) -> np.ndarray:
         """Positions ``(k, 2)`` of the robots seen that no message accounts for."""
-        if not len(self.others):
-            return self.seen
-        gaps = np.hypot(*(self.seen[:, None, :] - self.others[None, :, :]).transpose(2, 0, 1))
-        return self.seen[gaps.min(axis=1, initial=np.inf) > SAME_ROBOT]
+        return self.seen[rules.far_from(self.seen, self.others, SAME_ROBOT)]
 
     def update(self, dxu: np.ndarray) -> None:
         self.dxi = np.zeros(2)
