@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
 class Heartbeats:
@@ -35,11 +36,12 @@ class Heartbeats:
         self.news = np.zeros(n, dtype=np.int64)
         self.rounds = 0
 
-    def round(self, heard: Sequence[np.ndarray]) -> None:
-        """One radio round: merge the heartbeat vectors ``heard`` ``(n,)`` each, and beat."""
+    def round(self, heard: Sequence[ArrayLike]) -> None:
+        """One radio round: merge the heartbeat vectors ``heard`` ``(n,)`` each (arrays or
+        :meth:`sent` tuples), and beat."""
         self.rounds += 1
         if len(heard):
-            latest = np.max(heard, axis=0)
+            latest = np.max(np.asarray(heard), axis=0)
             rose = latest > self.beats
             self.beats[rose], self.news[rose] = latest[rose], self.rounds
         self.beats[self.me], self.news[self.me] = self.rounds, self.rounds

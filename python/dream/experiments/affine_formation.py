@@ -385,7 +385,7 @@ class Follower(RobotHRVO):
         missed = checkable & rules.far_from(claims, self.seen, MATCH)
         if not missed.any() and (~checkable).sum() == 1 and all(last is not None for last in self.liars.values()):
             # Robots seen nearby that neither a claim nor a liar found before accounts for.
-            accounted = np.vstack([claims, *self.liars.values()]) if self.liars else claims
+            accounted = np.vstack([claims, *(p for p in self.liars.values() if p is not None)])
             near = np.hypot(*(self.seen - here).T) <= RANGE
             if (near & rules.far_from(self.seen, accounted, MATCH)).any():
                 missed = ~checkable
