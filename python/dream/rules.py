@@ -215,3 +215,79 @@ def closing_in(offsets: Any, closing: Any, distance: float, horizon: float) -> n
     when = np.clip(-np.einsum("ij,ij->i", offsets, closing) / np.where(speed2 > 0, speed2, 1.0), 0.0, horizon)
     nearest = np.hypot(*(offsets + closing * when[:, None]).T)
     return nearest < np.minimum(distance, np.hypot(*offsets.T))
+
+
+def line_places(senders: Any, receivers: Any, x: Any, y: Any, spacing: float) -> FloatArray:
+    """Where each line-consensus message puts its receiver ``(m, 2)`` (m): ``spacing`` per id
+    difference right of the sender's ``x`` (robot i belongs ``(j - i) spacing`` right of robot
+    j), in the sender's row ``y``. ``senders``, ``receivers``, ``x``, ``y``: ``(m,)`` or scalars."""
+    offset = (np.asarray(senders) - np.asarray(receivers)) * spacing
+    return np.stack(np.broadcast_arrays(np.asarray(x, dtype=np.float64) + offset, np.asarray(y, dtype=np.float64)), -1)
+
+
+def consensus(values: Any, rows: Any, count: int) -> FloatArray:
+    """The consensus update: each of ``count`` robots takes the mean of the values ``(m, 2)`` it
+    received (``rows`` ``(m,)``: the receiving robot's row, values in the order received);
+    ``(count, 2)``, NaN for a robot that received nothing."""
+    values = np.asarray(values, dtype=np.float64).reshape(-1, 2)
+    rows = np.asarray(rows, dtype=np.int64)
+    heard = np.bincount(rows, minlength=count).astype(np.float64)
+    sums = np.column_stack([np.bincount(rows, weights=values[:, k], minlength=count) for k in range(2)])
+    with np.errstate(invalid="ignore"):
+        return sums / heard[:, None]
+
+
+def line_goal(
+    positions: Any, targets: Any, travelling: Any, spacing: float, lane: float
+) -> tuple[FloatArray, np.ndarray]:
+    """Where line-consensus robots head for their consensus ``targets``, and whether they travel.
+
+    With a passing lane (``lane`` > 0 m) a robot whose place is more than two spacings away along
+    x travels (until it is within one): it heads for the target's x in its own row, at least
+    ``lane`` off the line (above it when heading right, below when heading left, if closer). A
+    robot that does not travel heads for its target.
+
+    Parameters
+    ----------
+    positions, targets : (n, 2) or (2,) array_like
+        Where the robots are and their consensus targets (m); a NaN target leaves the robot's
+        ``travelling`` as it was.
+    travelling : (n,) or () bool array_like
+        Whether each robot travelled at its last decision.
+
+    Returns
+    -------
+    goals : (n, 2) or (2,) ndarray
+    travelling : (n,) or () bool ndarray
+    """
+    p = np.asarray(positions, dtype=np.float64)
+    t = np.asarray(targets, dtype=np.float64)
+    dx = t[..., 0] - p[..., 0]
+    away = np.abs(dx)
+    travelling = np.where((lane > 0) & (away > 2 * spacing), True, np.where(away < spacing, False, travelling))
+    off_line = p[..., 1] - t[..., 1]
+    off_line = np.where(np.abs(off_line) < lane, np.copysign(lane, dx), off_line)
+    beside = np.stack((t[..., 0], t[..., 1] + off_line), axis=-1)
+    return np.where(travelling[..., None], beside, t), travelling
+
+
+def toward(positions: Any, goals: Any, gain: float, v_max: float) -> FloatArray:
+    """``gain (goals - positions)`` ``(n, 2)`` or ``(2,)`` (m/s), scaled down to ``v_max`` when faster."""
+    desired = gain * (np.asarray(goals, dtype=np.float64) - np.asarray(positions, dtype=np.float64))
+    speed = np.hypot(desired[..., 0], desired[..., 1])
+    return desired * np.minimum(1.0, v_max / np.maximum(speed, 1e-300))[..., None]
+
+
+def sent_row(own_y: Any, target_y: Any, travelling: Any) -> np.ndarray:
+    """The y a line-consensus robot sends: its target's while it travels beside the line (so that
+    its detour does not pull the others' line), else its own. A NaN target: its own."""
+    target_y = np.asarray(target_y, dtype=np.float64)
+    return np.where(np.asarray(travelling, dtype=bool) & np.isfinite(target_y), target_y, own_y)
+
+
+def settles(desired: Any, nearest: Any, fine: float, clearance: float) -> np.ndarray:
+    """Whether a robot moves at ``desired`` ``(n, 2)`` or ``(2,)`` (m/s) without HRVO: slower than
+    ``fine`` (m/s) with no robot nearer than ``clearance`` (m; ``nearest`` ``(n,)`` or ``()``,
+    inf when none is detected). See :func:`dream.experiments.line_consensus.settle_or_steer`."""
+    desired = np.asarray(desired, dtype=np.float64)
+    return (np.hypot(desired[..., 0], desired[..., 1]) < fine) & (np.asarray(nearest) >= clearance)
