@@ -291,3 +291,30 @@ def settles(desired: Any, nearest: Any, fine: float, clearance: float) -> np.nda
     inf when none is detected). See :func:`dream.experiments.line_consensus.settle_or_steer`."""
     desired = np.asarray(desired, dtype=np.float64)
     return (np.hypot(desired[..., 0], desired[..., 1]) < fine) & (np.asarray(nearest) >= clearance)
+
+
+def approach(positions: Any, centroids: Any, gain: float, v_max: float, arrival: float) -> FloatArray:
+    """Coverage: ``gain`` times the way to the cell's centroid ``(n, 2)`` or ``(2,)`` (m/s), no
+    faster than ``v_max``; zero within ``arrival`` (m) of it."""
+    offset = np.asarray(centroids, dtype=np.float64) - np.asarray(positions, dtype=np.float64)
+    distance = np.hypot(offset[..., 0], offset[..., 1])
+    scale = np.minimum(1.0, v_max / (gain * np.maximum(distance, 1e-300)))
+    return np.where((distance >= arrival)[..., None], gain * offset * scale[..., None], 0.0)
+
+
+def unheard(seen: Any, seen_rows: Any, heard: Any, heard_rows: Any, same: float) -> np.ndarray:
+    """Which robots a coverage robot sees ``seen`` ``(k, 2)`` (m) no message accounts for: farther
+    than ``same`` (m) from every position ``heard`` ``(m, 2)`` from the robot's radio. Several
+    robots at once: ``seen_rows`` ``(k,)`` and ``heard_rows`` ``(m,)`` say whose each is."""
+    seen = np.asarray(seen, dtype=np.float64).reshape(-1, 2)
+    heard = np.asarray(heard, dtype=np.float64).reshape(-1, 2)
+    seen_rows, heard_rows = np.asarray(seen_rows), np.asarray(heard_rows)
+    order = np.argsort(heard_rows, kind="stable")
+    starts = np.searchsorted(heard_rows[order], seen_rows, side="left")
+    counts = np.searchsorted(heard_rows[order], seen_rows, side="right") - starts
+    pairs = np.repeat(np.arange(len(seen)), counts)
+    others = order[np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+    gaps = np.hypot(seen[pairs, 0] - heard[others, 0], seen[pairs, 1] - heard[others, 1])
+    nearest = np.full(len(seen), np.inf)
+    np.minimum.at(nearest, pairs, gaps)
+    return nearest > same

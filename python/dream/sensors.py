@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from dream._checks import FloatArray, RobotCallback, as_array, check_nonnegative, check_robot_id
+from dream.obstacles import sensed
 from dream.world import current_world
 
 if TYPE_CHECKING:
@@ -185,10 +186,5 @@ class ObstacleSensor(Sensor):
     def update(self, x: Any) -> None:
         """Measure from the attached robot's pose in ``x`` ``(3, n)`` and call the callback."""
         super().update(x)
-        here = np.array([self.pos_x, self.pos_y])
-        found = [
-            c
-            for c in (o.closest_point(here) for o in self.obstacles)
-            if c is not None and np.hypot(*(c - here)) <= self.range
-        ]
-        self._report(np.array(found).reshape(-1, 2))
+        found = sensed(self.obstacles, [self.pos_x, self.pos_y], self.range)[0]
+        self._report(found[~np.isnan(found[:, 0])])

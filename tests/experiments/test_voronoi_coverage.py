@@ -29,6 +29,29 @@ def test_voronoi_coverage_with_moving_obstacles_keeps_clear_of_the_static_ones(s
     assert result.measures["cost_end"] < result.measures["cost_start"]
 
 
+@pytest.mark.parametrize(("n", "seed", "moving"), [(15, 3, False), (40, 1, True)])
+def test_voronoi_coverage_swarm_mode_moves_as_the_robots_do(n, seed, moving):
+    # Swarm mode keeps every robot's timer rates, the in-step order of the per-robot timers (a
+    # radio hears the position a robot of lower id sent in the same step), what each robot's
+    # sensors read and when, and the cell each robot computes from what it knows alone: the
+    # trajectories agree to rounding, whole runs long. 15: the thesis's team in the Robotarium
+    # (coming to rest); 40: a grown arena with wandering obstacles.
+    robots = vc.run(n=n, seed=seed, backend="fast", moving_obstacles=moving, trace=True)
+    swarm = vc.run(n=n, seed=seed, backend="fast", moving_obstacles=moving, swarm=True, trace=True)
+    assert robots.success and swarm.success and swarm.swarm
+    assert swarm.completed_step == robots.completed_step
+    np.testing.assert_allclose(swarm.trace, robots.trace, rtol=0, atol=1e-9)
+    assert swarm.measures == robots.measures
+
+
+def test_voronoi_coverage_swarm_mode_frames_come_from_its_arrays():
+    frames = []
+    vc.run(n=15, seed=0, backend="fast", swarm=True, steps=40, record=frames.append)
+    last = frames[-1]
+    assert last.goals.shape == (15, 2) and np.isfinite(last.goals).all()
+    assert len(last.cells) == 15 and all(len(cell) >= 3 for cell in last.cells)
+
+
 def test_coverage_cost_is_lower_for_spread_robots():
     packed = vc.corner_poses(15, np.random.default_rng(0))[:2]
     xs, ys = np.meshgrid(np.linspace(-1.3, 1.3, 5), np.linspace(-0.7, 0.7, 3))
