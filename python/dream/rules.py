@@ -305,16 +305,29 @@ def approach(positions: Any, centroids: Any, gain: float, v_max: float, arrival:
 def unheard(seen: Any, seen_rows: Any, heard: Any, heard_rows: Any, same: float) -> np.ndarray:
     """Which robots a coverage robot sees ``seen`` ``(k, 2)`` (m) no message accounts for: farther
     than ``same`` (m) from every position ``heard`` ``(m, 2)`` from the robot's radio. Several
-    robots at once: ``seen_rows`` ``(k,)`` and ``heard_rows`` ``(m,)`` say whose each is."""
+    robots at once: ``seen_rows`` ``(k,)`` and ``heard_rows`` ``(m,)`` (ints) say whose each is.
+
+    Only positions in the same or a neighbouring square of side ``same`` can be that close, so
+    those are the only pairs measured (found by sorting), not every seen-heard pair.
+    """
     seen = np.asarray(seen, dtype=np.float64).reshape(-1, 2)
     heard = np.asarray(heard, dtype=np.float64).reshape(-1, 2)
-    seen_rows, heard_rows = np.asarray(seen_rows), np.asarray(heard_rows)
-    order = np.argsort(heard_rows, kind="stable")
-    starts = np.searchsorted(heard_rows[order], seen_rows, side="left")
-    counts = np.searchsorted(heard_rows[order], seen_rows, side="right") - starts
-    pairs = np.repeat(np.arange(len(seen)), counts)
-    others = order[np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
-    gaps = np.hypot(seen[pairs, 0] - heard[others, 0], seen[pairs, 1] - heard[others, 1])
     nearest = np.full(len(seen), np.inf)
-    np.minimum.at(nearest, pairs, gaps)
+    if len(seen) and len(heard):
+        side = same * (1 + 1e-9)
+        squares = np.floor(np.vstack((seen, heard)) / side).astype(np.int64)
+        squares -= squares.min(axis=0) - 1
+        span = squares.max(axis=0) + 2
+        rows = np.concatenate((seen_rows, heard_rows)).astype(np.int64)
+        keys = (rows * span[0] + squares[:, 0]) * span[1] + squares[:, 1]
+        mine, theirs = keys[: len(seen)], keys[len(seen) :]
+        order = np.argsort(theirs, kind="stable")
+        ordered = theirs[order]
+        for shift in (dx * span[1] + dy for dx in (-1, 0, 1) for dy in (-1, 0, 1)):
+            starts = np.searchsorted(ordered, mine + shift, side="left")
+            counts = np.searchsorted(ordered, mine + shift, side="right") - starts
+            pairs = np.repeat(np.arange(len(seen)), counts)
+            others = order[np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+            gaps = np.hypot(seen[pairs, 0] - heard[others, 0], seen[pairs, 1] - heard[others, 1])
+            np.minimum.at(nearest, pairs, gaps)
     return nearest > same

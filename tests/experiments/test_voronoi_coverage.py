@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from dream import Obstacle, ObstacleSensor
+from dream import Obstacle, ObstacleSensor, rules
 from dream.experiments import voronoi_coverage as vc
 from dream.specs import ROBOTARIUM
 
@@ -106,3 +106,18 @@ def test_voronoi_coverage_thousand_robots_spread_without_collision():
     assert result.n == 1000 and result.collisions == 0
     assert result.measures["static_contacts"] == 0
     assert result.measures["cost_end"] < result.measures["cost_start"]
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_unheard_matches_every_pair_compared(seed):
+    rng = np.random.default_rng(seed)
+    k, m, robots = rng.integers(0, 30), rng.integers(0, 60), rng.integers(1, 5)
+    seen, heard = rng.uniform(-1, 1, (k, 2)), rng.uniform(-1, 1, (m, 2))
+    close = min(k, m)
+    heard[:close] = seen[:close] + rng.normal(scale=0.05, size=(close, 2))  # some within reach
+    seen_rows, heard_rows = rng.integers(0, robots, k), rng.integers(0, robots, m)
+    want = [
+        not np.any((heard_rows == row) & (np.hypot(*(point - heard).T) <= vc.SAME_ROBOT))
+        for point, row in zip(seen, seen_rows, strict=True)
+    ]
+    np.testing.assert_array_equal(rules.unheard(seen, seen_rows, heard, heard_rows, vc.SAME_ROBOT), want)
