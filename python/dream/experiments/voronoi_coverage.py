@@ -409,22 +409,28 @@ class VoronoiCoverage(Experiment):
         rank = np.empty(len(who), dtype=np.int64)
         rank[order] = np.arange(len(who)) - first
         batch = rank * 4 + parity
+        # Robots by batch, each batch a run of them, their clipping points in the same order.
+        order = np.argsort(batch, kind="stable")
         indptr = np.searchsorted(rows, np.arange(len(who) + 1))
+        counts = np.diff(indptr)[order]
+        clips = clips[np.repeat(indptr[order] - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+        ptr = np.concatenate(([0], np.cumsum(counts)))
+        edges = np.flatnonzero(np.diff(batch[order], prepend=-1, append=-1))
         centroids = np.empty((len(who), 2))
-        for b in np.unique(batch):
-            mine = np.flatnonzero(batch == b)
-            counts = indptr[mine + 1] - indptr[mine]
-            picks = np.repeat(indptr[mine] - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
+        polygons = []
+        for start, stop in zip(edges[:-1], edges[1:], strict=True):
+            mine = order[start:stop]
             cells = kernels.voronoi_cells(
                 here[mine],
                 radius=CELL_RADIUS,
                 bounds=self.arena.bounds,
-                virtual=(np.concatenate(([0], np.cumsum(counts))), clips[picks]),
+                virtual=(ptr[start : stop + 1] - ptr[start], clips[ptr[start] : ptr[stop]]),
                 polygons=True,
             )
             centroids[mine] = cells.centroids
-            for i, polygon in zip(who[mine], np.split(cells.vertices, cells.offsets[1:-1]), strict=True):
-                self.team.cells[i] = polygon
+            polygons += np.split(cells.vertices, cells.offsets[1:-1])
+        for i, polygon in zip(who[order], polygons, strict=True):
+            self.team.cells[i] = polygon
         return centroids
 
     def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
