@@ -45,7 +45,7 @@ from dream import kernels, rules, timers
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
 from dream.radios import GraphRadio
-from dream.robot import GUARD_MARGIN, RobotHRVO, stopping
+from dream.robot import GUARD_HORIZON, GUARD_MARGIN, RobotHRVO, stopping
 from dream.sensors import MovementSensor, OdometrySensor, seen_velocity
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec
 from dream.world import create_timer
@@ -232,10 +232,38 @@ class LineRobot(RobotHRVO):
         self.command(dxu)
 
 
+class Nearby:
+    """Who is within ``radius`` (m) of some robots, step after step (swarm mode), as
+    :func:`dream.kernels.neighbours` answers (the same distances, ``sqrt(dx^2 + dy^2)``, and
+    the same inclusive test), from one index of a larger radius rebuilt every ``every`` steps:
+    robots at most ``speed`` (m/s) fast, ``dt`` (s) a step, cannot close the margin between."""
+
+    def __init__(self, radius: float, speed: float, dt: float, every: int = 4) -> None:
+        self.radius, self.every = radius, every
+        self.reach = radius + 2 * speed * dt * every * 1.01
+        self.built = -every
+        self.index = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64))
+
+    def rows(self, step: int, x: np.ndarray, who: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """CSR ``(indptr (n + 1,), indices, distances)`` of the robots within the radius of robots
+        ``who`` ``(k,)`` (ids, increasing; other rows empty) at poses ``x`` ``(3, n)``."""
+        if step - self.built >= self.every:
+            self.index, self.built = kernels.neighbours(x[:2].T, self.reach)[:2], step
+        indptr, indices = self.index
+        starts, counts = indptr[who], np.diff(indptr)[who]
+        owners = np.repeat(who, counts)
+        others = indices[np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+        dx, dy = x[0, others] - x[0, owners], x[1, others] - x[1, owners]
+        distances = np.sqrt(dx * dx + dy * dy)
+        near = distances <= self.radius
+        ptr = np.concatenate(([0], np.cumsum(np.bincount(owners[near], minlength=x.shape[1]))))
+        return ptr, others[near], distances[near]
+
+
 class Sight(NamedTuple):
     """What the movement sensors of one step see (swarm mode): the poses ``(3, n)``, every robot's
-    command before the step's decisions ``(2, n)``, and who is within :data:`SENSING` of whom
-    (:func:`dream.kernels.neighbours`)."""
+    command before the step's decisions ``(2, n)``, and who is within :data:`SENSING` of the
+    robots reading their sensor in that step (CSR, :class:`Nearby`)."""
 
     poses: np.ndarray
     before: np.ndarray
@@ -274,7 +302,6 @@ class Detections:
     known: np.ndarray
     chained: np.ndarray
     towards: np.ndarray = field(init=False)
-    offsets: np.ndarray = field(init=False)
 
     @classmethod
     def join(cls, parts: list[tuple[np.ndarray, ...]]) -> Detections:
@@ -283,11 +310,14 @@ class Detections:
         return cls(*(np.concatenate(values, axis=-1) for values in zip(empty, *parts)))
 
     def __post_init__(self) -> None:
-        # Where each detected robot is, from the detecting one (as HRVO reads a detection), and the
-        # detecting one's position less the detected one's (as the motion guard reads it).
-        distance = self.distances[:, None]
-        self.towards = distance * np.column_stack((np.cos(self.angles + np.pi), np.sin(self.angles + np.pi)))
-        self.offsets = distance * np.column_stack((np.cos(self.angles), np.sin(self.angles)))
+        # Where each detected robot is, from the detecting one, as HRVO reads a detection.
+        towards = self.angles + np.pi
+        self.towards = self.distances[:, None] * np.column_stack((np.cos(towards), np.sin(towards)))
+
+    def offsets(self, rows: np.ndarray) -> np.ndarray:
+        """The detecting robot's position less the detected one's ``(k, 2)``, for detections
+        ``rows`` ``(k,)``, as the motion guard reads a detection."""
+        return self.distances[rows, None] * np.column_stack((np.cos(self.angles[rows]), np.sin(self.angles[rows])))
 
     def velocity(self, commands: np.ndarray, rows: np.ndarray | slice = slice(None)) -> np.ndarray:
         """The velocities ``(m, 2)`` of the detected robots (of ``rows``) as the sensor estimates
@@ -420,7 +450,10 @@ class LineConsensus(Experiment):
         team = self.team
         # What the movement sensors of this step see: the poses, the commands before this step's
         # decisions, and who is in range (the last MOVEMENT_GAP steps are kept for later decisions).
-        self.sights[step] = Sight(x, self.dxu.copy(), *kernels.neighbours(x[:2].T, SENSING))
+        if step == 0:  # no robot drives faster than its simulator lets it
+            self.nearby = Nearby(SENSING, GRITSBOT.within(self.sim.spec).v_max, self.sim.time_step)
+        looking = np.flatnonzero(timers.due(step, team.delays, MOVEMENT_GAP))
+        self.sights[step] = Sight(x, self.dxu.copy(), *self.nearby.rows(step, x, looking))
         self.sights.pop(step - MOVEMENT_GAP, None)
         reading = timers.due(step, team.delays, ODOM_GAP)
         team.pose[:, reading] = x[:, reading]
@@ -494,6 +527,9 @@ class LineConsensus(Experiment):
         near = min(GRITSBOT.diameter + GUARD_MARGIN, SAFETY)
         velocity = seen.velocity(commands)
         chained = np.flatnonzero(seen.chained)
+        # Only detections this close can stop a robot (robot.stopping): the guard reads no others.
+        close = np.flatnonzero(seen.distances < near + limits.v_max * GUARD_HORIZON + 1e-9)
+        offsets = seen.offsets(close)
         todo = np.ones(len(who), dtype=bool)
         while todo.any():
             velocity[chained] = seen.velocity(commands, chained)
@@ -503,7 +539,9 @@ class LineConsensus(Experiment):
             dxi = np.where(settle[:, None], desired, chosen)[todo]
             new = kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, team.pose[:, who[todo]]), limits)
             local = np.cumsum(todo) - 1  # position of each robot of `who` among those of `todo`
-            new[0, stopping(new[0], heading[todo], local[seen.owners[pairs]], seen.offsets[pairs], near)] = 0.0
+            guarded = todo[seen.owners[close]]
+            owners = local[seen.owners[close[guarded]]]
+            new[0, stopping(new[0], heading[todo], owners, offsets[guarded], near)] = 0.0
             changed = np.zeros(n, dtype=bool)
             changed[who[todo]] = np.any(new != commands[:, who[todo]], axis=0)
             commands[:, who[todo]] = new
