@@ -448,10 +448,10 @@ class LineConsensus(Experiment):
         of each robot's timer): odometry, a radio round (:meth:`_talk`), a decision (:meth:`_decide`);
         a robot that does not decide keeps its last command."""
         team = self.team
-        # What the movement sensors of this step see: the poses, the commands before this step's
-        # decisions, and who is in range (the last MOVEMENT_GAP steps are kept for later decisions).
         if step == 0:  # no robot drives faster than its simulator lets it
             self.nearby = Nearby(SENSING, GRITSBOT.within(self.sim.spec).v_max, self.sim.time_step)
+        # What the movement sensors of this step see: the poses, the commands before this step's
+        # decisions, and who is in range (the last MOVEMENT_GAP steps are kept for later decisions).
         looking = np.flatnonzero(timers.due(step, team.delays, MOVEMENT_GAP))
         self.sights[step] = Sight(x, self.dxu.copy(), *self.nearby.rows(step, x, looking))
         self.sights.pop(step - MOVEMENT_GAP, None)
