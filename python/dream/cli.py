@@ -197,7 +197,7 @@ def _list(source: str | None) -> int:
             print(f"{name:<18} {'swarm' if cls.has_swarm_mode else '':<6} {_summary(cls)}")
         print(
             "\n`dream list NAME` shows an experiment's parameters; `dream run FILE.py` runs your own;"
-            "\nswarm: it also runs in swarm mode (`dream run NAME --swarm`)."
+            "\n`swarm`: it also runs in swarm mode (`dream run NAME --swarm`)."
         )
         return 0
     cls = _experiment(source)
