@@ -11,6 +11,7 @@ Units: metres, metres per second.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -228,13 +229,23 @@ def line_places(senders: Any, receivers: Any, x: Any, y: Any, spacing: float) ->
 def consensus(values: Any, rows: Any, count: int) -> FloatArray:
     """The consensus update: each of ``count`` robots takes the mean of the values ``(m, 2)`` it
     received (``rows`` ``(m,)``: the receiving robot's row, values in the order received);
-    ``(count, 2)``, NaN for a robot that received nothing."""
+    ``(count, 2)``, NaN for a robot that received nothing.
+
+    Robots with as many messages are averaged together, each row as ``numpy.mean`` averages one
+    robot's list (pairwise summation), so that a robot and the swarm round alike.
+    """
     values = np.asarray(values, dtype=np.float64).reshape(-1, 2)
     rows = np.asarray(rows, dtype=np.int64)
-    heard = np.bincount(rows, minlength=count).astype(np.float64)
-    sums = np.column_stack([np.bincount(rows, weights=values[:, k], minlength=count) for k in range(2)])
-    with np.errstate(invalid="ignore"):
-        return sums / heard[:, None]
+    order = np.argsort(rows, kind="stable")
+    heard = np.bincount(rows, minlength=count)
+    starts = np.concatenate(([0], np.cumsum(heard)))[:-1]
+    out = np.full((count, 2), np.nan)
+    for size in np.unique(heard[heard > 0]):
+        robots = np.flatnonzero(heard == size)
+        picks = order[starts[robots, None] + np.arange(size)]  # (robots, size), in the order received
+        out[robots, 0] = values[picks, 0].mean(axis=1)
+        out[robots, 1] = values[picks, 1].mean(axis=1)
+    return out
 
 
 def line_goal(
@@ -271,10 +282,21 @@ def line_goal(
     return np.where(travelling[..., None], beside, t), travelling
 
 
+def length(vectors: Any) -> FloatArray:
+    """Lengths ``(n,)`` or ``()`` of ``vectors`` ``(n, 2)`` or ``(2,)``, rounded as :func:`math.hypot`
+    rounds them (which can differ from ``numpy.hypot`` in the last bit): a robot's rules and the
+    swarm's then round alike, and as the per-robot code always has."""
+    v = np.asarray(vectors, dtype=np.float64)
+    return np.asarray(_HYPOT(v[..., 0], v[..., 1]), dtype=np.float64)
+
+
+_HYPOT = np.frompyfunc(math.hypot, 2, 1)
+
+
 def toward(positions: Any, goals: Any, gain: float, v_max: float) -> FloatArray:
     """``gain (goals - positions)`` ``(n, 2)`` or ``(2,)`` (m/s), scaled down to ``v_max`` when faster."""
     desired = gain * (np.asarray(goals, dtype=np.float64) - np.asarray(positions, dtype=np.float64))
-    speed = np.hypot(desired[..., 0], desired[..., 1])
+    speed = length(desired)
     return desired * np.minimum(1.0, v_max / np.maximum(speed, 1e-300))[..., None]
 
 
@@ -289,15 +311,14 @@ def settles(desired: Any, nearest: Any, fine: float, clearance: float) -> np.nda
     """Whether a robot moves at ``desired`` ``(n, 2)`` or ``(2,)`` (m/s) without HRVO: slower than
     ``fine`` (m/s) with no robot nearer than ``clearance`` (m; ``nearest`` ``(n,)`` or ``()``,
     inf when none is detected). See :func:`dream.experiments.line_consensus.settle_or_steer`."""
-    desired = np.asarray(desired, dtype=np.float64)
-    return (np.hypot(desired[..., 0], desired[..., 1]) < fine) & (np.asarray(nearest) >= clearance)
+    return (length(desired) < fine) & (np.asarray(nearest) >= clearance)
 
 
 def approach(positions: Any, centroids: Any, gain: float, v_max: float, arrival: float) -> FloatArray:
     """Coverage: ``gain`` times the way to the cell's centroid ``(n, 2)`` or ``(2,)`` (m/s), no
     faster than ``v_max``; zero within ``arrival`` (m) of it."""
     offset = np.asarray(centroids, dtype=np.float64) - np.asarray(positions, dtype=np.float64)
-    distance = np.hypot(offset[..., 0], offset[..., 1])
+    distance = length(offset)
     scale = np.minimum(1.0, v_max / (gain * np.maximum(distance, 1e-300)))
     return np.where((distance >= arrival)[..., None], gain * offset * scale[..., None], 0.0)
 
