@@ -194,8 +194,11 @@ def _summary(cls: type[Experiment]) -> str:
 def _list(source: str | None) -> int:
     if source is None:
         for name, cls in sorted(EXPERIMENTS.items()):
-            print(f"{name:<18} {_summary(cls)}")
-        print("\n`dream list NAME` shows an experiment's parameters; `dream run FILE.py` runs your own.")
+            print(f"{name:<18} {'swarm' if cls.has_swarm_mode else '':<6} {_summary(cls)}")
+        print(
+            "\n`dream list NAME` shows an experiment's parameters; `dream run FILE.py` runs your own;"
+            "\n`swarm`: it also runs in swarm mode (`dream run NAME --swarm`)."
+        )
         return 0
     cls = _experiment(source)
     print(f"{cls.label()}: {_summary(cls)}")

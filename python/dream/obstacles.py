@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -50,16 +51,27 @@ class Obstacle:
         return self.center + corners @ self._axes().T
 
     def _local(self, points: Any) -> FloatArray:
-        """``points`` ``(..., 2)`` in the obstacle's frame (centre at the origin, sides along the axes)."""
-        return (np.asarray(points, dtype=np.float64) - self.center) @ self._axes()
+        """``points`` ``(..., 2)`` in the obstacle's frame (centre at the origin, sides along the axes).
+
+        Written out rather than a matrix product, whose rounding may depend on how many points
+        there are: one robot's reading and the whole swarm's must agree to the bit."""
+        d = np.asarray(points, dtype=np.float64) - self.center
+        c, s = math.cos(self.angle), math.sin(self.angle)
+        return np.stack((d[..., 0] * c + d[..., 1] * s, d[..., 1] * c - d[..., 0] * s), axis=-1)
+
+    def closest_points(self, points: Any) -> FloatArray:
+        """The points of the obstacle closest to ``points`` ``(..., 2)``, NaN for those inside."""
+        local = self._local(points)
+        half = self.size / 2
+        q = np.clip(local, -half, half)
+        c, s = math.cos(self.angle), math.sin(self.angle)
+        closest = self.center + np.stack((q[..., 0] * c - q[..., 1] * s, q[..., 0] * s + q[..., 1] * c), axis=-1)
+        return np.where(np.all(np.abs(local) < half, axis=-1)[..., None], np.nan, closest)
 
     def closest_point(self, point: Any) -> FloatArray | None:
         """The point of the obstacle closest to ``point`` ``(2,)``; ``None`` if ``point`` is inside."""
-        local = self._local(point)
-        half = self.size / 2
-        if np.all(np.abs(local) < half):
-            return None
-        return self.center + self._axes() @ np.clip(local, -half, half)
+        closest = self.closest_points(point)
+        return None if np.isnan(closest[0]) else closest
 
     def contains(self, points: Any) -> np.ndarray:
         """Which of ``points`` ``(m, 2)`` lie strictly inside the obstacle, ``(m,)`` bool."""
@@ -96,6 +108,17 @@ class Obstacle:
             f"Obstacle(center={self.center.tolist()}, size={self.size.tolist()}, angle={self.angle}, "
             f"velocity={self.velocity.tolist()})"
         )
+
+
+def sensed(obstacles: Sequence[Obstacle], positions: Any, range: float) -> FloatArray:  # noqa: A002 (as the sensors)
+    """What obstacle sensors at ``positions`` ``(m, 2)`` read: the closest point of each obstacle
+    ``(m, k, 2)``, NaN for an obstacle beyond ``range`` (m, inclusive) or around the sensor."""
+    here = np.asarray(positions, dtype=np.float64).reshape(-1, 1, 2)
+    if not obstacles:
+        return np.zeros((len(here), 0, 2))
+    closest = np.stack([obstacle.closest_points(here[:, 0]) for obstacle in obstacles], axis=1)
+    far = ~(np.hypot(closest[..., 0] - here[..., 0], closest[..., 1] - here[..., 1]) <= range)
+    return np.where(far[..., None], np.nan, closest)
 
 
 def touching(obstacles: list[Obstacle], positions: Any, radius: float) -> np.ndarray:

@@ -151,6 +151,33 @@ class Robot:
         return self._limits[1]
 
 
+def stopping(
+    speeds: np.ndarray, headings: np.ndarray, owners: np.ndarray, offsets: np.ndarray, near: float
+) -> np.ndarray:
+    """The motion guard of a whole swarm (:meth:`RobotHRVO.guard`): whether each robot, driving at
+    ``speeds`` ``(n,)`` (m/s) along ``headings`` ``(n,)``, comes within ``near`` (m) of a robot it
+    sees in the next :data:`GUARD_HORIZON` seconds, ``(n,)`` bool. ``owners`` ``(k,)`` and
+    ``offsets`` ``(k, 2)``: who sees each other robot, and its position less that robot's (m)."""
+    # Only robots within reach in the horizon can be closed in on (the margin covers rounding).
+    reach = near + np.abs(speeds[owners]) * GUARD_HORIZON + 1e-9
+    close = np.flatnonzero(np.hypot(offsets[:, 0], offsets[:, 1]) < reach)
+    owners, offsets = owners[close], offsets[close]
+    moving = speeds[owners, None] * np.column_stack((np.cos(headings[owners]), np.sin(headings[owners])))
+    hit = rules.closing_in(offsets, moving, near, GUARD_HORIZON)
+    return np.bincount(owners[hit], minlength=len(speeds)) > 0
+
+
+def guard_swarm(dxu: np.ndarray, poses: np.ndarray, near: float) -> np.ndarray:
+    """``dxu`` ``(2, n)`` with no linear speed for the robots that :func:`stopping` stops, seeing
+    the others at their positions ``poses`` ``(3, n)``."""
+    p = poses[:2].T
+    indptr, indices, _ = kernels.neighbours(p, near + GRITSBOT.v_max * GUARD_HORIZON)
+    owners = np.repeat(np.arange(len(p)), np.diff(indptr))
+    out = dxu.copy()
+    out[0, stopping(dxu[0], poses[2], owners, p[owners] - p[indices], near)] = 0.0
+    return out
+
+
 class RobotHRVO(Robot):
     """A robot that avoids the others with Hybrid Reciprocal Velocity Obstacles.
 

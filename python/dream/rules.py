@@ -11,6 +11,7 @@ Units: metres, metres per second.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -232,5 +233,140 @@ def far_from(points: Any, others: Any, distance: float) -> np.ndarray:
     position accounts for, or claims that match no robot seen."""
     points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     others = np.asarray(others, dtype=np.float64).reshape(-1, 2)
-    gaps = np.hypot(*(points[:, None, :] - others[None, :, :]).transpose(2, 0, 1))
-    return gaps.min(axis=1, initial=np.inf) > distance
+    return unheard(points, np.zeros(len(points), np.int64), others, np.zeros(len(others), np.int64), distance)
+
+
+def line_places(senders: Any, receivers: Any, x: Any, y: Any, spacing: float) -> FloatArray:
+    """Where each line-consensus message puts its receiver ``(m, 2)`` (m): ``spacing`` per id
+    difference right of the sender's ``x`` (robot i belongs ``(j - i) spacing`` right of robot
+    j), in the sender's row ``y``. ``senders``, ``receivers``, ``x``, ``y``: ``(m,)`` or scalars."""
+    offset = (np.asarray(senders) - np.asarray(receivers)) * spacing
+    return np.stack(np.broadcast_arrays(np.asarray(x, dtype=np.float64) + offset, np.asarray(y, dtype=np.float64)), -1)
+
+
+def consensus(values: Any, rows: Any, count: int) -> FloatArray:
+    """The consensus update: each of ``count`` robots takes the mean of the values ``(m, 2)`` it
+    received (``rows`` ``(m,)``: the receiving robot's row, values in the order received);
+    ``(count, 2)``, NaN for a robot that received nothing.
+
+    Robots with as many messages are averaged together, each row as ``numpy.mean`` averages one
+    robot's list (pairwise summation), so that a robot and the swarm round alike.
+    """
+    values = np.asarray(values, dtype=np.float64).reshape(-1, 2)
+    rows = np.asarray(rows, dtype=np.int64)
+    order = np.argsort(rows, kind="stable")
+    heard = np.bincount(rows, minlength=count)
+    starts = np.concatenate(([0], np.cumsum(heard)))[:-1]
+    out = np.full((count, 2), np.nan)
+    for size in np.unique(heard[heard > 0]):
+        robots = np.flatnonzero(heard == size)
+        picks = order[starts[robots, None] + np.arange(size)]  # (robots, size), in the order received
+        out[robots, 0] = values[picks, 0].mean(axis=1)
+        out[robots, 1] = values[picks, 1].mean(axis=1)
+    return out
+
+
+def line_goal(
+    positions: Any, targets: Any, travelling: Any, spacing: float, lane: float
+) -> tuple[FloatArray, np.ndarray]:
+    """Where line-consensus robots head for their consensus ``targets``, and whether they travel.
+
+    With a passing lane (``lane`` > 0 m) a robot whose place is more than two spacings away along
+    x travels (until it is within one): it heads for the target's x in its own row, at least
+    ``lane`` off the line (above it when heading right, below when heading left, if closer). A
+    robot that does not travel heads for its target.
+
+    Parameters
+    ----------
+    positions, targets : (n, 2) or (2,) array_like
+        Where the robots are and their consensus targets (m); a NaN target leaves the robot's
+        ``travelling`` as it was.
+    travelling : (n,) or () bool array_like
+        Whether each robot travelled at its last decision.
+
+    Returns
+    -------
+    goals : (n, 2) or (2,) ndarray
+    travelling : (n,) or () bool ndarray
+    """
+    p = np.asarray(positions, dtype=np.float64)
+    t = np.asarray(targets, dtype=np.float64)
+    dx = t[..., 0] - p[..., 0]
+    away = np.abs(dx)
+    travelling = np.where((lane > 0) & (away > 2 * spacing), True, np.where(away < spacing, False, travelling))
+    off_line = p[..., 1] - t[..., 1]
+    off_line = np.where(np.abs(off_line) < lane, np.copysign(lane, dx), off_line)
+    beside = np.stack((t[..., 0], t[..., 1] + off_line), axis=-1)
+    return np.where(travelling[..., None], beside, t), travelling
+
+
+def length(vectors: Any) -> FloatArray:
+    """Lengths ``(n,)`` or ``()`` of ``vectors`` ``(n, 2)`` or ``(2,)``, rounded as :func:`math.hypot`
+    rounds them (which can differ from ``numpy.hypot`` in the last bit): a robot's rules and the
+    swarm's then round alike, and as the per-robot code always has."""
+    v = np.asarray(vectors, dtype=np.float64)
+    return np.asarray(_HYPOT(v[..., 0], v[..., 1]), dtype=np.float64)
+
+
+_HYPOT = np.frompyfunc(math.hypot, 2, 1)
+
+
+def toward(positions: Any, goals: Any, gain: float, v_max: float) -> FloatArray:
+    """``gain (goals - positions)`` ``(n, 2)`` or ``(2,)`` (m/s), scaled down to ``v_max`` when faster."""
+    desired = gain * (np.asarray(goals, dtype=np.float64) - np.asarray(positions, dtype=np.float64))
+    speed = length(desired)
+    return desired * np.minimum(1.0, v_max / np.maximum(speed, 1e-300))[..., None]
+
+
+def sent_row(own_y: Any, target_y: Any, travelling: Any) -> np.ndarray:
+    """The y a line-consensus robot sends: its target's while it travels beside the line (so that
+    its detour does not pull the others' line), else its own. A NaN target: its own."""
+    target_y = np.asarray(target_y, dtype=np.float64)
+    return np.where(np.asarray(travelling, dtype=bool) & np.isfinite(target_y), target_y, own_y)
+
+
+def settles(desired: Any, nearest: Any, fine: float, clearance: float) -> np.ndarray:
+    """Whether a robot moves at ``desired`` ``(n, 2)`` or ``(2,)`` (m/s) without HRVO: slower than
+    ``fine`` (m/s) with no robot nearer than ``clearance`` (m; ``nearest`` ``(n,)`` or ``()``,
+    inf when none is detected). See :func:`dream.experiments.line_consensus.settle_or_steer`."""
+    return (length(desired) < fine) & (np.asarray(nearest) >= clearance)
+
+
+def approach(positions: Any, centroids: Any, gain: float, v_max: float, arrival: float) -> FloatArray:
+    """Coverage: ``gain`` times the way to the cell's centroid ``(n, 2)`` or ``(2,)`` (m/s), no
+    faster than ``v_max``; zero within ``arrival`` (m) of it."""
+    offset = np.asarray(centroids, dtype=np.float64) - np.asarray(positions, dtype=np.float64)
+    distance = length(offset)
+    scale = np.minimum(1.0, v_max / (gain * np.maximum(distance, 1e-300)))
+    return np.where((distance >= arrival)[..., None], gain * offset * scale[..., None], 0.0)
+
+
+def unheard(seen: Any, seen_rows: Any, heard: Any, heard_rows: Any, same: float) -> np.ndarray:
+    """Which robots a coverage robot sees ``seen`` ``(k, 2)`` (m) no message accounts for: farther
+    than ``same`` (m) from every position ``heard`` ``(m, 2)`` from the robot's radio. Several
+    robots at once: ``seen_rows`` ``(k,)`` and ``heard_rows`` ``(m,)`` (ints) say whose each is.
+
+    Only positions in the same or a neighbouring square of side ``same`` can be that close, so
+    those are the only pairs measured (found by sorting), not every seen-heard pair.
+    """
+    seen = np.asarray(seen, dtype=np.float64).reshape(-1, 2)
+    heard = np.asarray(heard, dtype=np.float64).reshape(-1, 2)
+    nearest = np.full(len(seen), np.inf)
+    if len(seen) and len(heard):
+        side = same * (1 + 1e-9)
+        squares = np.floor(np.vstack((seen, heard)) / side).astype(np.int64)
+        squares -= squares.min(axis=0) - 1
+        span = squares.max(axis=0) + 2
+        rows = np.concatenate((seen_rows, heard_rows)).astype(np.int64)
+        keys = (rows * span[0] + squares[:, 0]) * span[1] + squares[:, 1]
+        mine, theirs = keys[: len(seen)], keys[len(seen) :]
+        order = np.argsort(theirs, kind="stable")
+        ordered = theirs[order]
+        for shift in (dx * span[1] + dy for dx in (-1, 0, 1) for dy in (-1, 0, 1)):
+            starts = np.searchsorted(ordered, mine + shift, side="left")
+            counts = np.searchsorted(ordered, mine + shift, side="right") - starts
+            pairs = np.repeat(np.arange(len(seen)), counts)
+            others = order[np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+            gaps = np.hypot(seen[pairs, 0] - heard[others, 0], seen[pairs, 1] - heard[others, 1])
+            np.minimum.at(nearest, pairs, gaps)
+    return nearest > same

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from dream._checks import FloatArray, RobotCallback, as_array, check_nonnegative, check_robot_id
+from dream.obstacles import sensed
 from dream.world import current_world
 
 if TYPE_CHECKING:
@@ -76,6 +77,15 @@ class Sensor:
         self._poses = poses
 
 
+def seen_velocity(commands: np.ndarray, headings: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(vx, vy)`` ``(k,)`` that a movement sensor reports for robots of last unicycle commands
+    ``commands`` ``(2, k)`` and headings ``headings`` ``(k,)``: the velocity of the point
+    :data:`PROJECTION_DISTANCE` ahead of each."""
+    lin, ang = commands
+    cos, sin = np.cos(headings), np.sin(headings)
+    return lin * cos - PROJECTION_DISTANCE * ang * sin, lin * sin + PROJECTION_DISTANCE * ang * cos
+
+
 class MovementSensor(Sensor):
     """Detects the position and velocity of the other robots in range and field of view.
 
@@ -130,16 +140,8 @@ class MovementSensor(Sensor):
         found, distances = self.world.neighbours_of(
             poses, self.robot_id, self.range, heading=self.rot_w, direction=self.direction, fov=self.wide
         )
-        theta = poses[2, found]
-        lin, ang = commands[0, found], commands[1, found]
-        detections = np.column_stack(
-            (
-                distances,
-                np.arctan2(self.pos_y - poses[1, found], self.pos_x - poses[0, found]),
-                lin * np.cos(theta) - PROJECTION_DISTANCE * ang * np.sin(theta),
-                lin * np.sin(theta) + PROJECTION_DISTANCE * ang * np.cos(theta),
-            )
-        )
+        angles = np.arctan2(self.pos_y - poses[1, found], self.pos_x - poses[0, found])
+        detections = np.column_stack((distances, angles, *seen_velocity(commands[:, found], poses[2, found])))
         self._report(detections)
 
 
@@ -184,10 +186,5 @@ class ObstacleSensor(Sensor):
     def update(self, x: Any) -> None:
         """Measure from the attached robot's pose in ``x`` ``(3, n)`` and call the callback."""
         super().update(x)
-        here = np.array([self.pos_x, self.pos_y])
-        found = [
-            c
-            for c in (o.closest_point(here) for o in self.obstacles)
-            if c is not None and np.hypot(*(c - here)) <= self.range
-        ]
-        self._report(np.array(found).reshape(-1, 2))
+        found = sensed(self.obstacles, [self.pos_x, self.pos_y], self.range)[0]
+        self._report(found[~np.isnan(found[:, 0])])

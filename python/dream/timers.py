@@ -4,7 +4,8 @@ A timer belongs to a robot. It stays off while ``current_time <= delay`` (start-
 afterwards each entry ``{"delay": gap, "tag": tag, "call": callable}`` runs
 ``call(*param[tag])`` whenever ``gap`` steps have passed since it last ran (initially at 0).
 ``create_timer`` and ``update_timers`` (the current world's timers) live in :mod:`dream.world`;
-this module imports nothing of DREAM.
+this module imports nothing of DREAM. :func:`due` and :func:`last_due` are the closed form of the
+same rule for a whole swarm's timers.
 """
 
 from __future__ import annotations
@@ -14,6 +15,8 @@ import numbers
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, cast
+
+import numpy as np
 
 
 @dataclass
@@ -80,6 +83,25 @@ class Timer:
                 f"got {type(args).__name__} (one argument is written as {tag!r}: (x,))"
             )
         return args
+
+
+def last_due(step: int, start_delay: Any, gap: int) -> np.ndarray:
+    """The last step up to integer step ``step`` at which a :class:`Timer` entry of ``gap`` steps
+    ran (-1 if none yet), for timers of start-up delays ``start_delay`` ``(n,)`` (integers) on an
+    exact clock: the closed form of :meth:`Timer.update`'s rule, for swarm modes that keep
+    per-robot rates without timer objects.
+
+    The entry first runs at the first step after the start-up delay that is at least ``gap``
+    steps after 0 (its initial last activation), then every ``gap`` steps (every step for 0).
+    """
+    first = np.maximum(np.asarray(start_delay) + 1, gap)
+    every = max(gap, 1)
+    return np.where(step >= first, first + (step - first) // every * every, -1)
+
+
+def due(step: int, start_delay: Any, gap: int) -> np.ndarray:
+    """Whether the entry runs at ``step`` (see :func:`last_due`): ``(n,)`` bool."""
+    return last_due(step, start_delay, gap) == step
 
 
 def _steps(value: Any, what: str) -> float:

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from dream import Timer, World, create_timer, update_timers
+from dream import Timer, World, create_timer, timers, update_timers
 from dream.world import current_world
 
 
@@ -203,3 +203,13 @@ def test_timer_update_rejects_params_that_are_not_a_tuple(args):
     timer = Timer(8, 0, [{"delay": 1, "tag": "odom", "call": lambda *a: None}])
     with pytest.raises(TypeError, match=r"robot 8.*'odom'"):
         timer.update(1, {"odom": args})
+
+
+@pytest.mark.parametrize("gap", [0, 1, 2, 3, 4, 10, 30])
+def test_due_matches_timer_update_step_by_step(gap):
+    delays = np.array([0, 1, 5, 10, 11, 12, 29, 40])
+    times = range(120)
+    fired = [_run(int(delay), gap, times) for delay in delays]
+    for step in times:
+        expected = [step in steps for steps in fired]
+        np.testing.assert_array_equal(timers.due(step, delays, gap), expected)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -18,6 +19,8 @@ def test_cli_list_names_the_experiments(capsys):
     assert main(["list"]) == 0
     listed = capsys.readouterr().out
     assert all(name in listed for name in ("hrvo-circle", "line-consensus", "voronoi-coverage", "affine-formation"))
+    assert re.search(r"^line-consensus\s+swarm\s", listed, re.M)
+    assert re.search(r"^affine-formation\s+[A-Z]", listed, re.M)  # no swarm mode
 
 
 def test_cli_run_prints_summary_and_writes_json(tmp_path, capsys):

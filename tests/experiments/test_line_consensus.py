@@ -23,6 +23,33 @@ def test_line_consensus_orders_robots_by_id_along_x():
     np.testing.assert_allclose(x[:-1] - x[1:], lc.SPACING, atol=lc.TOLERANCE)
 
 
+@pytest.mark.parametrize(("n", "seed"), [(6, 0), (10, 1)])
+def test_line_consensus_swarm_mode_moves_as_the_robots_do(n, seed):
+    # Swarm mode keeps every robot's timer rates, the order in which the per-robot timers run
+    # within a step (radio messages and detections of lower ids), what each movement sensor saw
+    # and when, and the shared decision rules: the trajectories agree to rounding, whole runs long.
+    # Six robots: the thesis's (Robotarium arena, plain HRVO); ten: the large team's code paths.
+    robots = lc.run(n=n, seed=seed, backend="fast", trace=True)
+    swarm = lc.run(n=n, seed=seed, backend="fast", swarm=True, trace=True)
+    assert robots.success and swarm.success and swarm.swarm
+    assert swarm.completed_step == robots.completed_step
+    np.testing.assert_allclose(swarm.trace, robots.trace, rtol=0, atol=1e-9)
+
+
+def test_line_consensus_swarm_mode_refuses_w_msr():
+    with pytest.raises(ValueError, match="no W-MSR"):
+        lc.run(n=6, backend="fast", swarm=True, resilient=1, steps=2)
+
+
+def test_line_consensus_swarm_mode_frames_come_from_its_arrays():
+    frames = []
+    lc.run(n=10, seed=0, backend="fast", swarm=True, steps=40, record=frames.append)
+    last = frames[-1]
+    assert last.goals.shape == (10, 2) and np.isfinite(last.goals).all()
+    assert last.velocities.shape == (10, 2) and np.any(last.velocities != 0)
+    assert len(last.links) == len(lc.graph_links(10, np.random.default_rng(0))[0]) // 2
+
+
 def test_line_consensus_uses_the_thesis_graph_for_six_robots():
     adjacency = lc.graph(6, np.random.default_rng(0))
     np.testing.assert_array_equal(adjacency, lc.THESIS_GRAPH)

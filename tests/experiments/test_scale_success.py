@@ -24,8 +24,9 @@ def size(experiment: str, rust: int) -> int:
 
 
 def test_line_consensus_forms_the_line_at_scale():
+    # Swarm mode: the per-robot mode's trajectories (test_line_consensus), several times faster.
     n = size("line", 100)
-    result = lc.run(n=n, seed=0, backend="fast")
+    result = lc.run(n=n, seed=0, backend="fast", swarm=True)
     assert result.success, result.summary()
     assert result.measures["y_spread"] < lc.TOLERANCE
     assert result.measures["spacing_error"] < lc.TOLERANCE

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from dream import Obstacle, ObstacleSensor
+from dream import Obstacle, ObstacleSensor, rules
 from dream.experiments import voronoi_coverage as vc
 from dream.specs import ROBOTARIUM
 
@@ -27,6 +27,29 @@ def test_voronoi_coverage_with_moving_obstacles_keeps_clear_of_the_static_ones(s
     assert result.collisions == 0
     assert result.measures["static_contacts"] == 0
     assert result.measures["cost_end"] < result.measures["cost_start"]
+
+
+@pytest.mark.parametrize(("n", "seed", "moving"), [(15, 3, False), (20, 0, True)])
+def test_voronoi_coverage_swarm_mode_moves_as_the_robots_do(n, seed, moving):
+    # Swarm mode keeps every robot's timer rates, the in-step order of the per-robot timers (a
+    # radio hears the position a robot of lower id sent in the same step), what each robot's
+    # sensors read and when, and the cell each robot computes from what it knows alone: the
+    # trajectories agree to rounding, whole runs long. 15: the thesis's team in the Robotarium
+    # (coming to rest); 20: a grown arena with wandering obstacles.
+    robots = vc.run(n=n, seed=seed, backend="fast", moving_obstacles=moving, trace=True)
+    swarm = vc.run(n=n, seed=seed, backend="fast", moving_obstacles=moving, swarm=True, trace=True)
+    assert robots.success and swarm.success and swarm.swarm
+    assert swarm.completed_step == robots.completed_step
+    np.testing.assert_allclose(swarm.trace, robots.trace, rtol=0, atol=1e-9)
+    assert swarm.measures == robots.measures
+
+
+def test_voronoi_coverage_swarm_mode_frames_come_from_its_arrays():
+    frames = []
+    vc.run(n=15, seed=0, backend="fast", swarm=True, steps=40, record=frames.append)
+    last = frames[-1]
+    assert last.goals.shape == (15, 2) and np.isfinite(last.goals).all()
+    assert len(last.cells) == 15 and all(len(cell) >= 3 for cell in last.cells)
 
 
 def test_coverage_cost_is_lower_for_spread_robots():
@@ -83,3 +106,18 @@ def test_voronoi_coverage_thousand_robots_spread_without_collision():
     assert result.n == 1000 and result.collisions == 0
     assert result.measures["static_contacts"] == 0
     assert result.measures["cost_end"] < result.measures["cost_start"]
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_unheard_matches_every_pair_compared(seed):
+    rng = np.random.default_rng(seed)
+    k, m, robots = rng.integers(0, 30), rng.integers(0, 60), rng.integers(1, 5)
+    seen, heard = rng.uniform(-1, 1, (k, 2)), rng.uniform(-1, 1, (m, 2))
+    close = min(k, m)
+    heard[:close] = seen[:close] + rng.normal(scale=0.05, size=(close, 2))  # some within reach
+    seen_rows, heard_rows = rng.integers(0, robots, k), rng.integers(0, robots, m)
+    want = [
+        not np.any((heard_rows == row) & (np.hypot(*(point - heard).T) <= vc.SAME_ROBOT))
+        for point, row in zip(seen, seen_rows, strict=True)
+    ]
+    np.testing.assert_array_equal(rules.unheard(seen, seen_rows, heard, heard_rows, vc.SAME_ROBOT), want)

@@ -25,7 +25,7 @@ from dream._reference.hrvo import (
     unit_directions,
 )
 from dream._reference.neighbours import neighbours, neighbours_of
-from dream._reference.obstacles import agents_from_closest, virtual_agents
+from dream._reference.obstacles import agents_from_closest, mirrored, virtual_agents
 from dream._reference.raycast import distance_rays
 from dream._reference.voronoi import voronoi_cell, voronoi_cells
 
@@ -33,6 +33,7 @@ __all__ = [
     "HrvoPlanner",
     "actuator_limit",
     "agents_from_closest",
+    "mirrored",
     "candidate_grid",
     "detection_directions",
     "distance_rays",

@@ -92,12 +92,16 @@ def virtual_agents(
 def agents_from_closest(p: FloatArray, closest: FloatArray, offset: float, range: float = np.inf) -> FloatArray:  # noqa: A002
     """Virtual agents ``(k, 2)`` of a robot at ``p`` for obstacle closest points ``(m, 2)``
     within ``range`` (points at distance 0, i.e. touching, give none)."""
-    agents = []
-    for c in closest:
-        d = c - p
-        distance = float(np.sqrt(d[0] * d[0] + d[1] * d[1]))
-        if distance > range or distance == 0:
-            continue
-        reach = 2 * max(distance - offset, GAP)
-        agents.append(p + reach * (d / distance))
-    return np.array(agents, dtype=np.float64).reshape(-1, 2)
+    agents = mirrored(p, closest, offset, range)
+    return agents[~np.isnan(agents[:, 0])]
+
+
+def mirrored(p: FloatArray, closest: FloatArray, offset: float, range: float = np.inf) -> FloatArray:  # noqa: A002
+    """The virtual agent ``(m, 2)`` of each robot at ``p`` ``(m, 2)`` (or one robot, ``(2,)``) for
+    the obstacle closest point ``closest`` ``(m, 2)``: ``p`` mirrored across the point ``offset``
+    before it; NaN for a point beyond ``range``, at distance 0 or NaN (none sensed)."""
+    d = np.asarray(closest, dtype=np.float64).reshape(-1, 2) - p
+    distance = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        agents = p + (2 * np.maximum(distance - offset, GAP))[:, None] * (d / distance[:, None])
+    return np.where(((distance <= range) & (distance != 0))[:, None], agents, np.nan)

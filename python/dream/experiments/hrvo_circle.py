@@ -45,7 +45,7 @@ from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
 from dream.heartbeats import Heartbeats
 from dream.radios import RangeRadio
-from dream.robot import GUARD_HORIZON, GUARD_MARGIN, RobotHRVO
+from dream.robot import GUARD_MARGIN, RobotHRVO, guard_swarm
 from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec
 from dream.world import create_timer
@@ -463,7 +463,7 @@ class HrvoCircle(Experiment):
         team.dxi = kernels.hrvo(p, team.dxi, wanted, radius=1.0, safety=self.layout.safety, bounds=self.bounds)
         team.sidestep, team.side = rules.sidestep_update(team.dxi, desired, team.sidestep, team.side, SIDESTEP_UPDATES)
         dxu = kernels.actuator_limit(kernels.dxi_to_dxu(team.dxi.T, x), GRITSBOT.within(self.sim.spec))
-        return _guarded(dxu, x, min(GRITSBOT.diameter + GUARD_MARGIN, self.layout.safety))
+        return guard_swarm(dxu, x, min(GRITSBOT.diameter + GUARD_MARGIN, self.layout.safety))
 
     def steps(self, n: int) -> int:
         return default_steps(n)
@@ -492,21 +492,6 @@ class HrvoCircle(Experiment):
 
 
 run = HrvoCircle.run
-
-
-def _guarded(dxu: np.ndarray, poses: np.ndarray, near: float) -> np.ndarray:
-    """``dxu`` with no linear speed for the robots whose motion would bring them within ``near`` of
-    another's position in the next :data:`~dream.robot.GUARD_HORIZON` (:meth:`RobotHRVO.guard`
-    for the whole swarm)."""
-    p = poses[:2].T
-    indptr, indices, _ = kernels.neighbours(p, near + GRITSBOT.v_max * GUARD_HORIZON)
-    rows = np.repeat(np.arange(len(p)), np.diff(indptr))
-    moving = dxu[0, rows, None] * np.column_stack((np.cos(poses[2, rows]), np.sin(poses[2, rows])))
-    stop = np.zeros(len(p), dtype=bool)
-    stop[rows[rules.closing_in(p[rows] - p[indices], moving, near, GUARD_HORIZON)]] = True
-    out = dxu.copy()
-    out[0, stop] = 0.0
-    return out
 
 
 def _merge_known(known: np.ndarray, state: np.ndarray, positions: np.ndarray, radio_range: float = 1.0) -> None:

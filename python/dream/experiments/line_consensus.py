@@ -19,22 +19,34 @@ aside when HRVO blocks them, and settle their last centimetres without HRVO, who
 otherwise forbid the very direction of a neighbour 0.3 m away on the line and keep the line
 shaking sideways (see :func:`settle_or_steer`).
 
+Swarm mode (``swarm=True``, :meth:`LineConsensus.swarm_step`) runs the same robots on arrays: the
+same decision rules (:mod:`dream.rules`: the consensus update, the goal beside the line, settling,
+stepping aside; the motion guard of :func:`dream.robot.stopping`), each robot at its own timer's
+steps (:func:`dream.timers.due`), one HRVO call for the robots deciding in a step. It also keeps
+what the per-robot timers imply within a step, where robots run one after the other by id: a
+radio hears the message a neighbour of lower id sent in that very step, and a movement sensor
+reads, besides the poses, the commands those neighbours have just decided. Each robot decides
+from what its sensor read at its last reading (up to two steps old), with the velocities the
+sensor estimates. The trajectories equal the per-robot mode's to rounding (the tests compare them
+over whole runs); it has no W-MSR, since faults reach a swarm through its wheels only.
+
 Success: y spread and spacing error below 0.02 m, zero collisions.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from dream import rules
+from dream import kernels, rules, timers
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
 from dream.radios import GraphRadio
-from dream.robot import RobotHRVO
-from dream.sensors import MovementSensor, OdometrySensor
+from dream.robot import GUARD_HORIZON, GUARD_MARGIN, RobotHRVO, stopping
+from dream.sensors import MovementSensor, OdometrySensor, seen_velocity
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec
 from dream.world import create_timer
 
@@ -47,6 +59,11 @@ FINE = 0.03  #: below this desired speed (m/s) a robot moves without HRVO (see `
 CLEARANCE = 0.2  #: settling without HRVO only with no robot this close (m): contact is at 0.11
 CRUISE = 0.8 * GRITSBOT.v_max  #: top speed of a robot (m/s): the unicycle conversion's gain 0.8 times v_max
 START_SPACING = 0.4  #: grid of the large teams' starting block (m)
+SAFETY = 0.24  #: HRVO's combined safety radius (m): the RobotHRVO default
+SENSING = 1.0  #: range of the movement sensor (m)
+START_DELAY = 10  #: start-up delay of robot i's timer: this plus i % 3 steps
+ODOM_GAP, MOVEMENT_GAP, CONTROL_GAP = 2, 3, 4  #: steps between odometry readings, detections, decisions
+SIDESTEP_UPDATES = 10  #: decisions a blocked robot steps aside for (see RobotHRVO.steer)
 
 #: The thesis's communication graph for six robots.
 THESIS_GRAPH = np.array(
@@ -62,23 +79,39 @@ THESIS_GRAPH = np.array(
 )
 
 
-def graph(n: int, rng: np.random.Generator) -> np.ndarray:
-    """The thesis's graph for six robots; otherwise a ring plus ``n`` random chords.
+def graph_links(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """The communication graph as its links ``(receivers, senders)`` ``(m,)``, both directions,
+    by receiver then sender id: the thesis's graph for six robots; otherwise a ring plus ``n``
+    random chords.
 
     The random chords make an expander: the consensus rate (the second eigenvalue of the
     random-walk Laplacian, about 0.13-0.17 for n = 100-1000) does not shrink with n, while a
     ring with local chords only has diameter ~n/k and a rate ~1/n^2. The mean degree is 4.
     """
     if n == 6:
-        return THESIS_GRAPH.copy()
+        receivers, senders = np.nonzero(THESIS_GRAPH)
+        return receivers.astype(np.int64), senders.astype(np.int64)
+    ring = np.arange(n)
+    chords = np.array([rng.choice(n, size=2, replace=False) for _ in range(n)], dtype=np.int64).reshape(-1, 2)
+    a = np.concatenate((ring, chords[:, 0]))
+    b = np.concatenate(((ring + 1) % n, chords[:, 1]))
+    links = np.unique(np.concatenate((a * n + b, b * n + a)))
+    receivers, senders = np.divmod(links, n)
+    apart = receivers != senders
+    return receivers[apart], senders[apart]
+
+
+def graph(n: int, rng: np.random.Generator) -> np.ndarray:
+    """The adjacency matrix ``(n, n)`` of :func:`graph_links`."""
     adjacency = np.zeros((n, n))
-    for i in range(n):
-        adjacency[i, (i + 1) % n] = adjacency[(i + 1) % n, i] = 1.0
-    for _ in range(n):
-        i, j = rng.choice(n, size=2, replace=False)
-        adjacency[i, j] = adjacency[j, i] = 1.0
-    np.fill_diagonal(adjacency, 0.0)
+    adjacency[graph_links(n, rng)] = 1.0
     return adjacency
+
+
+def start_delays(n: int) -> np.ndarray:
+    """Start-up delays ``(n,)`` of the robots' timers (steps): staggered so that a third of the
+    team talks and decides at each of three neighbouring steps."""
+    return START_DELAY + np.arange(n) % 3
 
 
 def start_grid(n: int) -> tuple[int, int]:
@@ -119,9 +152,15 @@ def line_errors(poses: np.ndarray, spacing: float = SPACING, correct: np.ndarray
     return float(np.ptp(y)) if len(y) else 0.0, float(np.abs(gaps).max()) if len(gaps) else 0.0
 
 
-def settle_or_steer(robot: RobotHRVO, desired: np.ndarray, fine: float = FINE, clearance: float = CLEARANCE) -> None:
+def settle_or_steer(
+    robot: RobotHRVO,
+    desired: np.ndarray,
+    fine: float = FINE,
+    clearance: float = CLEARANCE,
+    sidestep_updates: int = SIDESTEP_UPDATES,
+) -> None:
     """Set ``robot.dxi``: ``desired`` itself when slower than ``fine`` (m/s) with no detected robot
-    closer than ``clearance`` (m); else :meth:`RobotHRVO.steer`.
+    closer than ``clearance`` (m) (:func:`dream.rules.settles`); else :meth:`RobotHRVO.steer`.
 
     A robot this slow is within centimetres of its place, and velocity obstacles (no time
     horizon) forbid every velocity towards a neighbour inside the cone, however slow: on a line
@@ -132,10 +171,10 @@ def settle_or_steer(robot: RobotHRVO, desired: np.ndarray, fine: float = FINE, c
     """
     detections = np.asarray(robot.detections)
     nearest = float(detections[:, 0].min()) if detections.size else math.inf
-    if math.hypot(desired[0], desired[1]) < fine and nearest >= clearance:
+    if rules.settles(desired, nearest, fine, clearance):
         robot.dxi = desired
     else:
-        robot.steer(robot.detections, desired)
+        robot.steer(robot.detections, desired, sidestep_updates)
 
 
 class LineRobot(RobotHRVO):
@@ -162,54 +201,194 @@ class LineRobot(RobotHRVO):
 
     def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
         if messages:
-            xs = [x + (j - self.robot_id) * self.spacing for j, x, _ in messages]
-            ys = [y for _, _, y in messages]
+            senders, x, y = np.array(messages, dtype=np.float64).T
+            places = rules.line_places(senders, self.robot_id, x, y, self.spacing)
             if self.resilient and self.has_pose:  # W-MSR: ignore the extreme values a liar could send
-                xs = [*rules.wmsr_keep(xs, self.pos_x, self.resilient), self.pos_x]
-                ys = [*rules.wmsr_keep(ys, self.pos_y, self.resilient), self.pos_y]
-            self.target = np.array([np.mean(xs), np.mean(ys)])
+                xs = [*rules.wmsr_keep(places[:, 0], self.pos_x, self.resilient), self.pos_x]
+                ys = [*rules.wmsr_keep(places[:, 1], self.pos_y, self.resilient), self.pos_y]
+                self.target = np.array([np.mean(xs), np.mean(ys)])
+            else:
+                self.target = rules.consensus(places, np.zeros(len(places), dtype=np.int64), 1)[0]
         if not self.has_pose:
             return None
-        y = self.target[1] if self.travelling and self.target is not None else self.pos_y
-        return (self.robot_id, self.pos_x, y)
+        target_y = math.nan if self.target is None else self.target[1]
+        return (self.robot_id, self.pos_x, float(rules.sent_row(self.pos_y, target_y, self.travelling)))
 
     def goal(self, target: np.ndarray) -> np.ndarray:
-        """Where the robot heads now, for its consensus ``target`` ``(2,)``: the target itself, or,
-        while its place is more than two spacings away along x (until it is within one), the
-        target's x in its own row, at least ``lane`` off the line (above it when heading right,
-        below when heading left, if closer)."""
-        dx = target[0] - self.pos_x
-        if self.lane > 0 and abs(dx) > 2 * self.spacing:
-            self.travelling = True
-        elif abs(dx) < self.spacing:
-            self.travelling = False
-        if not self.travelling:
-            return target
-        off_line = self.pos_y - target[1]
-        if abs(off_line) < self.lane:
-            off_line = math.copysign(self.lane, dx)
-        return np.array([target[0], target[1] + off_line])
+        """Where the robot heads now for its consensus ``target`` ``(2,)`` (:func:`dream.rules.line_goal`:
+        the target, or beside the line while its place is far along it)."""
+        goal, travelling = rules.line_goal((self.pos_x, self.pos_y), target, self.travelling, self.spacing, self.lane)
+        self.travelling = bool(travelling)
+        return goal
 
     def update(self, dxu: np.ndarray) -> None:
         desired = np.zeros(2)
         if self.has_pose and self.target is not None:
-            desired = GAIN * (self.goal(self.target) - (self.pos_x, self.pos_y))
-            speed = math.hypot(desired[0], desired[1])
-            if speed > self.v_max:
-                desired *= self.v_max / speed
+            desired = rules.toward((self.pos_x, self.pos_y), self.goal(self.target), GAIN, self.v_max)
         if self.lane > 0:
-            settle_or_steer(self, desired)
+            settle_or_steer(self, desired, sidestep_updates=SIDESTEP_UPDATES)
         else:
             self.HRVO(self.detections, desired)
         self.command(dxu)
 
 
+class Nearby:
+    """Who is within ``radius`` (m) of some robots, step after step (swarm mode), as
+    :func:`dream.kernels.neighbours` answers (the same distances, ``sqrt(dx^2 + dy^2)``, and
+    the same inclusive test), from one index of a larger radius rebuilt every ``every`` steps:
+    robots at most ``speed`` (m/s) fast, ``dt`` (s) a step, cannot close the margin between."""
+
+    def __init__(self, radius: float, speed: float, dt: float, every: int = 4) -> None:
+        self.radius, self.every = radius, every
+        self.reach = radius + 2 * speed * dt * every * 1.01
+        self.built = -every
+        self.index = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64))
+
+    def rows(self, step: int, x: np.ndarray, who: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """CSR ``(indptr (n + 1,), indices, distances)`` of the robots within the radius of robots
+        ``who`` ``(k,)`` (ids, increasing; other rows empty) at poses ``x`` ``(3, n)``."""
+        if step - self.built >= self.every:
+            self.index, self.built = kernels.neighbours(x[:2].T, self.reach)[:2], step
+        indptr, indices = self.index
+        starts, counts = indptr[who], np.diff(indptr)[who]
+        owners = np.repeat(who, counts)
+        others = indices[np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+        dx, dy = x[0, others] - x[0, owners], x[1, others] - x[1, owners]
+        distances = np.sqrt(dx * dx + dy * dy)
+        near = distances <= self.radius
+        ptr = np.concatenate(([0], np.cumsum(np.bincount(owners[near], minlength=x.shape[1]))))
+        return ptr, others[near], distances[near]
+
+
+class Sight(NamedTuple):
+    """What the movement sensors of one step see (swarm mode): the poses ``(3, n)``, every robot's
+    command before the step's decisions ``(2, n)``, and who is within :data:`SENSING` of the
+    robots reading their sensor in that step (CSR, :class:`Nearby`)."""
+
+    poses: np.ndarray
+    before: np.ndarray
+    indptr: np.ndarray
+    indices: np.ndarray
+    distances: np.ndarray
+
+
+@dataclass
+class Detections:
+    """The movement-sensor detections of some robots (swarm mode), one row per detected robot.
+
+    Attributes
+    ----------
+    owners : (m,) int ndarray
+        Which deciding robot (its row among them) detected it.
+    others : (m,) int ndarray
+        The detected robot's id.
+    distances, angles : (m,) ndarrays
+        The sensor's ``[distance, angle]`` (m, rad; the angle from the detected robot towards
+        the detecting one).
+    headings : (m,) ndarray
+        The detected robot's heading then (rad).
+    known : (2, m) ndarray
+        The command ``[v; w]`` the sensor saw it carry out, unless ``chained``...
+    chained : (m,) bool ndarray
+        ...when the reading is of this step and the detected robot decides before the detecting
+        one: it sees the detected robot's command of this step, being decided.
+    """
+
+    owners: np.ndarray
+    others: np.ndarray
+    distances: np.ndarray
+    angles: np.ndarray
+    headings: np.ndarray
+    known: np.ndarray
+    chained: np.ndarray
+    towards: np.ndarray = field(init=False)
+
+    @classmethod
+    def join(cls, parts: list[tuple[np.ndarray, ...]]) -> Detections:
+        """The detections of ``parts``, each a tuple of the fields' values for some robots."""
+        empty = (*(np.zeros(0, dtype=np.int64),) * 2, *(np.zeros(0),) * 3, np.zeros((2, 0)), np.zeros(0, dtype=bool))
+        return cls(*(np.concatenate(values, axis=-1) for values in zip(empty, *parts)))
+
+    def __post_init__(self) -> None:
+        # Where each detected robot is, from the detecting one, as HRVO reads a detection.
+        towards = self.angles + np.pi
+        self.towards = self.distances[:, None] * np.column_stack((np.cos(towards), np.sin(towards)))
+
+    def offsets(self, rows: np.ndarray) -> np.ndarray:
+        """The detecting robot's position less the detected one's ``(k, 2)``, for detections
+        ``rows`` ``(k,)``, as the motion guard reads a detection."""
+        return self.distances[rows, None] * np.column_stack((np.cos(self.angles[rows]), np.sin(self.angles[rows])))
+
+    def velocity(self, commands: np.ndarray, rows: np.ndarray | slice = slice(None)) -> np.ndarray:
+        """The velocities ``(m, 2)`` of the detected robots (of ``rows``) as the sensor estimates
+        them (:func:`dream.sensors.seen_velocity`), ``commands`` ``(2, n)`` holding this step's."""
+        carried = np.where(self.chained[rows], commands[:, self.others[rows]], self.known[:, rows])
+        return np.column_stack(seen_velocity(carried, self.headings[rows]))
+
+
+@dataclass
+class LineSwarm:
+    """Every robot's state in swarm mode, one row or column each (see :meth:`LineConsensus.swarm_step`).
+
+    Attributes
+    ----------
+    delays : (n,) int ndarray
+        Start-up delay of each robot's timer (steps), as in the per-robot mode.
+    receivers, senders : (m,) int ndarrays
+        The graph's links (:func:`graph_links`).
+    pose : (3, n) ndarray
+        Each robot's last odometry reading (NaN before the first).
+    target : (n, 2) ndarray
+        Consensus targets (m; NaN before the first message).
+    travelling : (n,) bool ndarray
+        Whether each robot travels beside the line (:func:`dream.rules.line_goal`).
+    sent : (n, 2) ndarray
+        The radio board: the ``(x, y)`` each robot sent last (NaN before it first spoke).
+    dxi : (n, 2) ndarray
+        The velocities chosen last (m/s).
+    sidestep, side : (n,) ndarrays
+        Decisions left stepping aside, and to which side (see :meth:`~dream.RobotHRVO.steer`).
+    """
+
+    delays: np.ndarray
+    receivers: np.ndarray
+    senders: np.ndarray
+    pose: np.ndarray
+    target: np.ndarray
+    travelling: np.ndarray
+    sent: np.ndarray
+    dxi: np.ndarray
+    sidestep: np.ndarray
+    side: np.ndarray
+
+    @classmethod
+    def start(cls, n: int, links: tuple[np.ndarray, np.ndarray]) -> LineSwarm:
+        """``n`` robots that know nothing yet, on the graph ``links`` ``(receivers, senders)``."""
+        return cls(
+            delays=start_delays(n),
+            receivers=links[0],
+            senders=links[1],
+            pose=np.full((3, n), np.nan),
+            target=np.full((n, 2), np.nan),
+            travelling=np.zeros(n, dtype=bool),
+            sent=np.full((n, 2), np.nan),
+            dxi=np.zeros((n, 2)),
+            sidestep=np.zeros(n, dtype=np.int64),
+            side=np.ones(n),
+        )
+
+
 class LineConsensus(Experiment):
-    """The line-consensus experiment (see the module docs)."""
+    """The line-consensus experiment (see the module docs).
+
+    Swarm mode (``swarm=True``) keeps the per-robot mode's schedule and decision rules (see the
+    module docs) with the team's state in a :class:`LineSwarm`.
+    """
 
     name = NAME
     default_n = 6
     success = "y spread and spacing error below 0.02 m (the line has formed), zero violations"
+    has_swarm_mode = True
     spacing: float = param(SPACING, "distance between neighbours on the line (m)")
     radio_gap: int = param(10, "steps between radio exchanges")
     resilient: int = param(0, "W-MSR: ignore this many of the largest and smallest neighbour values (liars tolerated)")
@@ -233,23 +412,198 @@ class LineConsensus(Experiment):
 
     def build(self, n: int) -> None:
         self.adjacency = graph(n, self.world.rng)
-        lane = 0.0 if self.arena == ROBOTARIUM else LANE
+        lane, delays = self.lane(), start_delays(n)
         for i in range(n):
-            robot = LineRobot(i, f"robot_{i}", self.spacing, lane, self.resilient, arena=self.arena)
+            robot = LineRobot(i, f"robot_{i}", self.spacing, lane, self.resilient, safety=SAFETY, arena=self.arena)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
-            movement = MovementSensor(i, f"movement_{i}", robot.update_sensor)
+            movement = MovementSensor(i, f"movement_{i}", robot.update_sensor, range=SENSING)
             radio = GraphRadio(i, f"radio_{i}", robot.update_radio, self.adjacency)
             create_timer(
                 i,
-                10 + i % 3,
+                int(delays[i]),
                 [
-                    {"delay": 2, "tag": "odom", "call": odometry.update},
-                    {"delay": 3, "tag": "movement", "call": movement.update},
+                    {"delay": ODOM_GAP, "tag": "odom", "call": odometry.update},
+                    {"delay": MOVEMENT_GAP, "tag": "movement", "call": movement.update},
                     {"delay": self.radio_gap, "tag": "radio", "call": radio.update},
-                    {"delay": 4, "tag": "robot", "call": robot.update},
+                    {"delay": CONTROL_GAP, "tag": "robot", "call": robot.update},
                 ],
             )
             self.robots.append(robot)
+
+    def lane(self) -> float:
+        """The passing lanes' distance from the line (m): none in the Robotarium (the thesis's robots)."""
+        return 0.0 if self.arena == ROBOTARIUM else LANE
+
+    def build_swarm(self, n: int) -> None:
+        if self.resilient:
+            raise ValueError(
+                "line-consensus's swarm mode has no W-MSR (resilient > 0): its radio carries no lies "
+                "(faults reach a swarm through its wheels only); run it robot by robot"
+            )
+        self.team = LineSwarm.start(n, graph_links(n, self.world.rng))
+        self.bounds = self.arena.shrunk(GRITSBOT.radius)
+        self.sights: dict[int, Sight] = {}
+
+    def swarm_step(self, step: int, x: np.ndarray) -> np.ndarray:
+        """Every robot's part of step ``step``, at the per-robot mode's rates (:func:`dream.timers.due`
+        of each robot's timer): odometry, a radio round (:meth:`_talk`), a decision (:meth:`_decide`);
+        a robot that does not decide keeps its last command."""
+        team = self.team
+        if step == 0:  # no robot drives faster than its simulator lets it
+            self.nearby = Nearby(SENSING, GRITSBOT.within(self.sim.spec).v_max, self.sim.time_step)
+        # What the movement sensors of this step see: the poses, the commands before this step's
+        # decisions, and who is in range (the last MOVEMENT_GAP steps are kept for later decisions).
+        looking = np.flatnonzero(timers.due(step, team.delays, MOVEMENT_GAP))
+        self.sights[step] = Sight(x, self.dxu.copy(), *self.nearby.rows(step, x, looking))
+        self.sights.pop(step - MOVEMENT_GAP, None)
+        reading = timers.due(step, team.delays, ODOM_GAP)
+        team.pose[:, reading] = x[:, reading]
+        talking = timers.due(step, team.delays, self.radio_gap)
+        if talking.any():
+            self._talk(talking)
+        deciding = np.flatnonzero(timers.due(step, team.delays, CONTROL_GAP))
+        commands = self.dxu.copy()
+        if len(deciding):
+            self._decide(step, deciding, commands)
+        return commands
+
+    def _talk(self, talking: np.ndarray) -> None:
+        """One radio round of the ``talking`` robots ``(n,)`` bool: each takes the mean place of the
+        messages on the board from its graph neighbours (:func:`dream.rules.consensus`), then sends
+        its own. The per-robot mode's radios talk one after the other by id, so a neighbour of lower
+        id talking in the same step has already replaced its message: its position now, and a row
+        (:func:`dream.rules.sent_row`) that can depend on the target it has just taken. Those rows
+        follow the ids, so repeating the round until they no longer change gives exactly the
+        per-robot messages (twice for teams that do not travel)."""
+        team, n = self.team, self.n
+        links = talking[team.receivers]
+        receivers, senders = team.receivers[links], team.senders[links]
+        fresh = talking[senders] & (senders < receivers)
+        board = team.sent[senders]
+        heard = fresh | np.isfinite(board[:, 0])  # silent robots (none yet) send nothing
+        receivers, senders, fresh, board = receivers[heard], senders[heard], fresh[heard], board[heard]
+        x_sent = np.where(fresh, team.pose[0, senders], board[:, 0])
+        rows = rules.sent_row(team.pose[1], team.target[:, 1], team.travelling)
+        while True:
+            places = rules.line_places(
+                senders, receivers, x_sent, np.where(fresh, rows[senders], board[:, 1]), self.spacing
+            )
+            mean = rules.consensus(places, receivers, n)
+            target = np.where((talking & np.isfinite(mean[:, 0]))[:, None], mean, team.target)
+            settled, rows = rows, rules.sent_row(team.pose[1], target[:, 1], team.travelling)
+            if np.array_equal(rows[talking], settled[talking], equal_nan=True):
+                break
+        team.target = target
+        team.sent[talking] = np.column_stack((team.pose[0, talking], rows[talking]))
+
+    def _decide(self, step: int, who: np.ndarray, commands: np.ndarray) -> None:
+        """The decisions of robots ``who`` ``(k,)`` (ids, increasing), as :meth:`LineRobot.update`
+        takes them: head for the goal (:func:`dream.rules.line_goal`, :func:`dream.rules.toward`),
+        settle or steer (one HRVO call for them all), then write their limited and guarded commands
+        into ``commands`` ``(2, n)``.
+
+        Each robot sees what its movement sensor saw at its last reading (:meth:`_detections`). A
+        reading of this very step saw the new commands of the robots of lower id that decided
+        before it in the per-robot mode's order, so such robots decide again until no command they
+        see changes: the per-robot mode's decisions, in as many passes as the longest such chain.
+        """
+        team, lane, n = self.team, self.lane(), self.n
+        own, heading = team.pose[:2, who].T, team.pose[2, who]
+        aiming = np.isfinite(team.target[who, 0])
+        goals, team.travelling[who[aiming]] = rules.line_goal(
+            own[aiming], team.target[who[aiming]], team.travelling[who[aiming]], self.spacing, lane
+        )
+        desired = np.zeros((len(who), 2))
+        desired[aiming] = rules.toward(own[aiming], goals, GAIN, GRITSBOT.v_max)
+        seen = self._detections(step, who)
+        settle = np.zeros(len(who), dtype=bool)
+        wanted, sidestep = desired, team.sidestep[who]
+        if lane > 0:
+            nearest = np.full(len(who), np.inf)
+            np.minimum.at(nearest, seen.owners, seen.distances)
+            settle = rules.settles(desired, nearest, FINE, CLEARANCE)
+            wanted, sidestep = rules.sidestep_preference(desired, sidestep, team.side[who])
+        chosen = np.zeros((len(who), 2))
+        limits = GRITSBOT.within(self.sim.spec)
+        near = min(GRITSBOT.diameter + GUARD_MARGIN, SAFETY)
+        velocity = seen.velocity(commands)
+        chained = np.flatnonzero(seen.chained)
+        # Only detections this close can stop a robot (robot.stopping): the guard reads no others.
+        close = np.flatnonzero(seen.distances < near + limits.v_max * GUARD_HORIZON + 1e-9)
+        offsets = seen.offsets(close)
+        todo = np.ones(len(who), dtype=bool)
+        while todo.any():
+            velocity[chained] = seen.velocity(commands, chained)
+            pairs = np.flatnonzero(todo[seen.owners])
+            steer = todo & ~settle
+            chosen[steer] = self._hrvo(own, team.dxi[who], wanted, steer, seen, velocity, pairs)
+            dxi = np.where(settle[:, None], desired, chosen)[todo]
+            new = kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, team.pose[:, who[todo]]), limits)
+            local = np.cumsum(todo) - 1  # position of each robot of `who` among those of `todo`
+            guarded = todo[seen.owners[close]]
+            owners = local[seen.owners[close[guarded]]]
+            new[0, stopping(new[0], heading[todo], owners, offsets[guarded], near)] = 0.0
+            changed = np.zeros(n, dtype=bool)
+            changed[who[todo]] = np.any(new != commands[:, who[todo]], axis=0)
+            commands[:, who[todo]] = new
+            todo = np.bincount(seen.owners[chained[changed[seen.others[chained]]]], minlength=len(who)) > 0
+        if lane > 0:
+            sidestep, side = rules.sidestep_update(chosen, desired, sidestep, team.side[who], SIDESTEP_UPDATES)
+            steered = who[~settle]
+            team.sidestep[steered], team.side[steered] = sidestep[~settle], side[~settle]
+        team.dxi[who] = np.where(settle[:, None], desired, chosen)
+
+    def _hrvo(
+        self,
+        own: np.ndarray,
+        dxi: np.ndarray,
+        wanted: np.ndarray,
+        steer: np.ndarray,
+        seen: Detections,
+        velocity: np.ndarray,
+        pairs: np.ndarray,
+    ) -> np.ndarray:
+        """HRVO's choice ``(s, 2)`` for the robots ``steer`` ``(k,)`` bool among those at ``own``
+        ``(k, 2)`` with velocities ``dxi`` and wishes ``wanted`` ``(k, 2)``, from their detections
+        ``seen`` (rows ``pairs``, of the detected robots' ``velocity`` ``(m, 2)``): one
+        :func:`dream.kernels.hrvo` call in which every detection is a robot of its own, placed
+        where the detection says."""
+        pairs = pairs[steer[seen.owners[pairs]]]
+        owners = seen.owners[pairs]
+        k = int(steer.sum())
+        ghosts = own[owners] + seen.towards[pairs]
+        counts = np.bincount((np.cumsum(steer) - 1)[owners], minlength=k)
+        indptr = np.concatenate(([0], np.cumsum(counts), np.full(len(ghosts), len(ghosts))))
+        return kernels.hrvo(
+            np.vstack((own[steer], ghosts)),
+            np.vstack((dxi[steer], velocity[pairs])),
+            np.vstack((wanted[steer], np.zeros_like(ghosts))),
+            (indptr, k + np.arange(len(ghosts))),
+            safety=SAFETY,
+            v_max=GRITSBOT.v_max,
+            bounds=self.bounds,
+        )[:k]
+
+    def _detections(self, step: int, who: np.ndarray) -> Detections:
+        """What robots ``who`` ``(k,)`` saw at their last movement-sensor reading (see :class:`Detections`)."""
+        last = timers.last_due(step, self.team.delays[who], MOVEMENT_GAP)
+        parts: list[tuple[np.ndarray, ...]] = []
+        for when in np.unique(last[last >= 0]):
+            sight = self.sights[int(when)]
+            mine = np.flatnonzero(last == when)
+            starts, counts = sight.indptr[who[mine]], np.diff(sight.indptr)[who[mine]]
+            owners = np.repeat(mine, counts)
+            picks = np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
+            others, me = sight.indices[picks], who[owners]
+            x = sight.poses
+            # Robots of lower id had run their timers, decisions included, before this reading.
+            later = others < me
+            chained = later & (when == step)
+            after = sight.before if when == step else self.sights[int(when) + 1].before
+            known = np.where(later, after[:, others], sight.before[:, others])
+            angles = np.arctan2(x[1, me] - x[1, others], x[0, me] - x[0, others])
+            parts.append((owners, others, sight.distances[picks], angles, x[2, others], known, chained))
+        return Detections.join(parts)
 
     def done(self, step: int, poses: np.ndarray) -> bool:
         self.errors = line_errors(poses, self.spacing, self.correct)
@@ -264,13 +618,21 @@ class LineConsensus(Experiment):
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
         spread, error = line_errors(poses, self.spacing, self.correct)
+        if self.swarm:
+            goals, velocities = self.team.target, self.team.dxi
+            upper = self.team.receivers < self.team.senders
+            links = np.column_stack((self.team.receivers[upper], self.team.senders[upper]))
+        else:
+            goals = np.array([np.full(2, np.nan) if r.target is None else r.target for r in self.robots])
+            velocities = np.array([r.dxi for r in self.robots]).reshape(-1, 2)
+            links = np.argwhere(np.triu(self.adjacency) > 0)
         return Frame(
             step,
             self.arena,
             poses,
-            goals=np.array([np.full(2, np.nan) if r.target is None else r.target for r in self.robots]),
-            velocities=np.array([r.dxi for r in self.robots]).reshape(-1, 2),
-            links=np.argwhere(np.triu(self.adjacency) > 0),
+            goals=goals.reshape(-1, 2),
+            velocities=velocities,
+            links=links,
             title=f"{NAME}: y spread {spread:.3f} m, spacing error {error:.3f} m",
         )
 

@@ -8,6 +8,14 @@ it clipped by the arena, by the bisectors with the robots it hears, and by virtu
 keep the cell (and the robot's body) off the obstacles; it moves to the cell's centroid and
 stops within 0.05 m of it. No HRVO: the cells themselves keep the robots apart.
 
+Swarm mode (``swarm=True``, :meth:`VoronoiCoverage.swarm_step`) runs the same robots on arrays:
+each robot at its own timer's steps (:func:`dream.timers.due`), with what its sensors and radio
+gave it (a radio hears the position a robot of lower id sent in the same step, as the per-robot
+timers, which run by id, imply), the shared rules (:func:`dream.rules.unheard`,
+:func:`dream.rules.approach`, the motion guard of :func:`dream.robot.stopping`) and each robot's
+cell clipped by what it knows alone (:func:`dream.kernels.voronoi_cells` over batches of robots
+too far apart to clip each other's cells). The trajectories equal the per-robot mode's to rounding.
+
 Success: no robot-robot collision, no contact with the static obstacles, and the locational
 coverage cost falls: without moving obstacles the team comes to rest with a lower cost; with
 them it never rests (the wandering obstacles keep reshaping the cells), so the cost must stay
@@ -18,16 +26,17 @@ the obstacles grow so that the density stays the thesis's, and the step cap with
 from __future__ import annotations
 
 import math
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from dream import kernels, rules
+from dream import kernels, rules, timers
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
-from dream.obstacles import Obstacle, touching
+from dream.obstacles import Obstacle, sensed, touching
 from dream.radios import RangeRadio
-from dream.robot import GUARD_MARGIN, Robot
+from dream.robot import GUARD_MARGIN, Robot, stopping
 from dream.sensors import MovementSensor, ObstacleSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec
 from dream.world import create_timer
@@ -44,6 +53,10 @@ COVERED = 0.2  #: with moving obstacles, success is the cost staying below this 
 HOLD_STEPS = 300  #: ...for this many steps (10 s)
 COST_EVERY = 30  #: steps between two evaluations of the cost while it is watched
 COST_BLOCK = 2_000_000  #: point-robot pairs per slice of the coverage cost's grid
+RADIO_RANGE = 2 * CELL_RADIUS  #: robots farther apart than this do not clip each other's cells (m)
+START_DELAY = 10  #: start-up delay of robot i's timer: this plus i % 5 steps
+ODOM_GAP, SENSING_GAP, CONTROL_GAP = 2, 3, 5  #: steps between odometry readings, obstacle and robot
+#: detections, and decisions (each after a radio round)
 
 
 def scale_for(n: int) -> float:
@@ -161,18 +174,113 @@ class CoverageRobot(Robot):
                 bounds=self.arena.bounds,
                 virtual=agents,
             )
-            offset = self.centroid - here
-            distance = math.hypot(offset[0], offset[1])
-            if distance >= ARRIVAL:
-                self.dxi = GAIN * offset * min(1.0, self.v_max / (GAIN * distance))
+            self.dxi = rules.approach(here, self.centroid, GAIN, self.v_max, ARRIVAL)
         self.command(dxu)
 
 
+class Seen(NamedTuple):
+    """What the movement sensors of the robots reading in one step saw (swarm mode): CSR rows
+    ``indptr`` ``(n + 1,)`` (empty for robots not reading) of the positions ``(m, 2)`` where each
+    put the robots within :data:`SEEN`, by increasing id, as :meth:`CoverageRobot.update_sensor`
+    does: its believed position less each detection's offset."""
+
+    indptr: np.ndarray
+    positions: np.ndarray
+
+    @classmethod
+    def read(
+        cls,
+        x: np.ndarray,
+        beliefs: np.ndarray,
+        reading: np.ndarray,
+        indptr: np.ndarray,
+        indices: np.ndarray,
+        distances: np.ndarray,
+    ) -> Seen:
+        """The readings of robots ``reading`` ``(n,)`` bool at poses ``x`` ``(3, n)``, believing
+        themselves at ``beliefs`` ``(3, n)``, from the step's neighbour index (CSR)."""
+        owners = np.repeat(np.arange(len(reading)), np.diff(indptr))
+        keep = reading[owners] & (distances <= SEEN)
+        owners, others, d = owners[keep], indices[keep], distances[keep]
+        angles = np.arctan2(x[1, owners] - x[1, others], x[0, owners] - x[0, others])
+        positions = np.column_stack((beliefs[0, owners] - d * np.cos(angles), beliefs[1, owners] - d * np.sin(angles)))
+        return cls(np.searchsorted(owners, np.arange(len(reading) + 1)), positions)
+
+    @staticmethod
+    def last(seen: dict[int, Seen], step: int, who: np.ndarray, delays: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """What robots ``who`` ``(k,)`` (timers' start-up delays ``delays``) saw at their last
+        reading up to ``step``: positions ``(m, 2)`` and whose row of ``who`` saw each ``(m,)``."""
+        last = timers.last_due(step, delays, SENSING_GAP)
+        positions, rows = [np.zeros((0, 2))], [np.zeros(0, dtype=np.int64)]
+        for when in np.unique(last[last >= 0]):
+            reading = seen[int(when)]
+            mine = np.flatnonzero(last == when)
+            starts, counts = reading.indptr[who[mine]], np.diff(reading.indptr)[who[mine]]
+            positions.append(
+                reading.positions[np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+            )
+            rows.append(np.repeat(mine, counts))
+        rows_all = np.concatenate(rows)
+        order = np.argsort(rows_all, kind="stable")
+        return np.vstack(positions)[order], rows_all[order]
+
+
+@dataclass
+class CoverageSwarm:
+    """Every robot's state in swarm mode, one row each (see :meth:`VoronoiCoverage.swarm_step`).
+
+    Attributes
+    ----------
+    delays : (n,) int ndarray
+        Start-up delay of each robot's timer (steps), as in the per-robot mode.
+    pose : (3, n) ndarray
+        Each robot's last odometry reading (NaN before the first).
+    board : (n, 2) ndarray
+        The radio board: the position each robot sent last (NaN before it first spoke).
+    points : (n, k, 2) ndarray
+        The closest point of each obstacle at each robot's last obstacle reading (NaN: not sensed).
+    centroid : (n, 2) ndarray
+        Each robot's last centroid (NaN before its first decision).
+    cells : list of (m, 2) ndarrays
+        Each robot's last cell, for drawing.
+    """
+
+    delays: np.ndarray
+    pose: np.ndarray
+    board: np.ndarray
+    points: np.ndarray
+    centroid: np.ndarray
+    cells: list[np.ndarray]
+
+    @classmethod
+    def start(cls, n: int, obstacles: int) -> CoverageSwarm:
+        """``n`` robots that know nothing yet, among ``obstacles`` obstacles."""
+        return cls(
+            delays=start_delays(n),
+            pose=np.full((3, n), np.nan),
+            board=np.full((n, 2), np.nan),
+            points=np.full((n, obstacles, 2), np.nan),
+            centroid=np.full((n, 2), np.nan),
+            cells=[np.zeros((0, 2)) for _ in range(n)],
+        )
+
+
+def start_delays(n: int) -> np.ndarray:
+    """Start-up delays ``(n,)`` of the robots' timers (steps): a fifth of the team talks and
+    decides at each of five neighbouring steps."""
+    return START_DELAY + np.arange(n) % 5
+
+
 class VoronoiCoverage(Experiment):
-    """The coverage experiment (see the module docs)."""
+    """The coverage experiment (see the module docs).
+
+    Swarm mode (``swarm=True``) keeps the per-robot mode's schedule and decision rules with the
+    team's state in a :class:`CoverageSwarm` (see the module docs).
+    """
 
     name = NAME
     default_n = 15
+    has_swarm_mode = True
     success = (
         "zero collisions and no contact with the static obstacles, and: without moving obstacles the "
         "team comes to rest (no command for 60 steps) with the coverage cost below its start; with "
@@ -185,28 +293,141 @@ class VoronoiCoverage(Experiment):
 
     def build(self, n: int) -> None:
         self.obstacles = thesis_obstacles(self.world.rng, self.moving_obstacles, scale_for(n))
+        delays = start_delays(n)
         for i in range(n):
             robot = CoverageRobot(i, f"robot_{i}", arena=self.arena)
             self.robots.append(robot)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             sensor = ObstacleSensor(i, f"obstacles_{i}", robot.update_obstacles, self.obstacles, range=CELL_RADIUS)
             movement = MovementSensor(i, f"movement_{i}", robot.update_sensor, range=SEEN)
-            radio = RangeRadio(i, f"radio_{i}", robot.update_radio, range=2 * CELL_RADIUS)
+            radio = RangeRadio(i, f"radio_{i}", robot.update_radio, range=RADIO_RANGE)
             create_timer(
                 i,
-                10 + i % 5,
+                int(delays[i]),
                 [
-                    {"delay": 2, "tag": "odom", "call": odometry.update},
-                    {"delay": 3, "tag": "obstacles", "call": sensor.update},
-                    {"delay": 3, "tag": "movement", "call": movement.update},
-                    {"delay": 5, "tag": "radio", "call": radio.update},
-                    {"delay": 5, "tag": "robot", "call": robot.update},
+                    {"delay": ODOM_GAP, "tag": "odom", "call": odometry.update},
+                    {"delay": SENSING_GAP, "tag": "obstacles", "call": sensor.update},
+                    {"delay": SENSING_GAP, "tag": "movement", "call": movement.update},
+                    {"delay": CONTROL_GAP, "tag": "radio", "call": radio.update},
+                    {"delay": CONTROL_GAP, "tag": "robot", "call": robot.update},
                 ],
             )
+        self._start(n)
+
+    def _start(self, n: int) -> None:
+        """What both modes keep besides the robots: the obstacles' parts and the success counters."""
         self.static = [o for o in self.obstacles if not o.moving]
         self.sampling = 0.02 * scale_for(n)
         self.contacts, self.still = 0, 0
         self.covered_since: int | None = None
+
+    def build_swarm(self, n: int) -> None:
+        self.obstacles = thesis_obstacles(self.world.rng, self.moving_obstacles, scale_for(n))
+        self.team = CoverageSwarm.start(n, len(self.obstacles))
+        self.seen: dict[int, Seen] = {}
+        self._start(n)
+
+    def swarm_step(self, step: int, x: np.ndarray) -> np.ndarray:
+        """Every robot's part of step ``step``, at the per-robot mode's rates (:func:`dream.timers.due`
+        of each robot's timer): odometry, obstacle and robot detections, a radio round and a
+        decision (:meth:`_decide`); a robot that does not decide keeps its last command."""
+        team = self.team
+        reading = timers.due(step, team.delays, ODOM_GAP)
+        team.pose[:, reading] = x[:, reading]
+        # One neighbour index for the step: the radio's range holds the movement sensor's.
+        indptr, indices, distances = kernels.neighbours(x[:2].T, RADIO_RANGE)
+        sensing = timers.due(step, team.delays, SENSING_GAP)
+        team.points[sensing] = sensed(self.obstacles, x[:2, sensing].T, CELL_RADIUS)
+        self.seen[step] = Seen.read(x, team.pose, sensing, indptr, indices, distances)
+        self.seen.pop(step - SENSING_GAP, None)
+        deciding = np.flatnonzero(timers.due(step, team.delays, CONTROL_GAP))
+        commands = self.dxu.copy()
+        if len(deciding):
+            others, heard = self._talk(deciding, indptr, indices)
+            self._decide(step, deciding, others, heard, commands)
+        return commands
+
+    def _talk(self, who: np.ndarray, indptr: np.ndarray, indices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The radio round of robots ``who`` ``(k,)``: the positions ``(m, 2)`` they hear from the
+        robots within :data:`RADIO_RANGE`, by increasing id, and whose row of ``who`` hears each
+        ``(m,)``; then they send their own. The per-robot radios talk one after the other by id,
+        so a robot of lower id talking in the same step has already sent its position of now."""
+        team = self.team
+        starts, counts = indptr[who], np.diff(indptr)[who]
+        rows = np.repeat(np.arange(len(who)), counts)
+        senders = indices[np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+        talking = np.zeros(self.n, dtype=bool)
+        talking[who] = True
+        fresh = talking[senders] & (senders < who[rows])
+        said = np.where(fresh[:, None], team.pose[:2, senders].T, team.board[senders])
+        heard = ~np.isnan(said[:, 0])  # robots that have not spoken yet send nothing
+        team.board[who] = team.pose[:2, who].T
+        return said[heard], rows[heard]
+
+    def _decide(self, step: int, who: np.ndarray, others: np.ndarray, heard: np.ndarray, commands: np.ndarray) -> None:
+        """The decisions of robots ``who`` ``(k,)``, as :meth:`CoverageRobot.update` takes them, from
+        the positions ``others`` ``(m, 2)`` each heard (``heard``: its row): their cells, bounded by
+        the robots heard, the robots seen but not heard and the obstacles sensed (virtual agents),
+        their centroids and their limited, guarded commands, written into ``commands`` ``(2, n)``."""
+        team, k = self.team, len(who)
+        here = team.pose[:2, who].T
+        seen, looked = Seen.last(self.seen, step, who, team.delays[who])
+        silent = rules.unheard(seen, looked, others, heard, SAME_ROBOT)
+        points = team.points[who].reshape(-1, 2)
+        owners = np.repeat(np.arange(k), team.points.shape[1])
+        agents = kernels.obstacle_agents(here[owners], points, robot_radius=GRITSBOT.radius, margin=MARGIN)
+        sensed_agent = ~np.isnan(agents[:, 0])
+        # Each cell is clipped by what its robot knows, in its order: robots heard, robots seen
+        # but not heard, obstacles.
+        rows = np.concatenate((heard, looked[silent], owners[sensed_agent]))
+        clips = np.vstack((others, seen[silent], agents[sensed_agent]))
+        order = np.argsort(rows, kind="stable")
+        team.centroid[who] = self._cells(who, here, rows[order], clips[order])
+        dxi = rules.approach(here, team.centroid[who], GAIN, GRITSBOT.v_max, ARRIVAL)
+        new = kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, team.pose[:, who]), GRITSBOT.within(self.sim.spec))
+        near = GRITSBOT.diameter + GUARD_MARGIN
+        new[0, stopping(new[0], team.pose[2, who], looked, here[looked] - seen, near)] = 0.0
+        commands[:, who] = new
+
+    def _cells(self, who: np.ndarray, here: np.ndarray, rows: np.ndarray, clips: np.ndarray) -> np.ndarray:
+        """Centroids ``(k, 2)`` of the cells of robots ``who`` at ``here`` ``(k, 2)``, each clipped by
+        its points ``clips`` ``(m, 2)`` (``rows``: whose, sorted) alone, as :func:`dream.kernels.voronoi_cell`
+        clips it: :func:`dream.kernels.voronoi_cells` calls, with the clipping points as virtual
+        agents, over batches of robots too far apart (beyond :data:`RADIO_RANGE`) to clip each
+        other's cells. Robots in grid squares of that side whose columns and rows have the same
+        parities are that far apart; the n-th robot of each square goes into the n-th batch."""
+        square = np.floor(here / (RADIO_RANGE * (1 + 1e-9))).astype(np.int64)
+        parity = (square[:, 0] % 2) * 2 + square[:, 1] % 2
+        key = np.unique(square, axis=0, return_inverse=True)[1].ravel()
+        order = np.argsort(key, kind="stable")
+        first = np.searchsorted(key[order], key[order])
+        rank = np.empty(len(who), dtype=np.int64)
+        rank[order] = np.arange(len(who)) - first
+        batch = rank * 4 + parity
+        # Robots by batch, each batch a run of them, their clipping points in the same order.
+        order = np.argsort(batch, kind="stable")
+        indptr = np.searchsorted(rows, np.arange(len(who) + 1))
+        counts = np.diff(indptr)[order]
+        clips = clips[np.repeat(indptr[order] - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+        ptr = np.concatenate(([0], np.cumsum(counts)))
+        edges = np.flatnonzero(np.diff(batch[order], prepend=-1, append=-1))
+        centroids = np.empty((len(who), 2))
+        polygons = []
+        for start, stop in zip(edges[:-1], edges[1:], strict=True):
+            mine = order[start:stop]
+            cells = kernels.voronoi_cells(
+                here[mine],
+                radius=CELL_RADIUS,
+                bounds=self.arena.bounds,
+                virtual=(ptr[start : stop + 1] - ptr[start], clips[ptr[start] : ptr[stop]]),
+                polygons=True,
+            )
+            centroids[mine] = cells.centroids
+            assert cells.vertices is not None and cells.offsets is not None  # polygons=True
+            polygons += np.split(cells.vertices, cells.offsets[1:-1])
+        for i, polygon in zip(who[order], polygons, strict=True):
+            self.team.cells[i] = polygon
+        return centroids
 
     def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
         return corner_poses(n, rng, self.arena)
@@ -257,14 +478,19 @@ class VoronoiCoverage(Experiment):
         }
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
+        if self.swarm:
+            goals, cells = self.team.centroid, self.team.cells
+        else:
+            goals = np.array([np.full(2, np.nan) if r.centroid is None else r.centroid for r in self.robots])
+            cells = [r.cell for r in self.robots]
         return Frame(
             step,
             self.arena,
             poses,
-            goals=np.array([np.full(2, np.nan) if r.centroid is None else r.centroid for r in self.robots]),
+            goals=goals.reshape(-1, 2),
             obstacles=[o.polygon for o in self.obstacles],
             obstacle_moving=[o.moving for o in self.obstacles],
-            cells=[r.cell for r in self.robots],
+            cells=cells,
             ranges={"obstacle sensing": CELL_RADIUS, "radio": 2 * CELL_RADIUS},
             title=f"{NAME}: cost {self.last_cost / self.cost_start:.0%} of its start, static contacts {self.contacts}",
         )

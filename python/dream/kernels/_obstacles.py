@@ -28,10 +28,20 @@ def obstacle_agents(
     mirror_at_surface: bool = False,
 ) -> FloatArray:
     """One robot's virtual agents ``(k, 2)`` from the closest points ``(k, 2)`` of the obstacles it
-    senses (an :class:`~dream.sensors.ObstacleSensor` reading); see :func:`virtual_agents`."""
+    senses (an :class:`~dream.sensors.ObstacleSensor` reading); see :func:`virtual_agents`.
+
+    With one position per closest point (``position`` ``(k, 2)``, of the robot that sensed it; a
+    swarm's readings at once), the agents come row for row, NaN for a point that gives none
+    (a robot touching the obstacle, or a NaN point: nothing sensed)."""
+    offset = _mirror_offset(robot_radius, margin, mirror_at_surface)
+    if np.ndim(position) == 2:
+        p = as_array(position, "position", (None, 2))
+        c = np.asarray(closest_points, dtype=np.float64)
+        if c.shape != p.shape:
+            raise ValueError(f"`closest_points` must have the shape of `position` {p.shape}, got {c.shape}")
+        return _reference.mirrored(p, c, offset)
     p = as_array(position, "position", (2,))
     c = as_array(closest_points, "closest_points", (None, 2))
-    offset = _mirror_offset(robot_radius, margin, mirror_at_surface)
     return _reference.agents_from_closest(p, c, offset)
 
 
