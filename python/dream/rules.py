@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from dream._checks import FloatArray
+from dream._checks import Bounds, FloatArray
 
 #: Angle (rad) the roundabout aims ahead of the island's tangent point, so that a robot on
 #: the island's edge still has somewhere to go.
@@ -267,14 +267,18 @@ def consensus(values: Any, rows: Any, count: int) -> FloatArray:
 
 
 def line_goal(
-    positions: Any, targets: Any, travelling: Any, spacing: float, lane: float
+    positions: Any, targets: Any, travelling: Any, spacing: float, lane: float, bounds: Bounds
 ) -> tuple[FloatArray, np.ndarray]:
     """Where line-consensus robots head for their consensus ``targets``, and whether they travel.
 
     With a passing lane (``lane`` > 0 m) a robot whose place is more than two spacings away along
     x travels (until it is within one): it heads for the target's x in its own row, at least
     ``lane`` off the line (above it when heading right, below when heading left, if closer). A
-    robot that does not travel heads for its target.
+    robot that does not travel heads for its target. Goals lie within ``bounds``: the consensus
+    line drifts while the team travels, and a robot heading for a place beyond the arena's edge
+    would leave what HRVO's boundary check accepts, after which HRVO forbids it every velocity
+    (1000 robots: the line's end 0.4 m beyond the edge froze a robot there for good). Waiting at
+    the edge, it pulls the line back through the consensus.
 
     Parameters
     ----------
@@ -283,6 +287,8 @@ def line_goal(
         ``travelling`` as it was.
     travelling : (n,) or () bool array_like
         Whether each robot travelled at its last decision.
+    bounds : (xmin, xmax, ymin, ymax)
+        Where the robots' centres may go (m).
 
     Returns
     -------
@@ -297,7 +303,9 @@ def line_goal(
     off_line = p[..., 1] - t[..., 1]
     off_line = np.where(np.abs(off_line) < lane, np.copysign(lane, dx), off_line)
     beside = np.stack((t[..., 0], t[..., 1] + off_line), axis=-1)
-    return np.where(travelling[..., None], beside, t), travelling
+    goals = np.where(travelling[..., None], beside, t)
+    xmin, xmax, ymin, ymax = bounds
+    return np.stack((goals[..., 0].clip(xmin, xmax), goals[..., 1].clip(ymin, ymax)), axis=-1), travelling
 
 
 def length(vectors: Any) -> FloatArray:

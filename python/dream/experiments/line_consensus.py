@@ -7,7 +7,9 @@ the graph is connected, the team converges to a horizontal line ordered by id, d
 Six robots use the thesis's adjacency matrix; more robots use a ring plus random chords.
 
 Beyond the thesis's arena (more than seven robots, a line longer than 2 m) two things change.
-The robots start in a block at the centre of a strip that the line fits, and a robot whose
+The robots start scattered over a strip as long as the line (about one robot per square metre:
+a block at the centre made every robot cross the crowd of those heading the other way, and 1000
+robots jammed in it, 700 still there after 12,000 steps), and a robot whose
 place is far away along the line travels *beside* it: it keeps its own row, or, near the
 line, a passing lane ``LANE`` above it (heading right) or below it (heading left), and only
 joins the line once it is within a spacing of its place. Without this, the line forms in y
@@ -58,7 +60,8 @@ LANE = 0.35  #: distance of the passing lanes from the line (m): more than HRVO'
 FINE = 0.03  #: below this desired speed (m/s) a robot moves without HRVO (see `settle_or_steer`)
 CLEARANCE = 0.2  #: settling without HRVO only with no robot this close (m): contact is at 0.11
 CRUISE = 0.8 * GRITSBOT.v_max  #: top speed of a robot (m/s): the unicycle conversion's gain 0.8 times v_max
-START_SPACING = 0.4  #: grid of the large teams' starting block (m)
+START_SPACING = 0.4  #: grid of the large teams' starting strip (m)
+START_SHARE = 6  #: grid points per robot in the starting strip: about one robot per square metre
 SAFETY = 0.24  #: HRVO's combined safety radius (m): the RobotHRVO default
 SENSING = 1.0  #: range of the movement sensor (m)
 START_DELAY = 10  #: start-up delay of robot i's timer: this plus i % 3 steps
@@ -114,28 +117,27 @@ def start_delays(n: int) -> np.ndarray:
     return START_DELAY + np.arange(n) % 3
 
 
-def start_grid(n: int) -> tuple[int, int]:
-    """``(columns, rows)`` of the starting block of a large team: 1.5 grid points per robot, 3:1."""
-    points = math.ceil(1.5 * n)
-    columns = math.ceil(math.sqrt(3 * points))
-    return columns, math.ceil(points / columns)
+def start_grid(n: int, spacing: float = SPACING) -> tuple[int, int]:
+    """``(columns, rows)`` of the starting strip of a large team: columns ``START_SPACING`` apart
+    over 1.25 times the line's length, rows enough for ``START_SHARE`` grid points per robot."""
+    columns = math.floor(1.25 * (n - 1) * spacing / START_SPACING) + 1
+    return columns, math.ceil(START_SHARE * n / columns)
 
 
 def line_arena(n: int, spacing: float = SPACING) -> ArenaSpec:
     """The Robotarium while the line fits in its central 2 m; else a strip with room for the line
-    (and for its centre settling off the block's) around the starting block."""
+    (and for its centre settling off the start's) around the starting strip, 1 m to spare."""
     length = (n - 1) * spacing
     if length <= 2.0:
         return ROBOTARIUM
-    columns, rows = start_grid(n)
-    width = max(1.25 * length, columns * START_SPACING) + 2.0
-    return ArenaSpec.centred(width, max(ROBOTARIUM.height, rows * START_SPACING + 2.0))
+    rows = start_grid(n, spacing)[1]
+    return ArenaSpec.centred(1.25 * length + 2.0, max(ROBOTARIUM.height, rows * START_SPACING + 2.0))
 
 
-def block_poses(n: int, rng: np.random.Generator, arena: ArenaSpec) -> np.ndarray:
-    """Poses ``(3, n)`` of a large team: distinct random points of the :func:`start_grid` block
+def strip_poses(n: int, rng: np.random.Generator, arena: ArenaSpec, spacing: float = SPACING) -> np.ndarray:
+    """Poses ``(3, n)`` of a large team: distinct random points of the :func:`start_grid` strip
     (``START_SPACING`` apart) at the centre of ``arena``, random headings."""
-    columns, rows = start_grid(n)
+    columns, rows = start_grid(n, spacing)
     cells = rng.choice(columns * rows, size=n, replace=False)
     cx, cy = (arena.xmin + arena.xmax) / 2, (arena.ymin + arena.ymax) / 2
     x = cx + (cells % columns - (columns - 1) / 2) * START_SPACING
@@ -217,7 +219,9 @@ class LineRobot(RobotHRVO):
     def goal(self, target: np.ndarray) -> np.ndarray:
         """Where the robot heads now for its consensus ``target`` ``(2,)`` (:func:`dream.rules.line_goal`:
         the target, or beside the line while its place is far along it)."""
-        goal, travelling = rules.line_goal((self.pos_x, self.pos_y), target, self.travelling, self.spacing, self.lane)
+        goal, travelling = rules.line_goal(
+            (self.pos_x, self.pos_y), target, self.travelling, self.spacing, self.lane, self.bounds
+        )
         self.travelling = bool(travelling)
         return goal
 
@@ -397,8 +401,10 @@ class LineConsensus(Experiment):
         return line_arena(n, self.spacing)
 
     def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
-        """The thesis's random start in the Robotarium; a :func:`block_poses` block beyond."""
-        return super().initial_poses(n, rng) if self.arena == ROBOTARIUM else block_poses(n, rng, self.arena)
+        """The thesis's random start in the Robotarium; the :func:`strip_poses` strip beyond."""
+        if self.arena == ROBOTARIUM:
+            return super().initial_poses(n, rng)
+        return strip_poses(n, rng, self.arena, self.spacing)
 
     def steps(self, n: int) -> int:
         """3000 in the Robotarium; beyond, 3000 plus five times the time the robot farthest from
@@ -407,7 +413,7 @@ class LineConsensus(Experiment):
         against a cap of 21,230."""
         if self.arena_for(n) == ROBOTARIUM:
             return 3000
-        travel = (n - 1) * self.spacing / 2 + start_grid(n)[0] * START_SPACING / 2
+        travel = (n - 1) * self.spacing / 2 + (start_grid(n, self.spacing)[0] - 1) * START_SPACING / 2
         return 3000 + math.ceil(5 * travel / (CRUISE * RPS.time_step))
 
     def build(self, n: int) -> None:
@@ -511,7 +517,7 @@ class LineConsensus(Experiment):
         own, heading = team.pose[:2, who].T, team.pose[2, who]
         aiming = np.isfinite(team.target[who, 0])
         goals, team.travelling[who[aiming]] = rules.line_goal(
-            own[aiming], team.target[who[aiming]], team.travelling[who[aiming]], self.spacing, lane
+            own[aiming], team.target[who[aiming]], team.travelling[who[aiming]], self.spacing, lane, self.bounds
         )
         desired = np.zeros((len(who), 2))
         desired[aiming] = rules.toward(own[aiming], goals, GAIN, GRITSBOT.v_max)
