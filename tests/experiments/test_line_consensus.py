@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from dream import rules
 from dream.experiments import line_consensus as lc
 
 
@@ -89,3 +90,27 @@ def test_line_consensus_scales_on_the_fast_backend():
 def test_line_consensus_thousand_robots_on_fast_do_not_collide():
     result = lc.run(n=1000, seed=0, backend="fast", steps=150)
     assert result.n == 1000 and result.collisions == 0
+
+
+@pytest.mark.parametrize("n", [8, 100, 1000])
+def test_large_teams_start_scattered_over_a_strip_as_long_as_the_line(n):
+    arena = lc.line_arena(n)
+    poses = lc.strip_poses(n, np.random.default_rng(n), arena)
+    length = (n - 1) * lc.SPACING
+    # Scattered along the whole line (not a central block), at least START_SPACING apart,
+    # inside the arena with a metre to spare.
+    assert np.ptp(poses[0]) > 0.9 * length
+    gaps = np.hypot(*(poses[:2, :, None] - poses[:2, None, :]))
+    assert gaps[~np.eye(n, dtype=bool)].min() >= lc.START_SPACING - 1e-9
+    assert poses[0].min() >= arena.xmin + 1 and poses[0].max() <= arena.xmax - 1
+    assert poses[1].min() >= arena.ymin + 1 and poses[1].max() <= arena.ymax - 1
+
+
+def test_line_goals_stay_within_the_bounds():
+    bounds = (-2.0, 2.0, -1.0, 1.0)
+    # A place beyond the left edge (travelling, in its lane) and one beyond the top (settling).
+    goals, travelling = rules.line_goal(
+        [[0.0, 0.0], [1.0, 0.9]], [[-3.0, 0.0], [1.0, 1.5]], [False, False], 0.3, 0.35, bounds
+    )
+    np.testing.assert_array_equal(travelling, [True, False])
+    np.testing.assert_allclose(goals, [[-2.0, -0.35], [1.0, 1.0]])

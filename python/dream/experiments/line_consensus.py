@@ -408,9 +408,9 @@ class LineConsensus(Experiment):
 
     def steps(self, n: int) -> int:
         """3000 in the Robotarium; beyond, 3000 plus five times the time the robot farthest from
-        its place needs at full speed (half the line plus half the start block away): N = 100 took
-        6576-10,656 steps over seeds 0-9 but seed 3 17,636 (a group that passed the others late),
-        against a cap of 21,230."""
+        its place needs at full speed (half the line plus half the starting strip away): N = 100
+        took 7522-27,917 steps over seeds 0-9 against a cap of 34,487, N = 1000 65,444-119,393 over
+        seeds 0-2 against 322,177."""
         if self.arena_for(n) == ROBOTARIUM:
             return 3000
         travel = (n - 1) * self.spacing / 2 + (start_grid(n, self.spacing)[0] - 1) * START_SPACING / 2
