@@ -125,6 +125,7 @@ def _parser() -> argparse.ArgumentParser:
         "--fault", action="append", default=[], metavar="KIND=V1,V2", help="sweep a fault's values (repeatable)"
     )
     sweeper.add_argument("--backend", choices=BACKENDS, default="auto")
+    sweeper.add_argument("--swarm", action="store_true", help="run the experiment's swarm mode (see dream list)")
     sweeper.add_argument("--steps", type=_whole(1), default=None, help="step cap (default: what the run needs)")
     sweeper.add_argument("--workers", type=_whole(1), default=None, help="local worker processes (default: cores)")
     sweeper.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="use a running Dask scheduler instead")

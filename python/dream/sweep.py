@@ -36,7 +36,7 @@ from dream.experiments.runner import _count
 from dream.faults import Faults
 
 #: Input columns of every row, before one ``params.NAME`` column per declared parameter.
-INPUTS = ("experiment", "n", "seed", "backend", "step_cap")
+INPUTS = ("experiment", "n", "seed", "backend", "swarm", "step_cap")
 #: Metric columns of every row (``simulator``: the backend that ran, when ``backend`` is "auto").
 METRICS = ("simulator", "steps", "completed_step", "collisions", "boundary", "actuator", "success")
 #: Last columns: one ``measures.NAME`` column per measure comes before them.
@@ -57,12 +57,13 @@ class Task:
     n: int
     seed: int
     backend: str
+    swarm: bool
     step_cap: int | None
     params: tuple[tuple[str, Any], ...]
     faults: tuple[tuple[str, str], ...] = ()  #: ``--fault`` kinds and values, as on the command line
 
     def inputs(self) -> Row:
-        columns = dict(zip(INPUTS, (self.experiment, self.n, self.seed, self.backend, self.step_cap)))
+        columns = dict(zip(INPUTS, (self.experiment, self.n, self.seed, self.backend, self.swarm, self.step_cap)))
         return {
             **columns,
             **{f"params.{name}": value for name, value in self.params},
@@ -97,21 +98,25 @@ def plan(
     backend: str = "auto",
     steps: int | None = None,
     faults: Mapping[str, Iterable[Any]] | None = None,
+    swarm: bool = False,
 ) -> Plan:
     """Check a sweep and list its tasks, without running anything.
 
     Parameter values (Python values, or text as on the command line) are converted to the
     experiment's declared types; the experiment's ``check`` sees every size. ``faults`` maps a
     ``--fault`` kind to its values (``{"loss": [0, 0.3], "crash": ["0.1@300"]}``), swept like
-    the parameters.
+    the parameters. ``swarm`` runs the experiment's swarm mode.
 
     Raises
     ------
     ValueError
         Naming the argument: an unknown experiment, parameter or backend, a value of the wrong
-        type, an empty list, a seed below 0, a robot count below 1 or one the experiment refuses.
+        type, an empty list, a seed below 0, a robot count below 1 or one the experiment refuses,
+        ``swarm`` for an experiment without a swarm mode.
     """
     source, cls, base = _source(experiment)
+    if swarm and not cls.has_swarm_mode:
+        raise ValueError(f"swarm: {cls.label()} has no swarm mode (dream list shows which experiments have one)")
     seeds = _counts(seeds, "seeds", 0)
     sizes = _counts(cls.default_n if n is None else n, "n", 1)
     if backend not in BACKENDS:
@@ -134,7 +139,9 @@ def plan(
                 raise ValueError(f"n: the Robotarium backend runs at most {MAX_ROBOTS} robots, got {size}")
             exp.check(size, backend)
             for seed in seeds:
-                task = Task(cls.label(), size, seed, backend, steps, tuple(exp.params.items()), fault_options)
+                task = Task(
+                    cls.label(), size, seed, backend, bool(swarm), steps, tuple(exp.params.items()), fault_options
+                )
                 tasks.setdefault(task.key(), task)
     ordered = list(tasks.values())
     columns = ordered[0].inputs()
@@ -155,6 +162,7 @@ def sweep(
     backend: str = "auto",
     steps: int | None = None,
     faults: Mapping[str, Iterable[Any]] | None = None,
+    swarm: bool = False,
     progress: bool = True,
 ) -> list[Row]:
     """Run ``experiment`` for every (n, parameter values, seed) on Dask, one task per run.
@@ -184,6 +192,8 @@ def sweep(
     faults : mapping of str to a list of values, optional
         ``--fault`` kinds to sweep and their values (:mod:`dream.faults`), e.g.
         ``{"loss": [0, 0.3, 0.6]}``: the ``faults.KIND`` columns.
+    swarm : bool
+        Run the experiment's swarm mode (as :func:`dream.run`), for sweeps of thousands of robots.
     progress : bool
         A progress bar on stderr (only when stderr is a terminal).
 
@@ -191,7 +201,7 @@ def sweep(
     -------
     list of dict
         One row per run of this sweep, in task order (``pandas.DataFrame(rows)`` makes a table):
-        the inputs (``experiment, n, seed, backend, step_cap, params.NAME, faults.KIND``), the metrics
+        the inputs (``experiment, n, seed, backend, swarm, step_cap, params.NAME, faults.KIND``), the metrics
         (``simulator, steps, completed_step, collisions, boundary, actuator, success,
         measures.NAME``), ``wall_time`` (s, on the worker), ``worker`` (its address) and
         ``error`` (``"Type: message"`` of a run that raised, else ``None``). Rows read back from
@@ -206,7 +216,7 @@ def sweep(
         raise ValueError("workers: sizes the local cluster; with scheduler, the cluster's own workers run the tasks")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
-    sweep_plan = plan(experiment, seeds, n, params, backend, steps, faults)
+    sweep_plan = plan(experiment, seeds, n, params, backend, steps, faults, swarm)
     with Table(out, sweep_plan) as table:
         todo = [task for task in sweep_plan.tasks if task.key() not in table.done]
         if todo:
@@ -234,7 +244,7 @@ def run_task(source: str | type[Experiment], task: Task) -> Row:
             cls = find(source) if isinstance(source, str) else source
             result = run(
                 cls, n=task.n, seed=task.seed, backend=task.backend, steps=task.step_cap,
-                faults=task.fault_model(), **dict(task.params),
+                faults=task.fault_model(), swarm=task.swarm, **dict(task.params),
             )  # fmt: skip
         data = result.to_dict()
         row.update({"simulator": data["backend"], **{key: data[key] for key in METRICS[1:]}})
@@ -265,11 +275,12 @@ class Table:
             with self.path.open(newline="", encoding="utf-8") as file:
                 reader = csv.DictReader(file)
                 header = list(reader.fieldnames or [])
-                missing = [column for column in INPUTS if column not in header]
+                missing = [column for column in INPUTS if column not in header and column != "swarm"]
                 if missing:
                     raise ValueError(f"out: {self.path} is not a sweep table (no column {missing[0]!r})")
                 ours = {task.key() for task in sweep_plan.tasks}
                 for row in reader:
+                    row.setdefault("swarm", "False")  # a table from before sweeps had --swarm: robot by robot
                     key = self._key(row)
                     if not row.get("error"):
                         self.done[key] = {column: _value(text) for column, text in row.items()}
@@ -396,7 +407,7 @@ def command(args: argparse.Namespace) -> int:
         rows = sweep(
             args.experiment, args.seeds, args.n, grid, workers=args.workers, scheduler=args.scheduler,
             out=args.out, plot=args.plot, backend=args.backend, steps=args.steps, faults=fault_grid,
-            progress=not args.no_progress,
+            swarm=args.swarm, progress=not args.no_progress,
         )  # fmt: skip
     except ValueError as err:  # bad values or parameters, an unreachable scheduler, --out not a sweep table
         raise UsageError(str(err)) from None

@@ -39,7 +39,15 @@ class Drift(Experiment):
         return step >= 4
 
     def measures(self):
-        return {"mean_x": float(self.sim.poses[0].mean()), "seed": self.world.seed}
+        return {"mean_x": float(self.sim.poses[0].mean()), "seed": self.world.seed, "swarm": self.swarm}
+
+    has_swarm_mode = True
+
+    def build_swarm(self, n):
+        self.build(n)
+
+    def swarm_step(self, step, x):
+        return [[self.speed] * self.n, [0.0] * self.n]
 """
 
 
@@ -214,6 +222,32 @@ def test_plan_sweeps_faults_as_input_columns(drift):
     assert [t.inputs()["faults.loss"] for t in sweep_plan.tasks] == ["0", "0.3"]
     assert sweep_plan.swept == ["faults.loss"]
     assert sweep_plan.tasks[1].fault_model() == dream.Faults(loss=0.3, crash=0.5, crash_at=3)
+
+
+def test_sweep_runs_the_swarm_mode_and_refuses_it_where_there_is_none(drift, tmp_path, capsys):
+    out = tmp_path / "swarm.csv"
+    argv = ["sweep", drift, "--seeds", "0,1", "--backend", "fast", "--workers", "1", "--swarm"]
+    assert main([*argv, "--out", str(out), "--no-progress"]) == 0
+    rows = read(out)
+    assert [(r["seed"], r["swarm"], r["measures.swarm"], r["success"]) for r in rows] == [
+        ("0", "True", "True", "True"),
+        ("1", "True", "True", "True"),
+    ]
+    assert float(rows[0]["measures.mean_x"]) != 0.0  # the swarm step drove them
+    assert not plan(drift, seeds=[0]).tasks[0].swarm
+    with pytest.raises(ValueError, match="swarm: affine-formation has no swarm mode"):
+        plan("affine-formation", seeds=[0], swarm=True)
+
+
+def test_table_from_before_the_swarm_column_resumes_as_robot_by_robot_runs(drift, tmp_path):
+    out = tmp_path / "old.csv"
+    out.write_text("experiment,n,seed,backend,step_cap,params.speed,success,error\ndrift,3,0,auto,,0.05,True,\n")
+    task = plan(drift, seeds=[0]).tasks[0]
+    with Table(out, plan(drift, seeds=[0])) as table:
+        assert task.key() in table.done
+    swarm = plan(drift, seeds=[0], swarm=True)
+    with Table(out, swarm) as table:
+        assert swarm.tasks[0].key() not in table.done  # a swarm run is another run
 
 
 def test_plan_of_a_builtin_sends_its_name_and_refuses_bad_values():
