@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from dream._checks import FloatArray, RobotCallback, as_array, check_nonnegative, check_robot_id
+from dream._checks import FloatArray, RobotCallback, check_nonnegative, check_robot_id
 from dream.obstacles import sensed
 from dream.world import current_world
 
@@ -66,14 +66,15 @@ class Sensor:
             if state.dropped():
                 return
             noise = math.hypot(noise, state.faults.sensor_noise)
-        self.ret = self.add_noise(values, noise)
+        # Without noise, the reading is the values as an array of its own: skip the noise checks.
+        self.ret = np.array(values, dtype=np.float64) if noise == 0.0 else self.add_noise(values, noise)
         self.callback(self.ret)
 
     def update(self, x: Any) -> None:
         """Take the attached robot's pose from the pose array ``x`` ``(3, n)``."""
         poses = self.world.checked_poses(x)
         check_robot_id(self.robot_id, poses.shape[1], "x")
-        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in poses[:, self.robot_id])
+        self.pos_x, self.pos_y, self.rot_w = poses[:, self.robot_id].tolist()
         self._poses = poses
 
 
@@ -136,7 +137,7 @@ class MovementSensor(Sensor):
         """Detect from poses ``x`` ``(3, n)`` and last commands ``v`` ``(2, n)``; call the callback."""
         super().update(x)
         poses = self._poses
-        commands = as_array(v, "v", (2, poses.shape[1]))
+        commands = self.world.checked_commands(v, poses.shape[1])
         found, distances = self.world.neighbours_of(
             poses, self.robot_id, self.range, heading=self.rot_w, direction=self.direction, fov=self.wide
         )
