@@ -114,10 +114,14 @@ class Robot:
         """Set the linear speed to 0 (the robot still turns) when driving along its heading would
         bring it within ``near`` (m) of a robot at ``offsets`` ``(k, 2)`` (its own position less
         theirs, taken as standing still) in the next :data:`GUARD_HORIZON` seconds."""
-        offsets = np.asarray(offsets, dtype=np.float64).reshape(-1, 2)
-        if self.dxu[0] == 0.0 or not len(offsets):
+        speed = float(self.dxu[0])
+        if speed == 0.0:
             return
-        moving = self.dxu[0] * np.array([math.cos(self.rot_w), math.sin(self.rot_w)])
+        offsets = np.asarray(offsets, dtype=np.float64).reshape(-1, 2)
+        offsets = offsets[in_reach(offsets, abs(speed), near)]
+        if not len(offsets):
+            return
+        moving = speed * np.array([math.cos(self.rot_w), math.sin(self.rot_w)])
         if rules.closing_in(offsets, np.broadcast_to(moving, offsets.shape), near, GUARD_HORIZON).any():
             self.dxu[0] = 0.0
 
@@ -151,6 +155,13 @@ class Robot:
         return self._limits[1]
 
 
+def in_reach(offsets: np.ndarray, speeds: Any, near: float) -> np.ndarray:
+    """``(k,)`` bool: which robots at ``offsets`` ``(k, 2)`` (m) a robot driving at ``speeds``
+    ``(k,)`` or ``()`` (m/s) could come within ``near`` (m) of in the next :data:`GUARD_HORIZON`
+    seconds; the guard need not look at the others (the margin covers rounding)."""
+    return np.hypot(offsets[:, 0], offsets[:, 1]) < near + np.abs(speeds) * GUARD_HORIZON + 1e-9
+
+
 def stopping(
     speeds: np.ndarray, headings: np.ndarray, owners: np.ndarray, offsets: np.ndarray, near: float
 ) -> np.ndarray:
@@ -158,9 +169,7 @@ def stopping(
     ``speeds`` ``(n,)`` (m/s) along ``headings`` ``(n,)``, comes within ``near`` (m) of a robot it
     sees in the next :data:`GUARD_HORIZON` seconds, ``(n,)`` bool. ``owners`` ``(k,)`` and
     ``offsets`` ``(k, 2)``: who sees each other robot, and its position less that robot's (m)."""
-    # Only robots within reach in the horizon can be closed in on (the margin covers rounding).
-    reach = near + np.abs(speeds[owners]) * GUARD_HORIZON + 1e-9
-    close = np.flatnonzero(np.hypot(offsets[:, 0], offsets[:, 1]) < reach)
+    close = np.flatnonzero(in_reach(offsets, speeds[owners], near))
     owners, offsets = owners[close], offsets[close]
     moving = speeds[owners, None] * np.column_stack((np.cos(headings[owners]), np.sin(headings[owners])))
     hit = rules.closing_in(offsets, moving, near, GUARD_HORIZON)

@@ -32,8 +32,12 @@ def _pairs(*values: Any) -> bool:
 
 
 def _scalars(*values: Any) -> bool:
-    """Whether every one of ``values`` is a Python or NumPy number (a robot's own counter)."""
-    return all(isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) for v in values)
+    """Whether every one of ``values`` is a Python or NumPy number or a 0-d array (a robot's own counter)."""
+    return all(
+        (isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool))
+        or (type(v) is np.ndarray and v.ndim == 0)
+        for v in values
+    )
 
 
 def arrival(positions: Any, goals: Any, unreached: Any, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
@@ -188,7 +192,7 @@ def sidestep_preference(desired: Any, sidestep: Any, side: Any) -> tuple[FloatAr
             wanted = np.array([s * float(desired[1]), s * -float(desired[0])])
         else:
             wanted = desired.copy()
-        return wanted, np.asarray(max(sidestep - 1, 0))
+        return wanted, np.int64(max(int(sidestep) - 1, 0))
     desired = np.asarray(desired, dtype=np.float64)
     sidestep = np.asarray(sidestep)
     right = np.stack((desired[..., 1], -desired[..., 0]), axis=-1)
@@ -221,8 +225,8 @@ def sidestep_update(chosen: Any, desired: Any, sidestep: Any, side: Any, updates
     """
     if _pairs(chosen, desired) and _scalars(sidestep, side):
         if chosen[0] or chosen[1] or not (desired[0] or desired[1]):  # not blocked
-            return np.asarray(sidestep), np.asarray(side, dtype=np.float64)
-        return np.asarray(updates), np.asarray(-float(side) if sidestep > 0 else 1.0)
+            return np.int64(sidestep), np.float64(side)
+        return np.int64(updates), np.float64(-float(side) if sidestep > 0 else 1.0)
     blocked = ~np.any(chosen, axis=-1) & np.any(desired, axis=-1)
     sidestep = np.asarray(sidestep)
     side = np.asarray(side, dtype=np.float64)

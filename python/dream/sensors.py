@@ -141,8 +141,10 @@ class MovementSensor(Sensor):
         found, distances = self.world.neighbours_of(
             poses, self.robot_id, self.range, heading=self.rot_w, direction=self.direction, fov=self.wide
         )
-        angles = np.arctan2(self.pos_y - poses[1, found], self.pos_x - poses[0, found])
-        detections = np.column_stack((distances, angles, *seen_velocity(commands[:, found], poses[2, found])))
+        detections = np.empty((len(found), 4))  # filled column by column: cheaper than stacking
+        detections[:, 0] = distances
+        detections[:, 1] = np.arctan2(self.pos_y - poses[1, found], self.pos_x - poses[0, found])
+        detections[:, 2], detections[:, 3] = seen_velocity(commands[:, found], poses[2, found])
         self._report(detections)
 
 
