@@ -23,7 +23,10 @@ def as_array(value: Any, name: str, shape: tuple[int | None, ...]) -> FloatArray
         array = np.ascontiguousarray(value, dtype=np.float64)
     except (TypeError, ValueError) as err:
         raise ValueError(f"`{name}` must be a float array of shape {_show(shape)}: {err}") from None
-    if array.ndim != len(shape) or any(want is not None and got != want for got, want in zip(array.shape, shape)):
+    fits = array.shape == shape or (
+        array.ndim == len(shape) and all(want is None or got == want for got, want in zip(array.shape, shape))
+    )
+    if not fits:
         raise ValueError(f"`{name}` must have shape {_show(shape)}, got {array.shape}")
     if not np.isfinite(array).all():
         bad = np.argwhere(~np.isfinite(array))[0]

@@ -77,7 +77,8 @@ class Robot:
 
     def update_odom(self, pose: Any) -> None:
         """Odometry callback: take ``pose`` ``[x, y, theta]`` as the robot's belief of its pose."""
-        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in pose)
+        x, y, theta = pose
+        self.pos_x, self.pos_y, self.rot_w = float(x), float(y), float(theta)
 
     @property
     def has_pose(self) -> bool:

@@ -28,16 +28,22 @@ def _pairs(*values: Any) -> bool:
     then take a scalar path, which skips NumPy's per-call cost on tiny arrays (most of a robot's
     decision time) and rounds as the array path (same operations in the same order, and the
     same NumPy functions wherever a result could differ from :mod:`math`'s)."""
-    return all(type(v) is np.ndarray and v.shape == (2,) and v.dtype == np.float64 for v in values)
+    for v in values:  # a loop: a generator would cost as much as the check
+        if type(v) is not np.ndarray or v.shape != (2,) or v.dtype is not _FLOAT64:
+            return False
+    return True
 
 
 def _scalars(*values: Any) -> bool:
     """Whether every one of ``values`` is a Python or NumPy number or a 0-d array (a robot's own counter)."""
-    return all(
-        (isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool))
-        or (type(v) is np.ndarray and v.ndim == 0)
-        for v in values
-    )
+    for v in values:
+        if type(v) is bool or not (isinstance(v, _NUMBERS) or (type(v) is np.ndarray and v.ndim == 0)):
+            return False
+    return True
+
+
+_FLOAT64 = np.dtype(np.float64)
+_NUMBERS = (int, float, np.integer, np.floating)
 
 
 def arrival(positions: Any, goals: Any, unreached: Any, tolerance: float) -> tuple[np.ndarray, np.ndarray]:

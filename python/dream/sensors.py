@@ -143,8 +143,9 @@ class MovementSensor(Sensor):
         )
         detections = np.empty((len(found), 4))  # filled column by column: cheaper than stacking
         detections[:, 0] = distances
-        detections[:, 1] = np.arctan2(self.pos_y - poses[1, found], self.pos_x - poses[0, found])
-        detections[:, 2], detections[:, 3] = seen_velocity(commands[:, found], poses[2, found])
+        seen = poses[:, found]
+        detections[:, 1] = np.arctan2(self.pos_y - seen[1], self.pos_x - seen[0])
+        detections[:, 2], detections[:, 3] = seen_velocity(commands[:, found], seen[2])
         self._report(detections)
 
 
