@@ -77,7 +77,7 @@ class Robot:
 
     def update_odom(self, pose: Any) -> None:
         """Odometry callback: take ``pose`` ``[x, y, theta]`` as the robot's belief of its pose."""
-        x, y, theta = pose
+        x, y, theta = pose.tolist() if type(pose) is np.ndarray else pose
         self.pos_x, self.pos_y, self.rot_w = float(x), float(y), float(theta)
 
     @property

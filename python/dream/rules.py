@@ -64,6 +64,9 @@ def arrival(positions: Any, goals: Any, unreached: Any, tolerance: float) -> tup
         ``arrived``: within ``tolerance``; ``reached``: arrived and not counted before (the
         robot raises its state once, then clears ``unreached``).
     """
+    if _pairs(positions, goals) and (isinstance(unreached, (bool, np.bool_)) or _scalars(unreached)):
+        arrived = np.hypot(float(goals[0]) - float(positions[0]), float(goals[1]) - float(positions[1])) < tolerance
+        return arrived, arrived & np.bool_(unreached)
     offset = np.asarray(goals, dtype=np.float64) - np.asarray(positions, dtype=np.float64)
     arrived = np.hypot(offset[..., 0], offset[..., 1]) < tolerance
     return arrived, arrived & np.asarray(unreached, dtype=bool)

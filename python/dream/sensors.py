@@ -84,7 +84,8 @@ def seen_velocity(commands: np.ndarray, headings: np.ndarray) -> tuple[np.ndarra
     :data:`PROJECTION_DISTANCE` ahead of each."""
     lin, ang = commands
     cos, sin = np.cos(headings), np.sin(headings)
-    return lin * cos - PROJECTION_DISTANCE * ang * sin, lin * sin + PROJECTION_DISTANCE * ang * cos
+    ahead = PROJECTION_DISTANCE * ang
+    return lin * cos - ahead * sin, lin * sin + ahead * cos
 
 
 class MovementSensor(Sensor):

@@ -58,3 +58,13 @@ def test_sidestep_rules_scalar_path_matches_rows(scene, rng):
         one_counter, one_side = rules.sidestep_update(velocities[i], desired[i], int(after[i]), float(side[i]), 10)
         assert (int(one_counter), float(one_side)) == (counter[i], turned[i])
     assert len(np.unique(counter)) > 2 and (turned != side).any()  # blocked robots step aside
+
+
+def test_arrival_scalar_path_matches_rows(scene, rng):
+    positions, goals, _ = scene
+    goals = positions + rng.normal(0.0, 0.05, positions.shape)
+    unreached = rng.random(N) < 0.5
+    arrived, reached = rules.arrival(positions, goals, unreached, 0.05)
+    for i in range(N):
+        assert rules.arrival(positions[i], goals[i], bool(unreached[i]), 0.05) == (arrived[i], reached[i])
+    assert arrived.any() and not arrived.all() and reached.any()
