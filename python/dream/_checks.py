@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -23,12 +24,23 @@ def as_array(value: Any, name: str, shape: tuple[int | None, ...]) -> FloatArray
         array = np.ascontiguousarray(value, dtype=np.float64)
     except (TypeError, ValueError) as err:
         raise ValueError(f"`{name}` must be a float array of shape {_show(shape)}: {err}") from None
-    if array.ndim != len(shape) or any(want is not None and got != want for got, want in zip(array.shape, shape)):
+    fits = array.shape == shape or (
+        array.ndim == len(shape) and all(want is None or got == want for got, want in zip(array.shape, shape))
+    )
+    if not fits:
         raise ValueError(f"`{name}` must have shape {_show(shape)}, got {array.shape}")
-    if not np.isfinite(array).all():
+    if not all_finite(array):
         bad = np.argwhere(~np.isfinite(array))[0]
         raise ValueError(f"`{name}` contains a non-finite value (NaN or inf) at index {tuple(int(i) for i in bad)}")
     return array
+
+
+def all_finite(array: np.ndarray) -> bool:
+    """Whether every value of the float ``array`` is finite; a robot's small arrays through
+    :func:`math.isfinite` (several times faster there than NumPy's per-call cost)."""
+    if array.size <= 64:
+        return all(map(math.isfinite, array.ravel().tolist()))
+    return bool(np.isfinite(array).all())
 
 
 def as_poses(value: Any, name: str = "poses", n: int | None = None) -> FloatArray:

@@ -44,7 +44,7 @@ class Radio:
         """Take the attached robot's pose from the pose array ``x`` ``(3, n)``."""
         poses = self.world.checked_poses(x)
         check_robot_id(self.robot_id, poses.shape[1], "x")
-        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in poses[:, self.robot_id])
+        self.pos_x, self.pos_y, self.rot_w = poses[:, self.robot_id].tolist()
         self._poses = poses
 
     callback: Callback = RobotCallback()  # type: ignore[assignment]

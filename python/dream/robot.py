@@ -77,7 +77,8 @@ class Robot:
 
     def update_odom(self, pose: Any) -> None:
         """Odometry callback: take ``pose`` ``[x, y, theta]`` as the robot's belief of its pose."""
-        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in pose)
+        x, y, theta = pose.tolist() if type(pose) is np.ndarray else pose
+        self.pos_x, self.pos_y, self.rot_w = float(x), float(y), float(theta)
 
     @property
     def has_pose(self) -> bool:
@@ -114,10 +115,14 @@ class Robot:
         """Set the linear speed to 0 (the robot still turns) when driving along its heading would
         bring it within ``near`` (m) of a robot at ``offsets`` ``(k, 2)`` (its own position less
         theirs, taken as standing still) in the next :data:`GUARD_HORIZON` seconds."""
-        offsets = np.asarray(offsets, dtype=np.float64).reshape(-1, 2)
-        if self.dxu[0] == 0.0 or not len(offsets):
+        speed = float(self.dxu[0])
+        if speed == 0.0:
             return
-        moving = self.dxu[0] * np.array([math.cos(self.rot_w), math.sin(self.rot_w)])
+        offsets = np.asarray(offsets, dtype=np.float64).reshape(-1, 2)
+        offsets = offsets[in_reach(np.hypot(offsets[:, 0], offsets[:, 1]), abs(speed), near)]
+        if not len(offsets):
+            return
+        moving = speed * np.array([math.cos(self.rot_w), math.sin(self.rot_w)])
         if rules.closing_in(offsets, np.broadcast_to(moving, offsets.shape), near, GUARD_HORIZON).any():
             self.dxu[0] = 0.0
 
@@ -151,6 +156,13 @@ class Robot:
         return self._limits[1]
 
 
+def in_reach(distances: np.ndarray, speeds: Any, near: float) -> np.ndarray:
+    """``(k,)`` bool: which robots at ``distances`` ``(k,)`` (m) a robot driving at ``speeds``
+    ``(k,)`` or ``()`` (m/s) could come within ``near`` (m) of in the next :data:`GUARD_HORIZON`
+    seconds; the guard need not look at the others (the margin covers rounding)."""
+    return distances < near + np.abs(speeds) * GUARD_HORIZON + 1e-9
+
+
 def stopping(
     speeds: np.ndarray, headings: np.ndarray, owners: np.ndarray, offsets: np.ndarray, near: float
 ) -> np.ndarray:
@@ -158,9 +170,7 @@ def stopping(
     ``speeds`` ``(n,)`` (m/s) along ``headings`` ``(n,)``, comes within ``near`` (m) of a robot it
     sees in the next :data:`GUARD_HORIZON` seconds, ``(n,)`` bool. ``owners`` ``(k,)`` and
     ``offsets`` ``(k, 2)``: who sees each other robot, and its position less that robot's (m)."""
-    # Only robots within reach in the horizon can be closed in on (the margin covers rounding).
-    reach = near + np.abs(speeds[owners]) * GUARD_HORIZON + 1e-9
-    close = np.flatnonzero(np.hypot(offsets[:, 0], offsets[:, 1]) < reach)
+    close = np.flatnonzero(in_reach(np.hypot(offsets[:, 0], offsets[:, 1]), speeds[owners], near))
     owners, offsets = owners[close], offsets[close]
     moving = speeds[owners, None] * np.column_stack((np.cos(headings[owners]), np.sin(headings[owners])))
     hit = rules.closing_in(offsets, moving, near, GUARD_HORIZON)
@@ -324,11 +334,15 @@ class RobotHRVO(Robot):
         velocities are those of a point ahead of each robot, which a robot turning in place
         moves sideways, and each robot's own guard checks its own motion.
         """
-        if not self.has_pose or not len(self.detections):
+        if not self.has_pose or not len(self.detections) or self.dxu[0] == 0.0:
             return
+        near = min(self.spec.diameter + GUARD_MARGIN, self.safety)
         rows = np.asarray(self.detections)
-        offsets = rows[:, :1] * np.column_stack((np.cos(rows[:, 1]), np.sin(rows[:, 1])))
-        self.stop_short(offsets, min(self.spec.diameter + GUARD_MARGIN, self.safety))
+        # The sensor's distances tell who is within reach (the margin covers their rounding).
+        rows = rows[in_reach(rows[:, 0], abs(float(self.dxu[0])), near)]
+        if len(rows):
+            offsets = rows[:, :1] * np.column_stack((np.cos(rows[:, 1]), np.sin(rows[:, 1])))
+            self.stop_short(offsets, near)
 
     def steer(self, detections: Any, desired_velocity: Any, sidestep_updates: int = 10) -> FloatArray:
         """:meth:`HRVO`, for a robot that must not wait forever.

@@ -23,6 +23,29 @@ from dream._checks import Bounds, FloatArray
 ROUNDABOUT_LEAD = np.pi / 6
 
 
+def _pairs(*values: Any) -> bool:
+    """Whether every one of ``values`` is one robot's vector, a float64 ndarray ``(2,)``: the rules
+    then take a scalar path, which skips NumPy's per-call cost on tiny arrays (most of a robot's
+    decision time) and rounds as the array path (same operations in the same order, and the
+    same NumPy functions wherever a result could differ from :mod:`math`'s)."""
+    for v in values:  # a loop: a generator would cost as much as the check
+        if type(v) is not np.ndarray or v.shape != (2,) or v.dtype is not _FLOAT64:
+            return False
+    return True
+
+
+def _scalars(*values: Any) -> bool:
+    """Whether every one of ``values`` is a Python or NumPy number or a 0-d array (a robot's own counter)."""
+    for v in values:
+        if type(v) is bool or not (isinstance(v, _NUMBERS) or (type(v) is np.ndarray and v.ndim == 0)):
+            return False
+    return True
+
+
+_FLOAT64 = np.dtype(np.float64)
+_NUMBERS = (int, float, np.integer, np.floating)
+
+
 def arrival(positions: Any, goals: Any, unreached: Any, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
     """Which robots are at their goal, and which of them reached it just now.
 
@@ -41,6 +64,9 @@ def arrival(positions: Any, goals: Any, unreached: Any, tolerance: float) -> tup
         ``arrived``: within ``tolerance``; ``reached``: arrived and not counted before (the
         robot raises its state once, then clears ``unreached``).
     """
+    if _pairs(positions, goals) and (isinstance(unreached, (bool, np.bool_)) or _scalars(unreached)):
+        arrived = np.hypot(float(goals[0]) - float(positions[0]), float(goals[1]) - float(positions[1])) < tolerance
+        return arrived, arrived & np.bool_(unreached)
     offset = np.asarray(goals, dtype=np.float64) - np.asarray(positions, dtype=np.float64)
     arrived = np.hypot(offset[..., 0], offset[..., 1]) < tolerance
     return arrived, arrived & np.asarray(unreached, dtype=bool)
@@ -81,6 +107,19 @@ def roundabout_aim(positions: Any, goals: Any, semi_axes: tuple[float, float], i
     (n, 2) or (2,) ndarray
         The point to head for (m): the goal, or a point on the island's edge.
     """
+    if _pairs(positions, goals):
+        a, b = float(semi_axes[0]), float(semi_axes[1])
+        qx, qy = float(positions[0]) / a, float(positions[1]) / b
+        gx, gy = float(goals[0]) / a, float(goals[1]) / b
+        wx, wy = gx - qx, gy - qy
+        t = -(qx * wx + qy * wy) / max(wx * wx + wy * wy, 1e-300)
+        c = min(max(t, 0.0), 1.0)
+        if t > 0.0 and np.hypot(qx + c * wx, qy + c * wy) < island:
+            r = float(np.hypot(qx, qy))
+            turn = np.arccos(min(island / max(r, 1e-300), 1.0)) + ROUNDABOUT_LEAD
+            angle = float(np.arctan2(qy, qx) + turn)
+            gx, gy = island * float(np.cos(angle)), island * float(np.sin(angle))
+        return np.array([gx * a, gy * b])
     scale = np.asarray(semi_axes, dtype=np.float64)
     q = np.asarray(positions, dtype=np.float64) / scale
     g = np.asarray(goals, dtype=np.float64) / scale
@@ -119,6 +158,13 @@ def preferred_velocity(positions: Any, aims: Any, goals: Any, v_max: float, gain
     (n, 2) or (2,) ndarray
         Preferred single-integrator velocities (m/s); zero at the goal.
     """
+    if _pairs(positions, aims, goals):
+        px, py = float(positions[0]), float(positions[1])
+        ox, oy = float(aims[0]) - px, float(aims[1]) - py
+        distance = float(np.hypot(ox, oy))
+        speed = min(v_max, gain * float(np.hypot(float(goals[0]) - px, float(goals[1]) - py)))
+        factor = speed / max(distance, 1e-300) if distance > 0.0 else 0.0
+        return np.array([ox * factor, oy * factor])
     p = np.asarray(positions, dtype=np.float64)
     offset = np.asarray(aims, dtype=np.float64) - p
     left = np.asarray(goals, dtype=np.float64) - p
@@ -149,6 +195,13 @@ def sidestep_preference(desired: Any, sidestep: Any, side: Any) -> tuple[FloatAr
     sidestep : (n,) or () int ndarray
         The counter, one decision fewer.
     """
+    if _pairs(desired) and _scalars(sidestep, side):
+        if sidestep > 0:
+            s = float(side)
+            wanted = np.array([s * float(desired[1]), s * -float(desired[0])])
+        else:
+            wanted = desired.copy()
+        return wanted, np.int64(max(int(sidestep) - 1, 0))
     desired = np.asarray(desired, dtype=np.float64)
     sidestep = np.asarray(sidestep)
     right = np.stack((desired[..., 1], -desired[..., 0]), axis=-1)
@@ -179,6 +232,10 @@ def sidestep_update(chosen: Any, desired: Any, sidestep: Any, side: Any, updates
     -------
     sidestep, side : (n,) or () ndarray
     """
+    if _pairs(chosen, desired) and _scalars(sidestep, side):
+        if chosen[0] or chosen[1] or not (desired[0] or desired[1]):  # not blocked
+            return np.int64(sidestep), np.float64(side)
+        return np.int64(updates), np.float64(-float(side) if sidestep > 0 else 1.0)
     blocked = ~np.any(chosen, axis=-1) & np.any(desired, axis=-1)
     sidestep = np.asarray(sidestep)
     side = np.asarray(side, dtype=np.float64)

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from dream._checks import FloatArray, RobotCallback, as_array, check_nonnegative, check_robot_id
+from dream._checks import FloatArray, RobotCallback, check_nonnegative, check_robot_id
 from dream.obstacles import sensed
 from dream.world import current_world
 
@@ -66,14 +66,15 @@ class Sensor:
             if state.dropped():
                 return
             noise = math.hypot(noise, state.faults.sensor_noise)
-        self.ret = self.add_noise(values, noise)
+        # Without noise, the reading is the values as an array of its own: skip the noise checks.
+        self.ret = np.array(values, dtype=np.float64) if noise == 0.0 else self.add_noise(values, noise)
         self.callback(self.ret)
 
     def update(self, x: Any) -> None:
         """Take the attached robot's pose from the pose array ``x`` ``(3, n)``."""
         poses = self.world.checked_poses(x)
         check_robot_id(self.robot_id, poses.shape[1], "x")
-        self.pos_x, self.pos_y, self.rot_w = (float(v) for v in poses[:, self.robot_id])
+        self.pos_x, self.pos_y, self.rot_w = poses[:, self.robot_id].tolist()
         self._poses = poses
 
 
@@ -83,7 +84,8 @@ def seen_velocity(commands: np.ndarray, headings: np.ndarray) -> tuple[np.ndarra
     :data:`PROJECTION_DISTANCE` ahead of each."""
     lin, ang = commands
     cos, sin = np.cos(headings), np.sin(headings)
-    return lin * cos - PROJECTION_DISTANCE * ang * sin, lin * sin + PROJECTION_DISTANCE * ang * cos
+    ahead = PROJECTION_DISTANCE * ang
+    return lin * cos - ahead * sin, lin * sin + ahead * cos
 
 
 class MovementSensor(Sensor):
@@ -136,12 +138,15 @@ class MovementSensor(Sensor):
         """Detect from poses ``x`` ``(3, n)`` and last commands ``v`` ``(2, n)``; call the callback."""
         super().update(x)
         poses = self._poses
-        commands = as_array(v, "v", (2, poses.shape[1]))
+        commands = self.world.checked_commands(v, poses.shape[1])
         found, distances = self.world.neighbours_of(
             poses, self.robot_id, self.range, heading=self.rot_w, direction=self.direction, fov=self.wide
         )
-        angles = np.arctan2(self.pos_y - poses[1, found], self.pos_x - poses[0, found])
-        detections = np.column_stack((distances, angles, *seen_velocity(commands[:, found], poses[2, found])))
+        detections = np.empty((len(found), 4))  # filled column by column: cheaper than stacking
+        detections[:, 0] = distances
+        seen = poses[:, found]
+        detections[:, 1] = np.arctan2(self.pos_y - seen[1], self.pos_x - seen[0])
+        detections[:, 2], detections[:, 3] = seen_velocity(commands[:, found], seen[2])
         self._report(detections)
 
 

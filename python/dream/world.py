@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from dream import kernels
-from dream._checks import as_poses
+from dream._checks import as_array, as_poses
 from dream.faults import Faults, FaultState
 from dream.timers import Timer
 
@@ -52,11 +52,13 @@ class World:
         self._board: dict[int, Any] = {}
         self._in_flight: list[tuple[float, int, Any]] = []  # (visible at, sender, data)
         self._indexed_poses: np.ndarray | None = None  # the pose array the indexes were built for
-        self._indexed_xy = np.zeros((2, 0))  # ...and its positions then, to notice in-place changes
+        self._indexed_xy = b""  # ...and the bytes of its positions then, to notice in-place changes
         self._indexes: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._checked_input: Any = None  # the last pose array checked, at clock `_checked_time`
         self._checked_time: float = -1
         self._checked = np.zeros((3, 0))
+        self._commands_input: Any = None  # the last command array checked as is, at `_commands_time`
+        self._commands_time: float = -1
 
     # -- poses -----------------------------------------------------------------------------
     def checked_poses(self, x: Any) -> np.ndarray:
@@ -69,6 +71,20 @@ class World:
             self._checked = as_poses(x, "x")
             self._checked_input, self._checked_time = x, self.time
         return self._checked
+
+    def checked_commands(self, v: Any, n: int) -> np.ndarray:
+        """``v`` checked as the ``(2, n)`` unicycle commands of the step (shape, finite values).
+
+        Checked once per step of the world's clock when ``v`` is already a float64 array (robots
+        write their columns into it during the step, and every sensor sees that array itself);
+        anything else is converted at every call, so that no sensor reads a stale copy.
+        """
+        if v is self._commands_input and self.time == self._commands_time and v.shape == (2, n):
+            return v
+        commands = as_array(v, "v", (2, n))
+        if commands is v:
+            self._commands_input, self._commands_time = v, self.time
+        return commands
 
     # -- neighbours ------------------------------------------------------------------------
     def neighbours_of(
@@ -86,15 +102,19 @@ class World:
         Same answer as :func:`dream.kernels.neighbours_of`, but from one whole-swarm index per
         pose array and radius (Rust grid query), shared by every sensor and radio of the step.
         """
-        if poses is not self._indexed_poses or not np.array_equal(poses[:2], self._indexed_xy):
-            self._indexed_poses, self._indexed_xy = poses, poses[:2].copy()
+        # The bytes of the positions tell in-place changes (rps moves one array) far faster
+        # than an element-wise comparison; the poses are checked finite, so equal bytes are equal values.
+        xy = poses[:2].tobytes()
+        if poses is not self._indexed_poses or xy != self._indexed_xy:
+            self._indexed_poses, self._indexed_xy = poses, xy
             self._indexes = {}
         if radius not in self._indexes:
             self._indexes[radius] = kernels.neighbours(poses[:2].T, radius)
         indptr, indices, distances = self._indexes[radius]
         row = slice(indptr[robot_id], indptr[robot_id + 1])
         found, dist = indices[row], distances[row]
-        if heading is None:
+        # A full circle sees everyone: the wrapped angle below is never beyond pi.
+        if heading is None or fov >= 2 * np.pi:
             return found, dist
         dx = poses[0, found] - poses[0, robot_id]
         dy = poses[1, found] - poses[1, robot_id]
@@ -223,12 +243,22 @@ class World:
 
 
 def _copy(data: Any) -> Any:
-    """A deep copy; through pickle when possible, which is many times faster than ``deepcopy``
-    for the lists and arrays robots usually send."""
+    """A deep copy; arrays of numbers, alone or in a tuple or list, copied directly (the usual
+    messages), the rest through pickle when possible, which is many times faster than
+    ``deepcopy`` for the lists and arrays robots usually send."""
+    if _plain_array(data):
+        return data.copy(order="K")
+    if type(data) in (tuple, list) and all(_plain_array(item) for item in data):
+        return type(data)(item.copy(order="K") for item in data)
     try:
         return pickle.loads(pickle.dumps(data, protocol=pickle.HIGHEST_PROTOCOL))
     except (pickle.PicklingError, TypeError, AttributeError):
         return copy.deepcopy(data)
+
+
+def _plain_array(data: Any) -> bool:
+    """Whether ``data`` is an ndarray (not a subclass) of numbers, which ``copy`` copies deeply."""
+    return type(data) is np.ndarray and not data.dtype.hasobject
 
 
 _stack: list[World] = [World()]

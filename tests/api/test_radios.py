@@ -113,6 +113,25 @@ def test_range_radio_receivers_get_copies(world):
     assert world.messages[2] == [1, 2]
 
 
+def test_range_radio_copies_messages_of_arrays_deeply(world):
+    # Arrays, alone or in a tuple, skip pickle: they must still be copies, dtype and values kept.
+    x = _poses((0, 0), (0.1, 0), (0.2, 0))
+    states, beats = np.array([1, 2]), np.array([0.5, 1.5])
+    Radio(2).send_data((states, beats))
+    states[0], beats[0] = 7, 7.0
+
+    def vandal(messages):
+        messages[0][0][1] = -1
+
+    RangeRadio(0, "radio", vandal).update(x)
+    inbox = _Inbox()
+    RangeRadio(1, "radio", inbox).update(x)
+    (got,) = inbox.received[0]
+    assert type(got) is tuple and got[0].dtype == np.int64 and got[1].dtype == np.float64
+    assert got[0].tolist() == [1, 2] and got[1].tolist() == [0.5, 1.5]
+    assert world.messages[2][0].tolist() == [1, 2]
+
+
 def test_graph_radio_hears_positive_links_only():
     # Row 0: self-loop (ignored), 0.5 link, 0 no link, negative no link, 2 link.
     adjacency = np.array(
