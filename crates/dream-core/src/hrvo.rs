@@ -97,7 +97,11 @@ impl Neighbour {
 
     /// The neighbour at `offset` (its position minus the robot's) moving with `velocity`.
     pub fn from_offset(offset: Vec2, velocity: Vec2) -> Self {
-        let distance = (offset[0] * offset[0] + offset[1] * offset[1]).sqrt();
+        Self::at(offset, (offset[0] * offset[0] + offset[1] * offset[1]).sqrt(), velocity)
+    }
+
+    /// [`Neighbour::from_offset`] with the offset's length already known.
+    fn at(offset: Vec2, distance: f64, velocity: Vec2) -> Self {
         let direction = if distance > 0.0 {
             [offset[0] / distance, offset[1] / distance]
         } else {
@@ -546,13 +550,7 @@ pub fn hrvo_batch(
     }
     let scratch = || Scratch::new(grid, &params);
     let decide = |scratch: &mut Scratch, i: usize| choose(scratch, preferred[i], positions[i], &params);
-    let cone = |i: usize, j: usize, offset: Vec2| {
-        Cone::new(
-            velocities[i],
-            &Neighbour::from_offset(offset, velocities[j]),
-            params.safety,
-        )
-    };
+    let cone = |i: usize, b: &Neighbour| Cone::new(velocities[i], b, params.safety);
     if let Some((indptr, indices)) = neighbours {
         check_csr(indptr, indices, n)?;
         let robot = |scratch: &mut Scratch, i: usize| {
@@ -561,7 +559,8 @@ pub fn hrvo_batch(
             scratch.cones.clear();
             scratch.cones.extend(row.iter().map(|&j| {
                 let q = positions[j as usize];
-                cone(i, j as usize, [q[0] - p[0], q[1] - p[1]])
+                let j = j as usize;
+                cone(i, &Neighbour::from_offset([q[0] - p[0], q[1] - p[1]], velocities[j]))
             }));
             decide(scratch, i)
         };
@@ -575,7 +574,16 @@ pub fn hrvo_batch(
     let robot = |scratch: &mut Scratch, i: usize| {
         let Scratch { cones, run, .. } = scratch;
         cones.clear();
-        near.for_each(i, run, |j, offset, _| cones.push(cone(i, j, offset)));
+        near.for_each(i, run, |j, offset, distance| {
+            // The search's distance is `from_offset`'s unless the squares overflowed (beyond
+            // ~1.3e154 m, where the search takes `hypot`).
+            let b = if distance < 1e150 {
+                Neighbour::at(offset, distance, velocities[j])
+            } else {
+                Neighbour::from_offset(offset, velocities[j])
+            };
+            cones.push(cone(i, &b));
+        });
         decide(scratch, i)
     };
     let order = near.order();
