@@ -15,9 +15,13 @@
 //!
 //! The chosen velocity is the candidate closest to `v_pref` (first in candidate order on ties)
 //! that no neighbour forbids and, with bounds, keeps `position + v` strictly inside; zero if
-//! none does. A free preferred velocity is taken after one test per neighbour; otherwise the
-//! candidates are bucketed by distance and tested band by band, nearest band first. The
-//! arithmetic matches the NumPy reference operation by operation.
+//! none does. A free preferred velocity is taken after one test per neighbour. Otherwise the
+//! candidates, grouped once per call into small clusters of consecutive ones (a few speeds along
+//! one direction of the polar grid), are searched cluster by cluster, nearest clusters first: a
+//! cluster that cannot beat the best candidate so far is passed over, and one that a single cone
+//! surely forbids whole (its edge tests at the cluster's centre clear the cluster's radius plus a
+//! bound on rounding) costs one test. Each candidate that is tested goes through exactly the
+//! reference's arithmetic, so the answer is the reference's to the bit.
 
 use std::f64::consts::TAU;
 
@@ -32,8 +36,9 @@ pub type Vec2 = [f64; 2];
 
 /// Rows below this count run on one thread.
 const PARALLEL_ROBOTS: usize = 256;
-/// Distance bands the candidates are sorted into (see `choose`).
-const BANDS: usize = 24;
+/// Distance rings the candidates' clusters are sorted into (see `choose`): with ~60 clusters,
+/// 12 rings cost fewer instructions than 6 or 24 (callgrind, benches/scenes.py).
+const BANDS: usize = 12;
 /// Relative tolerance under which `v_A` is equally close to both RVO edges.
 pub const TIE: f64 = 1e-9;
 
@@ -93,7 +98,11 @@ impl Neighbour {
 
     /// The neighbour at `offset` (its position minus the robot's) moving with `velocity`.
     pub fn from_offset(offset: Vec2, velocity: Vec2) -> Self {
-        let distance = (offset[0] * offset[0] + offset[1] * offset[1]).sqrt();
+        Self::at(offset, (offset[0] * offset[0] + offset[1] * offset[1]).sqrt(), velocity)
+    }
+
+    /// [`Neighbour::from_offset`] with the offset's length already known.
+    fn at(offset: Vec2, distance: f64, velocity: Vec2) -> Self {
         let direction = if distance > 0.0 {
             [offset[0] / distance, offset[1] / distance]
         } else {
@@ -187,20 +196,108 @@ impl Cone {
     }
 }
 
-/// The candidate grid as columns, shared by every robot of a call.
-#[derive(Debug)]
-struct Columns {
-    xs: Vec<f64>,
-    ys: Vec<f64>,
+/// Relative slack in the bounds that settle a whole cluster at once: far above the few units
+/// in the last place that rounding can move the per-candidate arithmetic.
+const SLACK: f64 = 1e-12;
+/// Absolute slack for the same bounds, covering subnormal rounding.
+const TINY: f64 = 1e-300;
+/// Bounds at or above this are not trusted (the per-candidate arithmetic might overflow).
+const HUGE: f64 = 1e100;
+/// A cluster holds at most this many consecutive candidates ...
+const CLUSTER_SIZE: usize = 8;
+/// ... within a circle whose half-width is at most this part of the grid's reach.
+const CLUSTER_SPAN: f64 = 1.0 / 8.0;
+
+impl Cone {
+    /// Whether `forbids` holds for every candidate within `radius` of `centre`: both edge tests
+    /// at the centre clear the circle's width plus a bound on the rounding of either evaluation
+    /// (`pad` is [`pad`] of the circle).
+    fn covers(&self, [cx, cy]: Vec2, pad: f64) -> bool {
+        let margin =
+            |[e0, e1]: Vec2, [a0, a1]: Vec2| (e0.abs() + e1.abs()) * (pad + SLACK * (a0.abs() + a1.abs())) + TINY;
+        let ([l0, l1], [r0, r1]) = (self.left, self.right);
+        let ([la0, la1], [ra0, ra1]) = (self.left_apex, self.right_apex);
+        let (left, right) = (l0 * (cy - la1) - l1 * (cx - la0), r0 * (cy - ra1) - r1 * (cx - ra0));
+        let (to_left, to_right) = (margin(self.left, self.left_apex), margin(self.right, self.right_apex));
+        to_left < HUGE && to_right < HUGE && left + to_left < 0.0 && right - to_right > 0.0
+    }
 }
 
-impl Columns {
-    fn new(grid: &[Vec2]) -> Self {
-        Self {
-            xs: grid.iter().map(|v| v[0]).collect(),
-            ys: grid.iter().map(|v| v[1]).collect(),
+/// The part of [`Cone::covers`]'s margin that depends on the circle only: its radius, and
+/// the rounding of an edge test at any of its points.
+fn pad([cx, cy]: Vec2, radius: f64) -> f64 {
+    radius * (1.0 + SLACK) + SLACK * (cx.abs() + cy.abs() + 2.0 * radius)
+}
+
+/// Consecutive candidates that lie close together, as columns: cluster c holds candidates
+/// `starts[c]..starts[c + 1]`, all within `radii[c]` of `(xs[c], ys[c])`, and `pads[c]` is
+/// [`pad`] of that circle. In the polar grid a cluster is a few speeds along one direction.
+#[derive(Debug, Clone, Default)]
+struct Clusters {
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+    radii: Vec<f64>,
+    pads: Vec<f64>,
+    /// The largest radius.
+    widest: f64,
+    starts: Vec<usize>,
+}
+
+impl Clusters {
+    /// Candidate 0 alone when `alone` (the clamped preferred velocity, placed per robot), then
+    /// the others grouped greedily in order.
+    fn new(xs: &[f64], ys: &[f64], alone: bool) -> Self {
+        let mut clusters = Self::default();
+        let reach = xs.iter().chain(ys).fold(0.0, |far: f64, v| far.max(v.abs()));
+        let mut start = 0;
+        let mut bounds = [f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY];
+        for k in 0..xs.len() {
+            let grown = [
+                bounds[0].min(xs[k]),
+                bounds[1].max(xs[k]),
+                bounds[2].min(ys[k]),
+                bounds[3].max(ys[k]),
+            ];
+            let wide = (grown[1] - grown[0]).max(grown[3] - grown[2]) > 2.0 * CLUSTER_SPAN * reach;
+            if k > start && ((alone && start == 0) || k - start == CLUSTER_SIZE || wide) {
+                clusters.push(xs, ys, start, k);
+                start = k;
+                bounds = [xs[k], xs[k], ys[k], ys[k]];
+            } else {
+                bounds = grown;
+            }
         }
+        if start < xs.len() {
+            clusters.push(xs, ys, start, xs.len());
+        }
+        clusters.starts.push(xs.len());
+        clusters
     }
+
+    fn push(&mut self, xs: &[f64], ys: &[f64], start: usize, end: usize) {
+        let middle = |v: &[f64]| {
+            let (low, high) = v
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+            low + (high - low) / 2.0
+        };
+        let (cx, cy) = (middle(&xs[start..end]), middle(&ys[start..end]));
+        let radius = (start..end).fold(0.0, |r: f64, k| r.max((xs[k] - cx).hypot(ys[k] - cy)));
+        self.xs.push(cx);
+        self.ys.push(cy);
+        self.radii.push(radius);
+        self.widest = self.widest.max(radius);
+        self.pads.push(pad([cx, cy], radius));
+        self.starts.push(start);
+    }
+}
+
+/// A lower bound on the squared distance, as `choose` computes it, from a point to any
+/// candidate within `radius` of a centre at squared distance `squared` (computed as
+/// `dx * dx + dy * dy`, or any lower bound of that).
+fn lower_bound(squared: f64, radius: f64) -> f64 {
+    let gap = (squared.sqrt() * (1.0 - SLACK) - radius * (1.0 + SLACK)).max(0.0);
+    (gap * gap * (1.0 - SLACK) - TINY).max(0.0)
 }
 
 /// Scratch space reused between robots, so a batch call allocates once per thread.
@@ -208,12 +305,36 @@ impl Columns {
 struct Scratch {
     /// The current robot's cones, filled by the caller of `choose`.
     cones: Vec<Cone>,
-    /// Squared distance of each candidate to the preferred velocity.
-    distances: Vec<f64>,
-    /// Bit k of word `band * words + k / 64` is set when candidate k lies in that distance band.
-    bands: Vec<u64>,
+    /// The candidates as columns: slot 0 holds the robot's clamped preferred velocity when it is
+    /// tried, the grid follows.
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+    /// The candidates' clusters; cluster 0 is slot 0 alone when the preferred velocity is tried.
+    clusters: Clusters,
+    /// Squared distance of each cluster's centre to the preferred velocity.
+    centres: Vec<f64>,
+    /// Bit j of `bands[w][band]` is set when cluster `64 w + j` lies in that distance band.
+    bands: Vec<[u64; BANDS]>,
     /// The neighbour search's buffer.
     run: Vec<(usize, f64)>,
+}
+
+impl Scratch {
+    fn new(grid: &[Vec2], params: &HrvoParams) -> Self {
+        let slot = usize::from(params.include_preferred);
+        let column = |axis: usize| {
+            let mut values = vec![0.0; slot];
+            values.extend(grid.iter().map(|v| v[axis]));
+            values
+        };
+        let (xs, ys) = (column(0), column(1));
+        Self {
+            clusters: Clusters::new(&xs, &ys, params.include_preferred),
+            xs,
+            ys,
+            ..Self::default()
+        }
+    }
 }
 
 /// Whether any cone forbids `(x, y)`. The cone that does moves to the front: it usually
@@ -230,6 +351,23 @@ fn forbidden(cones: &mut [Cone], x: f64, y: f64) -> bool {
     }
 }
 
+/// The largest value, at least 0: `max` is exact, so lanes give a sequential fold's answer, and
+/// plain arrays of lanes let LLVM use vector instructions.
+fn largest(values: &[f64]) -> f64 {
+    const LANES: usize = 4;
+    let mut lanes = [0.0; LANES];
+    let chunks = values.chunks_exact(LANES);
+    let rest = chunks.remainder();
+    for chunk in chunks {
+        for (far, &d) in lanes.iter_mut().zip(chunk) {
+            *far = if d > *far { d } else { *far };
+        }
+    }
+    rest.iter()
+        .chain(&lanes)
+        .fold(0.0, |far, &d| if d > far { d } else { far })
+}
+
 /// `x` rounded to the nearest integer, for `0 <= x <= BANDS`: adding 2^52 leaves it in the
 /// mantissa's low bits. A band only has to grow with the distance, and this costs two
 /// instructions where a saturating float-to-int conversion costs ten on plain x86-64.
@@ -243,10 +381,13 @@ fn round_small(x: f64) -> usize {
 /// Candidate 0 is the clamped preferred velocity when `params.include_preferred`, the grid
 /// follows. `position` is only read when `params.bounds` is set. Inputs are trusted finite:
 /// the public entry points ([`hrvo_one`], [`hrvo_batch`]) check them.
-fn choose(scratch: &mut Scratch, preferred: Vec2, position: Vec2, grid: &Columns, params: &HrvoParams) -> Vec2 {
+fn choose(scratch: &mut Scratch, preferred: Vec2, position: Vec2, params: &HrvoParams) -> Vec2 {
     let Scratch {
         cones,
-        distances,
+        xs,
+        ys,
+        clusters,
+        centres,
         bands,
         ..
     } = scratch;
@@ -263,68 +404,74 @@ fn choose(scratch: &mut Scratch, preferred: Vec2, position: Vec2, grid: &Columns
     if params.include_preferred && norm <= params.v_max && inside(px, py) && !forbidden(cones, px, py) {
         return preferred;
     }
-    let first = usize::from(params.include_preferred);
-    let clamped = if norm > params.v_max {
-        let scale = params.v_max / norm;
-        [px * scale, py * scale]
-    } else {
-        preferred
-    };
-    let candidate = |k: usize| {
-        if k < first {
-            clamped
+    if params.include_preferred {
+        [xs[0], ys[0]] = if norm > params.v_max {
+            let scale = params.v_max / norm;
+            [px * scale, py * scale]
         } else {
-            [grid.xs[k - first], grid.ys[k - first]]
-        }
-    };
-    let squared = |x: f64, y: f64| {
-        let (dx, dy) = (x - px, y - py);
-        dx * dx + dy * dy
-    };
-    distances.clear();
-    if first == 1 {
-        distances.push(squared(clamped[0], clamped[1]));
+            preferred
+        };
+        (clusters.xs[0], clusters.ys[0]) = (xs[0], ys[0]);
+        clusters.pads[0] = pad([xs[0], ys[0]], 0.0);
     }
-    distances.extend(grid.xs.iter().zip(&grid.ys).map(|(&x, &y)| squared(x, y)));
-    // Candidates in rings of distance to the preferred velocity, as bit sets: the nearest valid
-    // candidate of the first band that has one is the answer, since every later band is
-    // farther. Most robots stop in the first bands; bits are visited in candidate order, which
-    // settles ties.
-    let farthest = distances.iter().fold(0.0, |far, &d| if d > far { d } else { far });
+    // Clusters in rings of their centres' distance, as bit sets, visited ring by ring: a cluster
+    // that cannot hold a candidate as near as the best so far is passed over, and the search
+    // ends at the first ring that cannot. Ties go to the first candidate, whatever the order.
+    centres.clear();
+    centres.extend(clusters.xs.iter().zip(&clusters.ys).map(|(&cx, &cy)| {
+        let (dx, dy) = (cx - px, cy - py);
+        dx * dx + dy * dy
+    }));
+    let farthest = largest(centres);
     let scale = if farthest > 0.0 {
         (BANDS - 1) as f64 / farthest
     } else {
         0.0
     };
-    let words = distances.len().div_ceil(64);
     bands.clear();
-    bands.resize(BANDS * words, 0);
-    for (k, &d) in distances.iter().enumerate() {
-        let band = round_small(d * scale).min(BANDS - 1);
-        bands[band * words + k / 64] |= 1 << (k % 64);
+    bands.resize(centres.len().div_ceil(64), [0; BANDS]);
+    for (chunk, sets) in centres.chunks(64).zip(bands.iter_mut()) {
+        for (j, &d) in chunk.iter().enumerate() {
+            sets[round_small(d * scale).min(BANDS - 1)] |= 1 << j;
+        }
     }
     let mut best: Option<(f64, usize)> = None;
-    for band in bands.chunks_exact(words) {
-        for (w, &word) in band.iter().enumerate() {
-            let mut bits = word;
+    for band in 0..BANDS {
+        // A centre in this ring or a later one has `d * scale` rounded to `band` or more.
+        let closest = |bd: f64| lower_bound((band as f64 - 0.5) / scale * (1.0 - SLACK), clusters.widest) > bd;
+        if band > 0 && best.is_some_and(|(bd, _)| closest(bd)) {
+            break;
+        }
+        for (w, sets) in bands.iter().enumerate() {
+            let mut bits = sets[band];
             while bits != 0 {
-                let k = w * 64 + bits.trailing_zeros() as usize;
+                let c = w * 64 + bits.trailing_zeros() as usize;
                 bits &= bits - 1;
-                let d = distances[k];
-                if best.is_some_and(|(bd, _)| d >= bd) {
+                if best.is_some_and(|(bd, _)| lower_bound(centres[c], clusters.radii[c]) > bd) {
                     continue;
                 }
-                let [x, y] = candidate(k);
-                if inside(x, y) && !forbidden(cones, x, y) {
-                    best = Some((d, k));
+                // The cone that forbade the last candidate often forbids this whole cluster.
+                if cones
+                    .first()
+                    .is_some_and(|cone| cone.covers([clusters.xs[c], clusters.ys[c]], clusters.pads[c]))
+                {
+                    continue;
+                }
+                for k in clusters.starts[c]..clusters.starts[c + 1] {
+                    let (x, y) = (xs[k], ys[k]);
+                    let (dx, dy) = (x - px, y - py);
+                    let d = dx * dx + dy * dy;
+                    if best.is_some_and(|(bd, bk)| d > bd || (d == bd && k > bk)) {
+                        continue;
+                    }
+                    if inside(x, y) && !forbidden(cones, x, y) {
+                        best = Some((d, k));
+                    }
                 }
             }
         }
-        if best.is_some() {
-            break;
-        }
     }
-    best.map_or([0.0, 0.0], |(_, k)| candidate(k))
+    best.map_or([0.0, 0.0], |(_, k)| [xs[k], ys[k]])
 }
 
 fn check_vec2s(arg: &'static str, values: &[Vec2]) -> Result<()> {
@@ -364,11 +511,11 @@ pub fn hrvo_one(
             });
         }
     }
-    let mut scratch = Scratch::default();
+    let mut scratch = Scratch::new(grid, &params);
     scratch
         .cones
         .extend(neighbours.iter().map(|b| Cone::new(velocity, b, params.safety)));
-    Ok(choose(&mut scratch, preferred, position, &Columns::new(grid), &params))
+    Ok(choose(&mut scratch, preferred, position, &params))
 }
 
 /// HRVO velocities of the whole swarm.
@@ -402,15 +549,9 @@ pub fn hrvo_batch(
             got: radius,
         });
     }
-    let columns = Columns::new(grid);
-    let decide = |scratch: &mut Scratch, i: usize| choose(scratch, preferred[i], positions[i], &columns, &params);
-    let cone = |i: usize, j: usize, offset: Vec2| {
-        Cone::new(
-            velocities[i],
-            &Neighbour::from_offset(offset, velocities[j]),
-            params.safety,
-        )
-    };
+    let scratch = || Scratch::new(grid, &params);
+    let decide = |scratch: &mut Scratch, i: usize| choose(scratch, preferred[i], positions[i], &params);
+    let cone = |i: usize, b: &Neighbour| Cone::new(velocities[i], b, params.safety);
     if let Some((indptr, indices)) = neighbours {
         check_csr(indptr, indices, n)?;
         let robot = |scratch: &mut Scratch, i: usize| {
@@ -419,11 +560,12 @@ pub fn hrvo_batch(
             scratch.cones.clear();
             scratch.cones.extend(row.iter().map(|&j| {
                 let q = positions[j as usize];
-                cone(i, j as usize, [q[0] - p[0], q[1] - p[1]])
+                let j = j as usize;
+                cone(i, &Neighbour::from_offset([q[0] - p[0], q[1] - p[1]], velocities[j]))
             }));
             decide(scratch, i)
         };
-        return Ok(for_each_robot(n, |i| i, robot));
+        return Ok(for_each_robot(n, scratch, |i| i, robot));
     }
     // Without lists, each robot's neighbours come straight from the grid (no CSR is built), and
     // robots go in the grid's cell order, so that neighbouring robots share cache lines.
@@ -433,11 +575,20 @@ pub fn hrvo_batch(
     let robot = |scratch: &mut Scratch, i: usize| {
         let Scratch { cones, run, .. } = scratch;
         cones.clear();
-        near.for_each(i, run, |j, offset, _| cones.push(cone(i, j, offset)));
+        near.for_each(i, run, |j, offset, distance| {
+            // The search's distance is `from_offset`'s unless the squares overflowed (beyond
+            // ~1.3e154 m, where the search takes `hypot`).
+            let b = if distance < 1e150 {
+                Neighbour::at(offset, distance, velocities[j])
+            } else {
+                Neighbour::from_offset(offset, velocities[j])
+            };
+            cones.push(cone(i, &b));
+        });
         decide(scratch, i)
     };
     let order = near.order();
-    let chosen = for_each_robot(n, |k| order[k], robot);
+    let chosen = for_each_robot(n, scratch, |k| order[k], robot);
     let mut out = vec![[0.0; 2]; n];
     for (&i, v) in order.iter().zip(chosen) {
         out[i] = v;
@@ -449,6 +600,7 @@ pub fn hrvo_batch(
 /// swarm, on this one (no thread pool, one scratch) for a small one.
 fn for_each_robot(
     n: usize,
+    scratch: impl Fn() -> Scratch + Sync + Send,
     robots: impl Fn(usize) -> usize + Sync + Send,
     robot: impl Fn(&mut Scratch, usize) -> Vec2 + Sync + Send,
 ) -> Vec<Vec2> {
@@ -456,10 +608,10 @@ fn for_each_robot(
         (0..n)
             .into_par_iter()
             .with_min_len(PARALLEL_ROBOTS)
-            .map_init(Scratch::default, |scratch, k| robot(scratch, robots(k)))
+            .map_init(&scratch, |scratch, k| robot(scratch, robots(k)))
             .collect()
     } else {
-        let mut scratch = Scratch::default();
+        let mut scratch = scratch();
         (0..n).map(|k| robot(&mut scratch, robots(k))).collect()
     }
 }
@@ -520,6 +672,49 @@ mod tests {
         for (x, want) in [(0.0, 0), (0.49, 0), (0.51, 1), (7.0, 7), (22.6, 23), (23.0, 23)] {
             assert_eq!(round_small(x), want, "{x}");
         }
+    }
+
+    #[test]
+    fn cluster_bounds_hold_for_every_member() {
+        // Points of a cluster at the edge of its circle, cones through or near it: whenever a
+        // cone is said to cover the circle it forbids every point, and the lower bound never
+        // exceeds a point's squared distance as `choose` computes it.
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut uniform = |low: f64, high: f64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            low + (high - low) * (seed >> 11) as f64 / (1_u64 << 53) as f64
+        };
+        let mut covered = 0;
+        for _ in 0..20_000 {
+            let [cx, cy, radius] = [uniform(-0.2, 0.2), uniform(-0.2, 0.2), uniform(0.0, 0.05)];
+            let points: Vec<Vec2> = (0..6)
+                .map(|_| {
+                    let angle = uniform(0.0, TAU);
+                    let r = radius * uniform(0.98, 1.0);
+                    [cx + r * angle.cos(), cy + r * angle.sin()]
+                })
+                .collect();
+            let neighbour = Neighbour::from_offset(
+                [uniform(-1.0, 1.0), uniform(-1.0, 1.0)],
+                [uniform(-0.2, 0.2), uniform(-0.2, 0.2)],
+            );
+            let cone = Cone::new([uniform(-0.2, 0.2), uniform(-0.2, 0.2)], &neighbour, 0.24);
+            let reach = points.iter().fold(0.0, |r: f64, q| r.max((q[0] - cx).hypot(q[1] - cy)));
+            if cone.covers([cx, cy], pad([cx, cy], reach)) {
+                covered += 1;
+                assert!(points.iter().all(|q| cone.forbids(q[0], q[1])));
+            }
+            let [px, py] = [uniform(-0.3, 0.3), uniform(-0.3, 0.3)];
+            let (dx, dy) = (cx - px, cy - py);
+            let bound = lower_bound(dx * dx + dy * dy, reach);
+            for q in &points {
+                let (dx, dy) = (q[0] - px, q[1] - py);
+                assert!(bound <= dx * dx + dy * dy);
+            }
+        }
+        assert!(covered > 1_000, "{covered}");
     }
 
     #[test]
