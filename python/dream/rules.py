@@ -129,11 +129,11 @@ def roundabout_aim(positions: Any, goals: Any, semi_axes: tuple[float, float], i
     t = -np.sum(q * way, axis=-1) / length2
     closest = q + np.clip(t, 0.0, 1.0)[..., None] * way
     crosses = (t > 0.0) & (np.hypot(closest[..., 0], closest[..., 1]) < island)
-    r = np.hypot(q[..., 0], q[..., 1])
+    radii = np.hypot(q[..., 0], q[..., 1])
     # The counter-clockwise tangent point from q is acos(island / r) past q's own angle.
-    turn = np.arccos(np.minimum(island / np.maximum(r, 1e-300), 1.0)) + ROUNDABOUT_LEAD
-    angle = np.arctan2(q[..., 1], q[..., 0]) + turn
-    edge = island * np.stack((np.cos(angle), np.sin(angle)), axis=-1)
+    turns = np.arccos(np.minimum(island / np.maximum(radii, 1e-300), 1.0)) + ROUNDABOUT_LEAD
+    angles = np.arctan2(q[..., 1], q[..., 0]) + turns
+    edge = island * np.stack((np.cos(angles), np.sin(angles)), axis=-1)
     return np.where(crosses[..., None], edge, g) * scale
 
 
@@ -168,12 +168,12 @@ def preferred_velocity(positions: Any, aims: Any, goals: Any, v_max: float, gain
     p = np.asarray(positions, dtype=np.float64)
     offset = np.asarray(aims, dtype=np.float64) - p
     left = np.asarray(goals, dtype=np.float64) - p
-    distance = np.hypot(offset[..., 0], offset[..., 1])
-    speed = np.minimum(v_max, gain * np.hypot(left[..., 0], left[..., 1]))
-    return offset * np.where(distance > 0.0, speed / np.maximum(distance, 1e-300), 0.0)[..., None]
+    distances = np.hypot(offset[..., 0], offset[..., 1])
+    speeds = np.minimum(v_max, gain * np.hypot(left[..., 0], left[..., 1]))
+    return offset * np.where(distances > 0.0, speeds / np.maximum(distances, 1e-300), 0.0)[..., None]
 
 
-def sidestep_preference(desired: Any, sidestep: Any, side: Any) -> tuple[FloatArray, np.ndarray]:
+def sidestep_preference(desired: Any, sidestep: Any, side: Any) -> tuple[FloatArray, Any]:
     """The velocity a robot asks HRVO for, and its side-step counter after this decision.
 
     A robot with ``sidestep`` decisions left stepping aside asks for its desired velocity
@@ -210,7 +210,7 @@ def sidestep_preference(desired: Any, sidestep: Any, side: Any) -> tuple[FloatAr
     return wanted, np.maximum(sidestep - 1, 0)
 
 
-def sidestep_update(chosen: Any, desired: Any, sidestep: Any, side: Any, updates: int) -> tuple[np.ndarray, np.ndarray]:
+def sidestep_update(chosen: Any, desired: Any, sidestep: Any, side: Any, updates: int) -> tuple[Any, Any]:
     """The side-step counter and side after HRVO chose ``chosen``.
 
     HRVO stops a robot whose way is blocked by a robot within the safety radius (every free
