@@ -38,6 +38,7 @@ def test_voronoi_coverage_with_moving_obstacles_covers_at_scale():
     assert result.success, result.summary()
     assert result.measures["static_contacts"] == 0
     assert result.measures["cost_end"] < vc.COVERED * result.measures["cost_start"]
+    assert result.measures["cost_end"] < vc.SPREAD * result.measures["cost_ideal"]
 
 
 def test_voronoi_coverage_without_moving_obstacles_comes_to_rest_at_scale():
@@ -46,6 +47,7 @@ def test_voronoi_coverage_without_moving_obstacles_comes_to_rest_at_scale():
     assert result.measures["static_contacts"] == 0
     assert result.measures["moving_at_end"] == 0
     assert result.measures["cost_end"] < vc.COVERED * result.measures["cost_start"]
+    assert result.measures["cost_end"] < vc.SPREAD * result.measures["cost_ideal"]
 
 
 def test_affine_formation_converges_and_passes_the_bars_at_scale():
