@@ -45,7 +45,7 @@ from dream.obstacles import Obstacle, sensed, touching
 from dream.radios import RangeRadio
 from dream.robot import GUARD_MARGIN, Robot, stopping
 from dream.sensors import MovementSensor, ObstacleSensor, OdometrySensor
-from dream.specs import GRITSBOT, ROBOTARIUM, TIME_STEP, ArenaSpec
+from dream.specs import GRITSBOT, ROBOTARIUM, TIME_STEP, ArenaSpec, SimulatorSpec
 from dream.world import create_timer
 
 NAME = "voronoi-coverage"
@@ -82,6 +82,14 @@ def arrival_for(n: int) -> float:
     by about four times this from one robot to the next: across a wide team, a crowd still
     packed at the start (cells of 0.2 m in a 1000-robot team would stay so with 0.05 m)."""
     return ARRIVAL / scale_for(n)
+
+
+def guard_distance(rules: SimulatorSpec) -> float:
+    """How close (centre to centre, m) a robot's motion guard lets it drive to a robot it sees: as
+    close as two bodies, or two of the lab's colliders where they sit ahead of the centre (rps 2.1:
+    0.135 m discs 0.025 m ahead touch at 0.185 m), and :data:`GUARD_MARGIN`. No HRVO keeps these
+    robots apart, only their cells and this guard."""
+    return max(GRITSBOT.diameter, rules.diameter + 2 * abs(rules.collider_offset)) + GUARD_MARGIN
 
 
 def cell_bounds(arena: ArenaSpec) -> tuple[float, float, float, float]:
@@ -174,11 +182,18 @@ class CoverageRobot(Robot):
     """
 
     def __init__(
-        self, robot_id: int, tag: str, arena: ArenaSpec = ROBOTARIUM, arrival: float = ARRIVAL, **kwargs: Any
+        self,
+        robot_id: int,
+        tag: str,
+        arena: ArenaSpec = ROBOTARIUM,
+        arrival: float = ARRIVAL,
+        near: float = GRITSBOT.diameter + GUARD_MARGIN,
+        **kwargs: Any,
     ) -> None:
         super().__init__(robot_id, tag, **kwargs)
         self.arena = arena
         self.arrival = arrival
+        self.near = near
         self.others = np.zeros((0, 2))
         self.obstacle_points = np.zeros((0, 2))
         self.centroid: np.ndarray | None = None
@@ -200,7 +215,7 @@ class CoverageRobot(Robot):
         its centroid: it drives no further when that would bring it within a centimetre of a
         robot it sees (:meth:`~dream.Robot.stop_short`)."""
         if self.has_pose and len(self.seen):
-            self.stop_short(np.array([self.pos_x, self.pos_y]) - self.seen, self.spec.diameter + GUARD_MARGIN)
+            self.stop_short(np.array([self.pos_x, self.pos_y]) - self.seen, self.near)
 
     def silent(self) -> np.ndarray:
         """Positions ``(k, 2)`` of the robots seen that no message accounts for."""
@@ -339,7 +354,9 @@ class VoronoiCoverage(Experiment):
         self.obstacles = thesis_obstacles(self.world.rng, self.moving_obstacles, scale_for(n))
         delays = start_delays(n)
         for i in range(n):
-            robot = CoverageRobot(i, f"robot_{i}", arena=self.arena, arrival=arrival_for(n))
+            robot = CoverageRobot(
+                i, f"robot_{i}", arena=self.arena, arrival=arrival_for(n), near=guard_distance(self.rules)
+            )
             self.robots.append(robot)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             sensor = ObstacleSensor(i, f"obstacles_{i}", robot.update_obstacles, self.obstacles, range=CELL_RADIUS)
@@ -430,7 +447,7 @@ class VoronoiCoverage(Experiment):
         team.centroid[who] = self._cells(who, here, rows[order], clips[order])
         dxi = rules.approach(here, team.centroid[who], GAIN, GRITSBOT.v_max, arrival_for(self.n))
         new = kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, team.pose[:, who]), GRITSBOT.within(self.sim.spec))
-        near = GRITSBOT.diameter + GUARD_MARGIN
+        near = guard_distance(self.rules)
         new[0, stopping(new[0], team.pose[2, who], looked, here[looked] - seen, near)] = 0.0
         commands[:, who] = new
 
