@@ -8,7 +8,7 @@ from numpy.testing import assert_allclose
 
 from dream import Obstacle, ObstacleSensor, rules
 from dream.experiments import voronoi_coverage as vc
-from dream.specs import ROBOTARIUM
+from dream.specs import ROBOTARIUM, ArenaSpec
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -63,6 +63,20 @@ def test_coverage_cost_of_one_robot_matches_the_integral():
     # One robot at the centre of a 2 x 2 square: the integral of x^2 + y^2 is 2 * (2 * 2^3/12) = 8/3.
     square = ROBOTARIUM.__class__(-1.0, 1.0, -1.0, 1.0)
     assert vc.coverage_cost(np.zeros((2, 1)), square, [], step=0.01) == pytest.approx(8 / 3, rel=1e-3)
+
+
+def test_ideal_cost_is_that_of_a_hexagonal_lattice():
+    """460 robots on a triangular lattice (hexagonal cells) over an 8 m square: the cost is just
+    above the ideal (the border cells are not hexagons), and a random spread costs far more."""
+    arena = ArenaSpec.centred(8.0, 8.0)
+    a, h = 0.4, 0.4 * np.sqrt(3) / 2
+    rows = np.arange(-4 + h / 2, 4, h)
+    lattice = np.array([(x, y) for r, y in enumerate(rows) for x in np.arange(-4 + a / 4 + (r % 2) * a / 2, 4, a)]).T
+    n = lattice.shape[1]
+    ideal = vc.ideal_cost(n, arena, [], step=0.04)
+    assert ideal <= vc.coverage_cost(lattice, arena, [], step=0.04) < 1.05 * ideal
+    scattered = np.random.default_rng(0).uniform(-4, 4, (2, n))
+    assert vc.coverage_cost(scattered, arena, [], step=0.04) > 1.5 * ideal
 
 
 def test_obstacle_closest_point_distance_and_polygon():
