@@ -50,7 +50,7 @@ class Radio:
     callback: Callback = RobotCallback()  # type: ignore[assignment]
 
     def _exchange(self, callback: Callback, senders: np.ndarray) -> None:
-        data = callback(self.world.receive((int(j) for j in senders), self.loss, self.robot_id))
+        data = callback(self.world.receive(np.asarray(senders).tolist(), self.loss, self.robot_id))
         if data is not None:
             self.send_data(data)
 

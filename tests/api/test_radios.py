@@ -113,6 +113,23 @@ def test_range_radio_receivers_get_copies(world):
     assert world.messages[2] == [1, 2]
 
 
+def test_range_radio_shares_only_what_no_reader_can_change(world):
+    # A tuple of numbers needs no copy; a tuple holding a list still gets one.
+    x = _poses((0, 0), (0.1, 0), (0.2, 0))
+    Radio(2).send_data((2, 0.5, [1.0]))
+
+    def vandal(messages):
+        messages[0][2].append("mutated")
+
+    RangeRadio(0, "radio", vandal).update(x)
+    inbox = _Inbox()
+    RangeRadio(1, "radio", inbox).update(x)
+    assert inbox.received == [[(2, 0.5, [1.0])]]
+    Radio(2).send_data((2, 0.5, np.float64(1.0)))
+    RangeRadio(1, "radio", inbox).update(x)
+    assert inbox.received[-1] == [(2, 0.5, 1.0)]
+
+
 def test_range_radio_copies_messages_of_arrays_deeply(world):
     # Arrays, alone or in a tuple, skip pickle: they must still be copies, dtype and values kept.
     x = _poses((0, 0), (0.1, 0), (0.2, 0))
