@@ -284,12 +284,20 @@ def seen_positions(position: Any, detections: Any) -> FloatArray:
     return np.column_stack((position[0] - d * np.cos(angle), position[1] - d * np.sin(angle)))
 
 
+SMALL_PAIRS = 8192  #: up to this many point pairs, :func:`far_from` measures them all (one robot's call)
+
+
 def far_from(points: Any, others: Any, distance: float) -> np.ndarray:
     """``(k,)`` bool: which of ``points`` ``(k, 2)`` lie farther than ``distance`` (m) from every one
     of ``others`` ``(m, 2)`` (all of them when there are none): robots seen that no claimed
     position accounts for, or claims that match no robot seen."""
     points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     others = np.asarray(others, dtype=np.float64).reshape(-1, 2)
+    if len(points) * len(others) <= SMALL_PAIRS:
+        # Every pair at once: what :func:`unheard` measures and more, and the pairs it skips lie
+        # farther apart than ``distance``, so the answer is the same.
+        gaps = np.hypot(points[:, None, 0] - others[None, :, 0], points[:, None, 1] - others[None, :, 1])
+        return np.all(gaps > distance, axis=1)
     return unheard(points, np.zeros(len(points), np.int64), others, np.zeros(len(others), np.int64), distance)
 
 

@@ -255,7 +255,7 @@ def _copy(data: Any) -> Any:
     or in a tuple or list, copied directly, the rest through pickle when possible, which is many
     times faster than ``deepcopy`` for the lists and arrays robots usually send."""
     kind = type(data)
-    if kind in _IMMUTABLE or (kind is tuple and all(type(item) in _IMMUTABLE for item in data)):
+    if kind in _IMMUTABLE or (kind is tuple and _IMMUTABLE.issuperset(map(type, data))):
         return data
     if _plain_array(data):
         return data.copy(order="K")

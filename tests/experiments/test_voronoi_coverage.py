@@ -135,3 +135,15 @@ def test_unheard_matches_every_pair_compared(seed):
         for point, row in zip(seen, seen_rows, strict=True)
     ]
     np.testing.assert_array_equal(rules.unheard(seen, seen_rows, heard, heard_rows, vc.SAME_ROBOT), want)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_far_from_measures_all_pairs_or_sorts_them_alike(seed):
+    # One robot's call (few pairs) measures every pair; a large one sorts them (rules.unheard).
+    rng = np.random.default_rng(seed)
+    for k, m in ((rng.integers(0, 40), rng.integers(0, 200)), (150, 100)):
+        points, others = rng.uniform(-1, 1, (k, 2)), rng.uniform(-1, 1, (m, 2))
+        close = min(k, m)
+        others[:close] = points[:close] + rng.normal(scale=0.05, size=(close, 2))
+        want = [not np.any(np.hypot(*(point - others).T) <= vc.SAME_ROBOT) for point in points]
+        np.testing.assert_array_equal(rules.far_from(points, others, vc.SAME_ROBOT), want)
