@@ -51,22 +51,13 @@ class Obstacle:
         return self.center + corners @ self._axes().T
 
     def _local(self, points: Any) -> FloatArray:
-        """``points`` ``(..., 2)`` in the obstacle's frame (centre at the origin, sides along the axes).
-
-        Written out rather than a matrix product, whose rounding may depend on how many points
-        there are: one robot's reading and the whole swarm's must agree to the bit."""
-        d = np.asarray(points, dtype=np.float64) - self.center
-        c, s = math.cos(self.angle), math.sin(self.angle)
-        return np.stack((d[..., 0] * c + d[..., 1] * s, d[..., 1] * c - d[..., 0] * s), axis=-1)
+        """``points`` ``(..., 2)`` in the obstacle's frame (centre at the origin, sides along the axes)."""
+        return _local(np.asarray(points, dtype=np.float64), self.center, math.cos(self.angle), math.sin(self.angle))
 
     def closest_points(self, points: Any) -> FloatArray:
         """The points of the obstacle closest to ``points`` ``(..., 2)``, NaN for those inside."""
-        local = self._local(points)
-        half = self.size / 2
-        q = np.clip(local, -half, half)
         c, s = math.cos(self.angle), math.sin(self.angle)
-        closest = self.center + np.stack((q[..., 0] * c - q[..., 1] * s, q[..., 0] * s + q[..., 1] * c), axis=-1)
-        return np.where(np.all(np.abs(local) < half, axis=-1)[..., None], np.nan, closest)
+        return _closest(np.asarray(points, dtype=np.float64), self.center, c, s, self.size / 2)
 
     def closest_point(self, point: Any) -> FloatArray | None:
         """The point of the obstacle closest to ``point`` ``(2,)``; ``None`` if ``point`` is inside."""
@@ -110,13 +101,38 @@ class Obstacle:
         )
 
 
+def _local(points: FloatArray, center: Any, c: Any, s: Any) -> FloatArray:
+    """``points`` ``(..., 2)`` in the frames of obstacles centred at ``center`` ``(..., 2)``, turned by
+    the angles of cosines ``c`` and sines ``s`` (broadcast: one obstacle or several).
+
+    Written out rather than a matrix product, whose rounding may depend on how many points
+    there are: one robot's reading and the whole swarm's must agree to the bit."""
+    d = points - center
+    return np.stack((d[..., 0] * c + d[..., 1] * s, d[..., 1] * c - d[..., 0] * s), axis=-1)
+
+
+def _closest(points: FloatArray, center: Any, c: Any, s: Any, half: Any) -> FloatArray:
+    """The points closest to ``points`` of the rectangles of half sides ``half`` (as :func:`_local`
+    broadcasts), NaN for the points inside."""
+    local = _local(points, center, c, s)
+    q = np.clip(local, -half, half)
+    closest = center + np.stack((q[..., 0] * c - q[..., 1] * s, q[..., 0] * s + q[..., 1] * c), axis=-1)
+    return np.where(np.all(np.abs(local) < half, axis=-1)[..., None], np.nan, closest)
+
+
 def sensed(obstacles: Sequence[Obstacle], positions: Any, range: float) -> FloatArray:  # noqa: A002 (as the sensors)
     """What obstacle sensors at ``positions`` ``(m, 2)`` read: the closest point of each obstacle
-    ``(m, k, 2)``, NaN for an obstacle beyond ``range`` (m, inclusive) or around the sensor."""
+    ``(m, k, 2)``, NaN for an obstacle beyond ``range`` (m, inclusive) or around the sensor.
+
+    All obstacles in one pass (a robot's sensor reads one position, thousands of times a run)."""
     here = np.asarray(positions, dtype=np.float64).reshape(-1, 1, 2)
     if not obstacles:
         return np.zeros((len(here), 0, 2))
-    closest = np.stack([obstacle.closest_points(here[:, 0]) for obstacle in obstacles], axis=1)
+    centers = np.array([obstacle.center for obstacle in obstacles])
+    c = np.array([math.cos(obstacle.angle) for obstacle in obstacles])
+    s = np.array([math.sin(obstacle.angle) for obstacle in obstacles])
+    halves = np.array([obstacle.size / 2 for obstacle in obstacles])
+    closest = _closest(here, centers, c, s, halves)
     far = ~(np.hypot(closest[..., 0] - here[..., 0], closest[..., 1] - here[..., 1]) <= range)
     return np.where(far[..., None], np.nan, closest)
 

@@ -8,6 +8,7 @@ from numpy.testing import assert_allclose
 
 from dream import Obstacle, ObstacleSensor, rules
 from dream.experiments import voronoi_coverage as vc
+from dream.obstacles import sensed
 from dream.specs import ROBOTARIUM, ArenaSpec
 
 
@@ -88,6 +89,19 @@ def test_obstacle_closest_point_distance_and_polygon():
     corners = box.polygon
     assert corners.shape == (4, 2)
     assert_allclose(corners.min(axis=0), [0.9, -0.2], atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_sensed_reads_every_obstacle_as_each_alone(seed):
+    # One pass over all obstacles, one point or many: the same bits as each obstacle's own answer.
+    rng = np.random.default_rng(seed)
+    obstacles = [Obstacle(rng.uniform(-1, 1, 2), rng.uniform(0.1, 0.6, 2), rng.uniform(-3, 3)) for _ in range(4)]
+    points = rng.uniform(-1.5, 1.5, (50, 2))
+    want = np.stack([o.closest_points(points) for o in obstacles], axis=1)
+    far = ~(np.hypot(*(want - points[:, None]).transpose(2, 0, 1)) <= 0.8)
+    want[far] = np.nan
+    np.testing.assert_array_equal(sensed(obstacles, points, 0.8), want)
+    np.testing.assert_array_equal(sensed(obstacles, points[7], 0.8)[0], want[7])
 
 
 def test_moving_obstacle_bounces_off_the_walls():
