@@ -84,6 +84,7 @@ WEIGHTS = np.array(
 NOMINAL = np.array([[2, 0], [1, 1], [1, -1], [0, 1], [0, -1], [-1, 1], [-1, -1]], dtype=np.float64)
 SCALE = 0.3  #: metres per formation unit
 GAIN = 8.0  #: the followers' stress gain k (1/s)
+LEADER_GAIN = 1.5  #: a leader's gain towards its aim (1/s)
 # The same under rps 2.1's rules, whose colliders touch at 0.185 m: with the gathering and the
 # steady changes of shape below, no two robots came closer than 0.175 m (seeds 0-39, both
 # rules); a safety of 0.2 m made the followers lag, and a leader, which does not avoid them,
@@ -138,6 +139,12 @@ def follower_targets(leaders: np.ndarray, weights: np.ndarray = WEIGHTS) -> np.n
     """Where the followers converge for leaders at ``leaders`` ``(3, 2)``: ``-Omega_ff^-1 Omega_fl p_l``."""
     omega = stress_matrix(weights)
     return -np.linalg.solve(omega[LEADERS:, LEADERS:], omega[LEADERS:, :LEADERS] @ leaders)
+
+
+def morph(start: np.ndarray, goals: np.ndarray, decisions: Any) -> np.ndarray:
+    """Where leaders' aims stand after ``decisions`` ``(k,)`` or ``()`` of their ``MORPH`` decisions
+    from the places ``start`` to ``goals`` ``(k, 2)`` (m): a steady pace along straight lines."""
+    return start + np.minimum(np.asarray(decisions) / MORPH, 1.0)[..., None] * (goals - start)
 
 
 def formation(shape: str) -> np.ndarray:
@@ -280,7 +287,7 @@ class Leader(RobotHRVO):
     @property
     def aims(self) -> np.ndarray:
         """The points ``(3, 2)`` (m) the plan has the formation's leaders head for now."""
-        return self.start + min(self.decisions / MORPH, 1.0) * (self.goals - self.start)
+        return morph(self.start, self.goals, self.decisions)
 
     @property
     def aim(self) -> np.ndarray:
@@ -324,10 +331,7 @@ class Leader(RobotHRVO):
         self.decisions += 1
         desired = np.zeros(2)
         if self.has_pose:
-            desired = 1.5 * (self.aim - (self.pos_x, self.pos_y))
-            speed = math.hypot(desired[0], desired[1])
-            if speed > self.v_max:
-                desired *= self.v_max / speed
+            desired = rules.toward((self.pos_x, self.pos_y), self.aim, LEADER_GAIN, self.v_max)
         self.HRVO(self.detections, desired)
         self.command(dxu)
 
@@ -444,14 +448,9 @@ class Follower(RobotHRVO):
         if self.has_pose:
             here = np.array([self.pos_x, self.pos_y])
             self.check_claims(here)
-            pull = sum(
-                (self.weights[j] * (here - there) for j, there in self.positions().items() if self.weights[j]),
-                np.zeros(2),
-            )
-            desired = -GAIN * pull
-            speed = math.hypot(desired[0], desired[1])
-            if speed > self.v_max:
-                desired *= self.v_max / speed
+            known = self.positions()
+            there = np.array(list(known.values())).reshape(-1, 2)
+            desired = rules.capped(-GAIN * rules.stress(here, there, self.weights[list(known)]), self.v_max)
         # Close to its place (the formation keeps robots >= 0.25 m apart) HRVO would forbid the
         # last centimetres towards a neighbour. The thesis's followers check no clearance.
         settle_or_steer(self, desired, FINE, clearance=0.0)
