@@ -50,18 +50,19 @@ Without faults every decision is as before: runs are the same to the last bit.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from dream import rules
-from dream.experiments.line_consensus import settle_or_steer
+from dream import kernels, rules, timers
+from dream.experiments.line_consensus import SIDESTEP_UPDATES, Detections, Nearby, Sight, settle_or_steer
 from dream.experiments.spec import Experiment
 from dream.frames import Frame
 from dream.heartbeats import Heartbeats
 from dream.obstacles import Obstacle, touching
 from dream.radios import GraphRadio
-from dream.robot import RobotHRVO
+from dream.robot import GUARD_HORIZON, GUARD_MARGIN, RobotHRVO, stopping
 from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec
 from dream.world import create_timer
@@ -101,6 +102,14 @@ SILENCE = 20  #: radio rounds without a heartbeat after which a robot is taken f
 #: survivor's place is, within the tile less ``WALL`` (m).
 CLEAR = 0.2
 WALL = 0.15
+START_DELAY = 10  #: start-up delay of robot i's timer: this plus its place in its formation (i % 7) steps
+ODOM_GAP, MOVEMENT_GAP, CONTROL_GAP = (
+    2,
+    3,
+    4,
+)  #: steps between odometry readings, detections, radio rounds and decisions
+#: The faults a swarm takes (see :meth:`AffineFormation.swarm_step`): those of the wheels alone.
+SWARM_FAULTS = frozenset({"stuck", "stuck_at", "actuator_noise"})
 SETTLE = 1200  #: steps for the followers to take their places before the first manoeuvre
 #: How far (m) to the right the leaders stand while the followers gather from the corners, until
 #: step ``GATHER``. The followers from the right-hand corners have the longer way and must pass
@@ -469,6 +478,83 @@ def schedule() -> list[tuple[int, int, int, str, float]]:
     return passes
 
 
+def tile_places(robots: np.ndarray, shape: str, centres: np.ndarray) -> np.ndarray:
+    """The places ``(k, 2)`` (m) of ``robots`` ``(k,)`` (ids) in ``shape`` about their tiles' ``centres``
+    ``(g, 2)``, as the per-robot leaders compute them (the formation, then the tile's centre)."""
+    return formation(shape)[robots % 7] + centres[robots // 7]
+
+
+def start_delays(n: int) -> np.ndarray:
+    """Start-up delays ``(n,)`` of the robots' timers (steps): staggered by the place in the formation."""
+    return START_DELAY + np.arange(n) % 7
+
+
+@dataclass
+class AffineSwarm:
+    """Every robot's state in swarm mode, one row or column each (see :meth:`AffineFormation.swarm_step`).
+
+    Attributes
+    ----------
+    delays : (n,) int ndarray
+        Start-up delay of each robot's timer (steps), as in the per-robot mode.
+    leader : (n,) bool ndarray
+        Who leads (places 0-2 of each formation).
+    pose : (3, n) ndarray
+        Each robot's last odometry reading (NaN before the first).
+    board : (n, 2) ndarray
+        The radio board: the position each robot sent last (m; NaN before it first spoke).
+    dxi : (n, 2) ndarray
+        The velocities chosen last (m/s).
+    sidestep, side : (n,) ndarrays
+        A follower's decisions left stepping aside, and to which side (see :meth:`~dream.RobotHRVO.steer`).
+    origin, goal : (n, 2) ndarrays
+        A leader's aim moves from ``origin`` to ``goal`` (m) over ``MORPH`` decisions (:func:`morph`;
+        rows of followers unused).
+    decisions : (n,) int ndarray
+        A leader's decisions since it took its goal.
+    """
+
+    delays: np.ndarray
+    leader: np.ndarray
+    pose: np.ndarray
+    board: np.ndarray
+    dxi: np.ndarray
+    sidestep: np.ndarray
+    side: np.ndarray
+    origin: np.ndarray
+    goal: np.ndarray
+    decisions: np.ndarray
+
+    @classmethod
+    def start(cls, n: int, centres: np.ndarray) -> AffineSwarm:
+        """``n`` robots that know nothing yet, in the tiles centred at ``centres`` ``(n / 7, 2)``, the
+        leaders heading for their gathering places (as :meth:`AffineFormation.build` sets them)."""
+        leaders = np.flatnonzero(np.arange(n) % 7 < LEADERS)
+        team = cls(
+            delays=start_delays(n),
+            leader=np.arange(n) % 7 < LEADERS,
+            pose=np.full((3, n), np.nan),
+            board=np.full((n, 2), np.nan),
+            dxi=np.zeros((n, 2)),
+            sidestep=np.zeros(n, dtype=np.int64),
+            side=np.ones(n),
+            origin=np.zeros((n, 2)),
+            goal=np.zeros((n, 2)),
+            decisions=np.full(n, MORPH, dtype=np.int64),
+        )
+        team.goal[leaders] = team.origin[leaders] = tile_places(leaders, "nominal", centres)
+        team.head_for(team.goal[leaders] + (SHIFT, 0.0))
+        return team
+
+    def head_for(self, places: np.ndarray) -> None:
+        """:meth:`Leader.head_for` for every leader: its aim moves from where it is now to its place
+        ``places`` ``(g * 3, 2)`` (m, by id) over its next ``MORPH`` decisions."""
+        leaders = np.flatnonzero(self.leader)
+        self.origin[leaders] = morph(self.origin[leaders], self.goal[leaders], self.decisions[leaders])
+        self.goal[leaders] = places
+        self.decisions[leaders] = 0
+
+
 class AffineFormation(Experiment):
     """The affine-formation experiment (see the module docs).
 
@@ -478,6 +564,7 @@ class AffineFormation(Experiment):
 
     name = NAME
     default_n = 7
+    has_swarm_mode = True
     success = (
         "follower error below 0.05 m before the first bars, no robot touching a bar, zero violations, "
         "through both passes and back to the nominal shape; under faults, the correct robots hold the "
@@ -495,11 +582,18 @@ class AffineFormation(Experiment):
     def arena_for(self, n: int) -> ArenaSpec:
         return tiled_arena(n // 7)
 
-    def build(self, n: int) -> None:
+    def _prepare(self, n: int) -> None:
+        """What both modes keep: the tiles, who leads, the passes, the bars and the measures."""
         self.centres = tile_centres(n // 7)
-        self.weights = np.kron(np.eye(n // 7), WEIGHTS)
         self.leader = np.arange(n) % 7 < LEADERS
         self.passes = schedule()
+        self.bars: list[Obstacle] = []
+        self.contacts, self.settled_error, self.deformed_error, self.error = 0, math.nan, 0.0, math.nan
+
+    def build(self, n: int) -> None:
+        self._prepare(n)
+        self.weights = np.kron(np.eye(n // 7), WEIGHTS)
+        delays = start_delays(n)
         # Every robot hears its whole formation (the law uses the weighted neighbours only): the
         # heartbeats, the leaders' plans and the claims a follower checks come from all.
         adjacency = np.kron(np.eye(n // 7), np.ones((7, 7)))
@@ -520,15 +614,179 @@ class AffineFormation(Experiment):
             if isinstance(robot, Leader):
                 robot.sensor, look = movement, robot.watch
             entries = [
-                {"delay": 2, "tag": "odom", "call": odometry.update},
-                {"delay": 3, "tag": "movement", "call": look},
-                {"delay": 4, "tag": "radio", "call": radio.update},
-                {"delay": 4, "tag": "robot", "call": robot.update},
+                {"delay": ODOM_GAP, "tag": "odom", "call": odometry.update},
+                {"delay": MOVEMENT_GAP, "tag": "movement", "call": look},
+                {"delay": CONTROL_GAP, "tag": "radio", "call": radio.update},
+                {"delay": CONTROL_GAP, "tag": "robot", "call": robot.update},
             ]
-            create_timer(i, 10 + i % 7, entries)
+            create_timer(i, int(delays[i]), entries)
             self.robots.append(robot)
-        self.bars: list[Obstacle] = []
-        self.contacts, self.settled_error, self.deformed_error, self.error = 0, math.nan, 0.0, math.nan
+
+    def build_swarm(self, n: int) -> None:
+        self._prepare(n)
+        self.team = AffineSwarm.start(n, self.centres)
+        self.bounds = self.arena.shrunk(GRITSBOT.radius)
+        self.sights: dict[int, Sight] = {}
+
+    def swarm_step(self, step: int, x: np.ndarray) -> np.ndarray:
+        """Every robot's part of step ``step``, at the per-robot mode's rates (:func:`dream.timers.due`
+        of each robot's timer): odometry, the followers' movement sensors, a radio round
+        (:meth:`_talk`) and a decision (:meth:`_decide`); a robot that does not decide keeps its last
+        command."""
+        team = self.team
+        if step == 0:
+            self._refuse_faults()
+            self.nearby = Nearby(RANGE, GRITSBOT.within(self.sim.spec).v_max, self.sim.time_step)
+        # What the followers' movement sensors see (the leaders read theirs only to avoid crashed
+        # robots): the poses, the commands before this step's decisions, who is within RANGE.
+        looking = np.flatnonzero(timers.due(step, team.delays, MOVEMENT_GAP) & ~team.leader)
+        self.sights[step] = Sight(x, self.dxu.copy(), *self.nearby.rows(step, x, looking))
+        self.sights.pop(step - MOVEMENT_GAP, None)
+        reading = timers.due(step, team.delays, ODOM_GAP)
+        team.pose[:, reading] = x[:, reading]
+        # The radio and the controller share their gap and start: a robot talks, then decides.
+        deciding = np.flatnonzero(timers.due(step, team.delays, CONTROL_GAP))
+        commands = self.dxu.copy()
+        if len(deciding):
+            self._decide(step, deciding, self._talk(deciding), commands)
+        return commands
+
+    def _refuse_faults(self) -> None:
+        """Refuse faults other than the wheels' (:data:`SWARM_FAULTS`), saying why."""
+        state = self.world.fault_state
+        others = sorted(set(state.faults.to_dict()) - SWARM_FAULTS) if state is not None else []
+        if others:
+            raise ValueError(
+                f"affine-formation's swarm mode takes faults of the wheels only (stuck, actuator_noise), got "
+                f"{', '.join(others)}: crashes and liars need each robot's failure detector and claim checks, "
+                "and the swarm has no radio or sensor model to lose, delay or corrupt messages, readings or "
+                "clocks; run it robot by robot"
+            )
+
+    def _talk(self, who: np.ndarray) -> np.ndarray:
+        """The radio round of robots ``who`` ``(k,)`` (ids, increasing): the positions ``(k, 7, 2)`` each
+        has heard last from the robots of its formation, by place (NaN: not yet); then they send
+        their own. The per-robot radios talk one after the other by id, so a robot of lower id
+        talking in the same step has already sent its position of now."""
+        team = self.team
+        members = (who - who % 7)[:, None] + np.arange(7)
+        talking = np.zeros(self.n, dtype=bool)
+        talking[who] = True
+        fresh = talking[members] & (members < who[:, None])
+        heard = team.board[members]
+        heard[fresh] = team.pose[:2, members[fresh]].T
+        team.board[who] = team.pose[:2, who].T
+        return heard
+
+    def _decide(self, step: int, who: np.ndarray, heard: np.ndarray, commands: np.ndarray) -> None:
+        """The decisions of robots ``who`` ``(k,)`` (ids, increasing) as :meth:`Leader.update` and
+        :meth:`Follower.update` take them: a leader heads for its aim (:func:`morph`,
+        :func:`dream.rules.toward`) through HRVO, avoiding nobody; a follower obeys the stress law
+        on the positions ``heard`` ``(k, 7, 2)`` (:func:`dream.rules.stress`), settles or steers
+        (:func:`~dream.experiments.line_consensus.settle_or_steer`): one HRVO call for them all;
+        then their limited and guarded commands go into ``commands`` ``(2, n)``.
+
+        A follower's reading of this very step saw the new commands of the robots of lower id that
+        decided before it in the per-robot mode's order, so such robots decide again until no
+        command they see changes (as line-consensus's swarm mode does).
+        """
+        team, n, k = self.team, self.n, len(who)
+        own, heading = team.pose[:2, who].T, team.pose[2, who]
+        lead = team.leader[who]
+        leaders, followers = who[lead], who[~lead]
+        desired = np.zeros((k, 2))
+        team.decisions[leaders] += 1
+        aims = morph(team.origin[leaders], team.goal[leaders], team.decisions[leaders])
+        desired[lead] = rules.toward(own[lead], aims, LEADER_GAIN, GRITSBOT.v_max)
+        pull = rules.stress(own[~lead], heard[~lead], WEIGHTS[followers % 7])
+        desired[~lead] = rules.capped(-GAIN * pull, GRITSBOT.v_max)
+        seen = self._detections(step, who)
+        nearest = np.full(k, np.inf)
+        np.minimum.at(nearest, seen.owners, seen.distances)
+        # Leaders always go through HRVO (never step aside: their counters stay at 0).
+        settle = ~lead & rules.settles(desired, nearest, FINE, 0.0)
+        wanted, sidestep = rules.sidestep_preference(desired, team.sidestep[who], team.side[who])
+        chosen = np.zeros((k, 2))
+        limits = GRITSBOT.within(self.sim.spec)
+        near = min(GRITSBOT.diameter + GUARD_MARGIN, SAFETY)
+        velocity = seen.velocity(commands)
+        chained = np.flatnonzero(seen.chained)
+        # Only detections this close can stop a robot (robot.stopping): the guard reads no others.
+        close = np.flatnonzero(seen.distances < near + limits.v_max * GUARD_HORIZON + 1e-9)
+        offsets = seen.offsets(close)
+        todo = np.ones(k, dtype=bool)
+        while todo.any():
+            velocity[chained] = seen.velocity(commands, chained)
+            pairs = np.flatnonzero(todo[seen.owners])
+            steer = todo & ~settle
+            chosen[steer] = self._hrvo(own, team.dxi[who], wanted, steer, seen, velocity, pairs)
+            dxi = np.where(settle[:, None], desired, chosen)[todo]
+            new = kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, team.pose[:, who[todo]]), limits)
+            local = np.cumsum(todo) - 1  # position of each robot of `who` among those of `todo`
+            guarded = todo[seen.owners[close]]
+            owners = local[seen.owners[close[guarded]]]
+            new[0, stopping(new[0], heading[todo], owners, offsets[guarded], near)] = 0.0
+            changed = np.zeros(n, dtype=bool)
+            changed[who[todo]] = np.any(new != commands[:, who[todo]], axis=0)
+            commands[:, who[todo]] = new
+            todo = np.bincount(seen.owners[chained[changed[seen.others[chained]]]], minlength=k) > 0
+        steered = ~lead & ~settle
+        sidestep, side = rules.sidestep_update(chosen, desired, sidestep, team.side[who], SIDESTEP_UPDATES)
+        team.sidestep[who[steered]], team.side[who[steered]] = sidestep[steered], side[steered]
+        team.dxi[who] = np.where(settle[:, None], desired, chosen)
+
+    def _hrvo(
+        self,
+        own: np.ndarray,
+        dxi: np.ndarray,
+        wanted: np.ndarray,
+        steer: np.ndarray,
+        seen: Detections,
+        velocity: np.ndarray,
+        pairs: np.ndarray,
+    ) -> np.ndarray:
+        """HRVO's choice ``(s, 2)`` for the robots ``steer`` ``(k,)`` bool among those at ``own``
+        ``(k, 2)`` with velocities ``dxi`` and wishes ``wanted`` ``(k, 2)``, from their detections
+        ``seen`` (rows ``pairs``, of the detected robots' ``velocity`` ``(m, 2)``): one
+        :func:`dream.kernels.hrvo` call in which every detection is a robot of its own, placed
+        where the detection says."""
+        pairs = pairs[steer[seen.owners[pairs]]]
+        owners = seen.owners[pairs]
+        k = int(steer.sum())
+        ghosts = own[owners] + seen.towards[pairs]
+        counts = np.bincount((np.cumsum(steer) - 1)[owners], minlength=k)
+        indptr = np.concatenate(([0], np.cumsum(counts), np.full(len(ghosts), len(ghosts))))
+        return kernels.hrvo(
+            np.vstack((own[steer], ghosts)),
+            np.vstack((dxi[steer], velocity[pairs])),
+            np.vstack((wanted[steer], np.zeros_like(ghosts))),
+            (indptr, k + np.arange(len(ghosts))),
+            safety=SAFETY,
+            v_max=GRITSBOT.v_max,
+            bounds=self.bounds,
+        )[:k]
+
+    def _detections(self, step: int, who: np.ndarray) -> Detections:
+        """What robots ``who`` ``(k,)`` saw at their last movement-sensor reading (none for the
+        leaders, who read theirs only to avoid crashed robots; see :class:`Detections`)."""
+        last = timers.last_due(step, self.team.delays[who], MOVEMENT_GAP)
+        parts: list[tuple[np.ndarray, ...]] = []
+        for when in np.unique(last[last >= 0]):
+            sight = self.sights[int(when)]
+            mine = np.flatnonzero(last == when)
+            starts, counts = sight.indptr[who[mine]], np.diff(sight.indptr)[who[mine]]
+            owners = np.repeat(mine, counts)
+            picks = np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
+            others, me = sight.indices[picks], who[owners]
+            x = sight.poses
+            # Robots of lower id had run their timers, decisions included, before this reading.
+            later = others < me
+            chained = later & (when == step)
+            after = sight.before if when == step else self.sights[int(when) + 1].before
+            known = np.where(later, after[:, others], sight.before[:, others])
+            angles = np.arctan2(x[1, me] - x[1, others], x[0, me] - x[0, others])
+            parts.append((owners, others, sight.distances[picks], angles, x[2, others], known, chained))
+        return Detections.join(parts)
 
     def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
         return corner_starts(rng, self.centres)
@@ -550,6 +808,9 @@ class AffineFormation(Experiment):
 
     def _lead(self, shape: str) -> None:
         """Send every leader towards its place in ``shape`` (the leaders know the plan)."""
+        if self.swarm:
+            self.team.head_for(tile_places(np.flatnonzero(self.leader), shape, self.centres))
+            return
         for robot in self.robots:
             if isinstance(robot, Leader):
                 robot.head_for(formation(shape) + self.centres[robot.robot_id // 7])
@@ -598,15 +859,20 @@ class AffineFormation(Experiment):
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
         goals = np.zeros((self.n, 2))
-        goals[self.leader] = [r.goal for r in self.robots if isinstance(r, Leader)]
+        if self.swarm:
+            goals[self.leader], velocities = self.team.goal[self.leader], self.team.dxi
+        else:
+            goals[self.leader] = [r.goal for r in self.robots if isinstance(r, Leader)]
+            velocities = np.array([r.dxi for r in self.robots])
         goals[~self.leader] = self.targets
+        links = np.argwhere(np.triu(WEIGHTS) != 0)
         return Frame(
             step,
             self.arena,
             poses,
             goals=goals,
-            velocities=np.array([r.dxi for r in self.robots]),
-            links=np.argwhere(np.triu(self.weights) != 0),
+            velocities=velocities,
+            links=(links[None] + 7 * np.arange(self.n // 7)[:, None, None]).reshape(-1, 2),
             obstacles=[bar.polygon for bar in self.bars],
             obstacle_moving=[True] * len(self.bars),
             roles=np.where(self.leader, "leader", "follower"),
