@@ -145,9 +145,11 @@ def stress_matrix(weights: np.ndarray = WEIGHTS) -> np.ndarray:
 
 
 def follower_targets(leaders: np.ndarray, weights: np.ndarray = WEIGHTS) -> np.ndarray:
-    """Where the followers converge for leaders at ``leaders`` ``(3, 2)``: ``-Omega_ff^-1 Omega_fl p_l``."""
+    """Where the followers converge ``(..., 4, 2)`` for leaders at ``leaders`` ``(..., 3, 2)`` (one
+    formation, or a stack of them): ``-Omega_ff^-1 Omega_fl p_l``."""
     omega = stress_matrix(weights)
-    return -np.linalg.solve(omega[LEADERS:, LEADERS:], omega[LEADERS:, :LEADERS] @ leaders)
+    pulled = omega[LEADERS:, :LEADERS] @ leaders
+    return -np.linalg.solve(np.broadcast_to(omega[LEADERS:, LEADERS:], (*pulled.shape[:-2], 4, 4)), pulled)
 
 
 def morph(start: np.ndarray, goals: np.ndarray, decisions: Any) -> np.ndarray:
@@ -203,8 +205,7 @@ def bars(gap: float, x: float, centre: np.ndarray | None = None) -> list[Obstacl
 def follower_positions(anchors: np.ndarray) -> np.ndarray:
     """Each formation's follower targets ``(4 g, 2)`` for leaders at ``anchors`` ``(7 g, 2)`` (rows
     of followers unused)."""
-    blocks = anchors.reshape(len(anchors) // 7, 7, 2)
-    return np.vstack([follower_targets(block[:LEADERS]) for block in blocks])
+    return follower_targets(anchors.reshape(-1, 7, 2)[:, :LEADERS]).reshape(-1, 2)
 
 
 def affine_image(known: dict[int, np.ndarray], indices: list[int]) -> dict[int, np.ndarray]:
