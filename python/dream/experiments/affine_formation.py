@@ -55,14 +55,15 @@ from typing import Any
 
 import numpy as np
 
-from dream import kernels, rules, timers
-from dream.experiments.line_consensus import SIDESTEP_UPDATES, Detections, Nearby, Sight, settle_or_steer
+from dream import rules, timers
+from dream.experiments.line_consensus import SIDESTEP_UPDATES, Nearby, Sight, settle_or_steer
+from dream.experiments.sightings import decide_in_order, last_detections
 from dream.experiments.spec import Experiment
 from dream.frames import Frame
 from dream.heartbeats import Heartbeats
 from dream.obstacles import Obstacle, touching
 from dream.radios import GraphRadio
-from dream.robot import GUARD_HORIZON, GUARD_MARGIN, RobotHRVO, stopping
+from dream.robot import GUARD_MARGIN, RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec
 from dream.world import create_timer
@@ -684,15 +685,11 @@ class AffineFormation(Experiment):
         :meth:`Follower.update` take them: a leader heads for its aim (:func:`morph`,
         :func:`dream.rules.toward`) through HRVO, avoiding nobody; a follower obeys the stress law
         on the positions ``heard`` ``(k, 7, 2)`` (:func:`dream.rules.stress`), settles or steers
-        (:func:`~dream.experiments.line_consensus.settle_or_steer`): one HRVO call for them all;
-        then their limited and guarded commands go into ``commands`` ``(2, n)``.
-
-        A follower's reading of this very step saw the new commands of the robots of lower id that
-        decided before it in the per-robot mode's order, so such robots decide again until no
-        command they see changes (as line-consensus's swarm mode does).
-        """
-        team, n, k = self.team, self.n, len(who)
-        own, heading = team.pose[:2, who].T, team.pose[2, who]
+        (:func:`~dream.experiments.line_consensus.settle_or_steer`); one HRVO call for them all,
+        in the per-robot mode's order (:func:`~dream.experiments.sightings.decide_in_order`), puts
+        their limited and guarded commands into ``commands`` ``(2, n)``."""
+        team, k = self.team, len(who)
+        own = team.pose[:2, who].T
         lead = team.leader[who]
         leaders, followers = who[lead], who[~lead]
         desired = np.zeros((k, 2))
@@ -701,93 +698,32 @@ class AffineFormation(Experiment):
         desired[lead] = rules.toward(own[lead], aims, LEADER_GAIN, GRITSBOT.v_max)
         pull = rules.stress(own[~lead], heard[~lead], WEIGHTS[followers % 7])
         desired[~lead] = rules.capped(-GAIN * pull, GRITSBOT.v_max)
-        seen = self._detections(step, who)
+        # The leaders read no sensor (they avoid only crashed robots): their rows are empty.
+        seen = last_detections(self.sights, team.delays[who], step, who, MOVEMENT_GAP)
         nearest = np.full(k, np.inf)
         np.minimum.at(nearest, seen.owners, seen.distances)
-        # Leaders always go through HRVO (never step aside: their counters stay at 0).
+        # Leaders always go through HRVO, and never step aside (their counters stay at 0).
         settle = ~lead & rules.settles(desired, nearest, FINE, 0.0)
         wanted, sidestep = rules.sidestep_preference(desired, team.sidestep[who], team.side[who])
-        chosen = np.zeros((k, 2))
-        limits = GRITSBOT.within(self.sim.spec)
-        near = min(GRITSBOT.diameter + GUARD_MARGIN, SAFETY)
-        velocity = seen.velocity(commands)
-        chained = np.flatnonzero(seen.chained)
-        # Only detections this close can stop a robot (robot.stopping): the guard reads no others.
-        close = np.flatnonzero(seen.distances < near + limits.v_max * GUARD_HORIZON + 1e-9)
-        offsets = seen.offsets(close)
-        todo = np.ones(k, dtype=bool)
-        while todo.any():
-            velocity[chained] = seen.velocity(commands, chained)
-            pairs = np.flatnonzero(todo[seen.owners])
-            steer = todo & ~settle
-            chosen[steer] = self._hrvo(own, team.dxi[who], wanted, steer, seen, velocity, pairs)
-            dxi = np.where(settle[:, None], desired, chosen)[todo]
-            new = kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, team.pose[:, who[todo]]), limits)
-            local = np.cumsum(todo) - 1  # position of each robot of `who` among those of `todo`
-            guarded = todo[seen.owners[close]]
-            owners = local[seen.owners[close[guarded]]]
-            new[0, stopping(new[0], heading[todo], owners, offsets[guarded], near)] = 0.0
-            changed = np.zeros(n, dtype=bool)
-            changed[who[todo]] = np.any(new != commands[:, who[todo]], axis=0)
-            commands[:, who[todo]] = new
-            todo = np.bincount(seen.owners[chained[changed[seen.others[chained]]]], minlength=k) > 0
+        chosen = decide_in_order(
+            who,
+            team.pose[:, who],
+            team.dxi[who],
+            desired,
+            wanted,
+            settle,
+            seen,
+            commands,
+            safety=SAFETY,
+            v_max=GRITSBOT.v_max,
+            bounds=self.bounds,
+            limits=GRITSBOT.within(self.sim.spec),
+            near=min(GRITSBOT.diameter + GUARD_MARGIN, SAFETY),
+        )
         steered = ~lead & ~settle
         sidestep, side = rules.sidestep_update(chosen, desired, sidestep, team.side[who], SIDESTEP_UPDATES)
         team.sidestep[who[steered]], team.side[who[steered]] = sidestep[steered], side[steered]
         team.dxi[who] = np.where(settle[:, None], desired, chosen)
-
-    def _hrvo(
-        self,
-        own: np.ndarray,
-        dxi: np.ndarray,
-        wanted: np.ndarray,
-        steer: np.ndarray,
-        seen: Detections,
-        velocity: np.ndarray,
-        pairs: np.ndarray,
-    ) -> np.ndarray:
-        """HRVO's choice ``(s, 2)`` for the robots ``steer`` ``(k,)`` bool among those at ``own``
-        ``(k, 2)`` with velocities ``dxi`` and wishes ``wanted`` ``(k, 2)``, from their detections
-        ``seen`` (rows ``pairs``, of the detected robots' ``velocity`` ``(m, 2)``): one
-        :func:`dream.kernels.hrvo` call in which every detection is a robot of its own, placed
-        where the detection says."""
-        pairs = pairs[steer[seen.owners[pairs]]]
-        owners = seen.owners[pairs]
-        k = int(steer.sum())
-        ghosts = own[owners] + seen.towards[pairs]
-        counts = np.bincount((np.cumsum(steer) - 1)[owners], minlength=k)
-        indptr = np.concatenate(([0], np.cumsum(counts), np.full(len(ghosts), len(ghosts))))
-        return kernels.hrvo(
-            np.vstack((own[steer], ghosts)),
-            np.vstack((dxi[steer], velocity[pairs])),
-            np.vstack((wanted[steer], np.zeros_like(ghosts))),
-            (indptr, k + np.arange(len(ghosts))),
-            safety=SAFETY,
-            v_max=GRITSBOT.v_max,
-            bounds=self.bounds,
-        )[:k]
-
-    def _detections(self, step: int, who: np.ndarray) -> Detections:
-        """What robots ``who`` ``(k,)`` saw at their last movement-sensor reading (none for the
-        leaders, who read theirs only to avoid crashed robots; see :class:`Detections`)."""
-        last = timers.last_due(step, self.team.delays[who], MOVEMENT_GAP)
-        parts: list[tuple[np.ndarray, ...]] = []
-        for when in np.unique(last[last >= 0]):
-            sight = self.sights[int(when)]
-            mine = np.flatnonzero(last == when)
-            starts, counts = sight.indptr[who[mine]], np.diff(sight.indptr)[who[mine]]
-            owners = np.repeat(mine, counts)
-            picks = np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
-            others, me = sight.indices[picks], who[owners]
-            x = sight.poses
-            # Robots of lower id had run their timers, decisions included, before this reading.
-            later = others < me
-            chained = later & (when == step)
-            after = sight.before if when == step else self.sights[int(when) + 1].before
-            known = np.where(later, after[:, others], sight.before[:, others])
-            angles = np.arctan2(x[1, me] - x[1, others], x[0, me] - x[0, others])
-            parts.append((owners, others, sight.distances[picks], angles, x[2, others], known, chained))
-        return Detections.join(parts)
 
     def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
         return corner_starts(rng, self.centres)
