@@ -45,6 +45,19 @@ robots too. Each robot decides from its own radio, sensors and clock:
   The liar itself moves as a correct robot (it decides from true inputs) but is not judged.
 
 Without faults every decision is as before: runs are the same to the last bit.
+
+Swarm mode (``swarm=True``, :meth:`AffineFormation.swarm_step`) runs the same leaders and followers
+on arrays (:class:`AffineSwarm`), for thousands of formations: each robot at its own timer's steps
+(:func:`dream.timers.due`), radio rounds in which a robot hears the position a robot of lower id
+sent in that very step (the per-robot timers run by id), the same rules (:func:`morph` and
+:func:`dream.rules.toward` for the leaders; :func:`dream.rules.stress`, :func:`dream.rules.capped`,
+settling and stepping aside for the followers; the motion guard) and one HRVO call for the robots
+deciding in a step, in the per-robot mode's order (:mod:`dream.experiments.sightings`). The
+trajectories equal the per-robot mode's to the bit (the tests compare whole runs). It has no
+failure detector and no claim checks, and no radio or sensor model to lose, delay or corrupt
+messages and readings: it takes the faults of the wheels only (``stuck``, ``actuator_noise``,
+which reach it as they reach the robots) and refuses the others (crash, byzantine, radio, sensor
+and clock faults) with the reason.
 """
 
 from __future__ import annotations
