@@ -154,3 +154,15 @@ def test_affine_formation_tiles_are_robotarium_sized():
     assert np.all(np.abs(centres[:, 1]) + 1.0 <= arena.ymax + 1e-9)
     gaps = np.linalg.norm(centres[:, None] - centres[None], axis=2) + 10 * np.eye(5)
     assert gaps.min() >= 2.0 - 1e-9
+
+
+def test_affine_formation_swarm_mode_frames_come_from_its_arrays():
+    frames: dict[bool, list] = {False: [], True: []}
+    for swarm in frames:
+        af.run(n=14, seed=0, backend="fast", steps=40, swarm=swarm, record=frames[swarm].append)
+    robots, swarm = frames[False][-1], frames[True][-1]
+    assert np.isfinite(swarm.goals).all() and np.any(swarm.velocities != 0)
+    np.testing.assert_array_equal(swarm.goals, robots.goals)
+    np.testing.assert_array_equal(swarm.velocities, robots.velocities)
+    np.testing.assert_array_equal(swarm.links, robots.links)
+    assert len(swarm.links) == 2 * np.count_nonzero(np.triu(af.WEIGHTS))
