@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from dream import kernels
 from dream._checks import FloatArray, as_array
 from dream.specs import ArenaSpec
 
@@ -55,9 +56,7 @@ class Obstacle:
 
         Written out rather than a matrix product, whose rounding may depend on how many points
         there are: one robot's reading and the whole swarm's must agree to the bit."""
-        d = np.asarray(points, dtype=np.float64) - self.center
-        c, s = math.cos(self.angle), math.sin(self.angle)
-        return np.stack((d[..., 0] * c + d[..., 1] * s, d[..., 1] * c - d[..., 0] * s), axis=-1)
+        return _local(np.asarray(points, dtype=np.float64), self.center, math.cos(self.angle), math.sin(self.angle))
 
     def closest_points(self, points: Any) -> FloatArray:
         """The points of the obstacle closest to ``points`` ``(..., 2)``, NaN for those inside."""
@@ -79,8 +78,7 @@ class Obstacle:
 
     def distances(self, points: Any) -> FloatArray:
         """Distances ``(m,)`` (m) from ``points`` ``(m, 2)`` to the obstacle (0 inside)."""
-        outside = np.maximum(np.abs(self._local(points)) - self.size / 2, 0.0)
-        return np.hypot(outside[..., 0], outside[..., 1])
+        return _distances(self._local(points), self.size / 2)
 
     def distance(self, point: Any) -> float:
         """Distance from ``point`` ``(2,)`` to the obstacle (0 inside)."""
@@ -121,13 +119,42 @@ def sensed(obstacles: Sequence[Obstacle], positions: Any, range: float) -> Float
     return np.where(far[..., None], np.nan, closest)
 
 
+def _local(points: FloatArray, centres: Any, cos: Any, sin: Any) -> FloatArray:
+    """``points`` ``(..., 2)`` in the frames of rectangles centred at ``centres`` ``(..., 2)`` turned by
+    angles of cosines ``cos`` and sines ``sin`` ``(...)`` (see :meth:`Obstacle._local`)."""
+    d = points - centres
+    return np.stack((d[..., 0] * cos + d[..., 1] * sin, d[..., 1] * cos - d[..., 0] * sin), axis=-1)
+
+
+def _distances(local: FloatArray, half: Any) -> FloatArray:
+    """Distances ``(...)`` (m) from points ``local`` ``(..., 2)`` in rectangles' frames to the
+    rectangles of half sides ``half`` ``(..., 2)`` (0 inside)."""
+    outside = np.maximum(np.abs(local) - half, 0.0)
+    return np.hypot(outside[..., 0], outside[..., 1])
+
+
 def touching(obstacles: list[Obstacle], positions: Any, radius: float) -> np.ndarray:
     """Which robots ``(n,)`` touch an obstacle: their centre, at ``positions`` ``(n, 2)``, is closer
     than ``radius`` (m) to one of ``obstacles`` (or inside it)."""
     points = as_array(positions, "positions", (None, 2))
     touch = np.zeros(len(points), dtype=bool)
-    for obstacle in obstacles:
-        touch |= obstacle.distances(points) < radius
+    if not obstacles or not len(points):
+        return touch
+    m = len(obstacles)
+    centres = np.array([obstacle.center for obstacle in obstacles])
+    half = np.array([obstacle.size for obstacle in obstacles]) / 2
+    cos = np.array([math.cos(obstacle.angle) for obstacle in obstacles])
+    sin = np.array([math.sin(obstacle.angle) for obstacle in obstacles])
+    # Only a robot within an obstacle's circumcircle grown by `radius` can be that close to it: one
+    # neighbour query finds those pairs, so thousands of obstacles cost no loop over them.
+    reach = (float(np.hypot(half[:, 0], half[:, 1]).max()) + radius) * (1 + 1e-9)
+    indptr, indices = kernels.neighbours(np.vstack((centres, points)), reach)[:2]
+    owners = np.repeat(np.arange(m), np.diff(indptr[: m + 1]))
+    others = indices[: indptr[m]]
+    pairs = others >= m
+    owners, others = owners[pairs], others[pairs] - m
+    local = _local(points[others], centres[owners], cos[owners], sin[owners])
+    touch[others[_distances(local, half[owners]) < radius]] = True
     return touch
 
 
