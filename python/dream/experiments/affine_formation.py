@@ -117,11 +117,8 @@ SILENCE = 20  #: radio rounds without a heartbeat after which a robot is taken f
 CLEAR = 0.2
 WALL = 0.15
 START_DELAY = 10  #: start-up delay of robot i's timer: this plus its place in its formation (i % 7) steps
-ODOM_GAP, MOVEMENT_GAP, CONTROL_GAP = (
-    2,
-    3,
-    4,
-)  #: steps between odometry readings, detections, radio rounds and decisions
+#: Steps between a robot's odometry readings, its detections, and its radio rounds and decisions.
+ODOM_GAP, MOVEMENT_GAP, CONTROL_GAP = 2, 3, 4
 #: The faults a swarm takes (see :meth:`AffineFormation.swarm_step`): those of the wheels alone.
 SWARM_FAULTS = frozenset({"stuck", "stuck_at", "actuator_noise"})
 SETTLE = 1200  #: steps for the followers to take their places before the first manoeuvre
@@ -544,10 +541,11 @@ class AffineSwarm:
     def start(cls, n: int, centres: np.ndarray) -> AffineSwarm:
         """``n`` robots that know nothing yet, in the tiles centred at ``centres`` ``(n / 7, 2)``, the
         leaders heading for their gathering places (as :meth:`AffineFormation.build` sets them)."""
-        leaders = np.flatnonzero(np.arange(n) % 7 < LEADERS)
+        leader = np.arange(n) % 7 < LEADERS
+        leaders = np.flatnonzero(leader)
         team = cls(
             delays=start_delays(n),
-            leader=np.arange(n) % 7 < LEADERS,
+            leader=leader,
             pose=np.full((3, n), np.nan),
             board=np.full((n, 2), np.nan),
             dxi=np.zeros((n, 2)),
