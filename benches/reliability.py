@@ -38,7 +38,7 @@ SIZES = [
     "hrvo-circle:10000:swarm:0",
     *(f"{name}:{n}:{how}:{seeds}" for name in ("line-consensus", "voronoi-coverage") for n, seeds, how in LARGE),
     "affine-formation:98:fast:0-9",
-    "affine-formation:1001:fast:0-2",
+    "affine-formation:1001:swarm:0-2",  # moves as robot by robot, 60x faster
 ]
 QUICK = [
     "hrvo-circle:10:robotarium:0-9",

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from dream import kernels
 from dream._checks import FloatArray, as_array
 from dream.specs import ArenaSpec
 
@@ -70,8 +71,7 @@ class Obstacle:
 
     def distances(self, points: Any) -> FloatArray:
         """Distances ``(m,)`` (m) from ``points`` ``(m, 2)`` to the obstacle (0 inside)."""
-        outside = np.maximum(np.abs(self._local(points)) - self.size / 2, 0.0)
-        return np.hypot(outside[..., 0], outside[..., 1])
+        return _distances(self._local(points), self.size / 2)
 
     def distance(self, point: Any) -> float:
         """Distance from ``point`` ``(2,)`` to the obstacle (0 inside)."""
@@ -120,6 +120,16 @@ def _closest(points: FloatArray, center: Any, c: Any, s: Any, half: Any) -> Floa
     return np.where(np.all(np.abs(local) < half, axis=-1)[..., None], np.nan, closest)
 
 
+def _frames(obstacles: Sequence[Obstacle]) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """The obstacles' centres ``(k, 2)``, the cosines and sines of their angles ``(k,)`` (as
+    :meth:`Obstacle._local` takes them, from :func:`math.cos`) and their half sides ``(k, 2)``."""
+    centres = np.array([obstacle.center for obstacle in obstacles]).reshape(-1, 2)
+    cos = np.array([math.cos(obstacle.angle) for obstacle in obstacles])
+    sin = np.array([math.sin(obstacle.angle) for obstacle in obstacles])
+    half = np.array([obstacle.size for obstacle in obstacles]).reshape(-1, 2) / 2
+    return centres, cos, sin, half
+
+
 def sensed(obstacles: Sequence[Obstacle], positions: Any, range: float) -> FloatArray:  # noqa: A002 (as the sensors)
     """What obstacle sensors at ``positions`` ``(m, 2)`` read: the closest point of each obstacle
     ``(m, k, 2)``, NaN for an obstacle beyond ``range`` (m, inclusive) or around the sensor.
@@ -128,13 +138,17 @@ def sensed(obstacles: Sequence[Obstacle], positions: Any, range: float) -> Float
     here = np.asarray(positions, dtype=np.float64).reshape(-1, 1, 2)
     if not obstacles:
         return np.zeros((len(here), 0, 2))
-    centers = np.array([obstacle.center for obstacle in obstacles])
-    c = np.array([math.cos(obstacle.angle) for obstacle in obstacles])
-    s = np.array([math.sin(obstacle.angle) for obstacle in obstacles])
-    halves = np.array([obstacle.size / 2 for obstacle in obstacles])
-    closest = _closest(here, centers, c, s, halves)
+    centres, cos, sin, half = _frames(obstacles)
+    closest = _closest(here, centres, cos, sin, half)
     far = ~(np.hypot(closest[..., 0] - here[..., 0], closest[..., 1] - here[..., 1]) <= range)
     return np.where(far[..., None], np.nan, closest)
+
+
+def _distances(local: FloatArray, half: Any) -> FloatArray:
+    """Distances ``(...)`` (m) from points ``local`` ``(..., 2)`` in rectangles' frames to the
+    rectangles of half sides ``half`` ``(..., 2)`` (0 inside)."""
+    outside = np.maximum(np.abs(local) - half, 0.0)
+    return np.hypot(outside[..., 0], outside[..., 1])
 
 
 def touching(obstacles: list[Obstacle], positions: Any, radius: float) -> np.ndarray:
@@ -142,8 +156,20 @@ def touching(obstacles: list[Obstacle], positions: Any, radius: float) -> np.nda
     than ``radius`` (m) to one of ``obstacles`` (or inside it)."""
     points = as_array(positions, "positions", (None, 2))
     touch = np.zeros(len(points), dtype=bool)
-    for obstacle in obstacles:
-        touch |= obstacle.distances(points) < radius
+    if not obstacles or not len(points):
+        return touch
+    m = len(obstacles)
+    centres, cos, sin, half = _frames(obstacles)
+    # Only a robot within an obstacle's circumcircle grown by `radius` can be that close to it: one
+    # neighbour query finds those pairs, so thousands of obstacles cost no loop over them.
+    reach = (float(np.hypot(half[:, 0], half[:, 1]).max()) + radius) * (1 + 1e-9)
+    indptr, indices = kernels.neighbours(np.vstack((centres, points)), reach)[:2]
+    owners = np.repeat(np.arange(m), np.diff(indptr[: m + 1]))
+    others = indices[: indptr[m]]
+    pairs = others >= m
+    owners, others = owners[pairs], others[pairs] - m
+    local = _local(points[others], centres[owners], cos[owners], sin[owners])
+    touch[others[_distances(local, half[owners]) < radius]] = True
     return touch
 
 

@@ -386,9 +386,32 @@ _HYPOT = np.frompyfunc(math.hypot, 2, 1)
 
 def toward(positions: Any, goals: Any, gain: float, v_max: float) -> FloatArray:
     """``gain (goals - positions)`` ``(n, 2)`` or ``(2,)`` (m/s), scaled down to ``v_max`` when faster."""
-    desired = gain * (np.asarray(goals, dtype=np.float64) - np.asarray(positions, dtype=np.float64))
-    speed = length(desired)
-    return desired * np.minimum(1.0, v_max / np.maximum(speed, 1e-300))[..., None]
+    return capped(gain * (np.asarray(goals, dtype=np.float64) - np.asarray(positions, dtype=np.float64)), v_max)
+
+
+def capped(velocities: Any, v_max: float) -> FloatArray:
+    """``velocities`` ``(n, 2)`` or ``(2,)`` (m/s) scaled down to ``v_max`` when faster (times
+    ``v_max / speed``, as a robot's ``desired *= v_max / speed`` rounds)."""
+    v = np.asarray(velocities, dtype=np.float64)
+    return v * np.minimum(1.0, v_max / np.maximum(length(v), 1e-300))[..., None]
+
+
+def stress(positions: Any, others: Any, weights: Any) -> FloatArray:
+    """The stress term of the affine-formation law, ``sum_j w_ij (p_i - p_j)`` ``(n, 2)`` or ``(2,)``
+    (m), for robots at ``positions`` ``(n, 2)`` or ``(2,)`` that take their formation's robots to be
+    at ``others`` ``(n, k, 2)`` or ``(k, 2)`` with weights ``weights`` ``(n, k)`` or ``(k,)``.
+
+    Terms are added in the order of ``others``, and skipped where the weight is 0 or the position
+    unknown (NaN: nothing heard yet), so that a robot and the swarm round alike.
+    """
+    p = np.asarray(positions, dtype=np.float64)
+    there = np.asarray(others, dtype=np.float64)
+    w = np.asarray(weights, dtype=np.float64)
+    pull = np.zeros(p.shape)
+    for j in range(there.shape[-2]):
+        counts = (w[..., j] != 0) & np.isfinite(there[..., j, 0])
+        pull = np.where(counts[..., None], pull + w[..., j, None] * (p - there[..., j, :]), pull)
+    return pull
 
 
 def sent_row(own_y: Any, target_y: Any, travelling: Any) -> np.ndarray:

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
+import dream
 from dream.experiments import affine_formation as af
 
 
@@ -90,11 +91,54 @@ def test_affine_formation_has_seven_robots():
         af.run(n=8)
 
 
-def test_affine_formation_tiles_several_formations():
-    result = af.run(n=14, seed=0, backend="fast")
+@pytest.fixture(scope="module")
+def two_formations():
+    """Two tiled formations robot by robot (Fast, seed 0), shared by the tests that need the run."""
+    return af.run(n=14, seed=0, backend="fast", trace=True)
+
+
+def test_affine_formation_tiles_several_formations(two_formations):
+    result = two_formations
     assert result.measures["error_before_bars"] < 0.05
     assert result.measures["bar_contacts"] == 0 and result.collisions == 0
     assert result.completed_step is not None
+
+
+def test_affine_formation_swarm_mode_moves_as_the_robots_do(two_formations):
+    # Swarm mode keeps each robot's timers, the per-robot order by id within a step (radio
+    # messages and detected commands of lower ids are this step's) and the same rules, so the
+    # whole runs agree: 1e-9 m leaves room for the rounding of the one HRVO call (detections as
+    # robots placed where they are seen) against each robot's own (they agree to the bit today).
+    swarm = af.run(n=14, seed=0, backend="fast", trace=True, swarm=True)
+    assert two_formations.success and swarm.success and swarm.swarm
+    assert swarm.collisions == 0 and swarm.boundary == 0 and swarm.actuator == 0
+    assert swarm.completed_step == two_formations.completed_step
+    np.testing.assert_allclose(swarm.trace, two_formations.trace, rtol=0, atol=1e-9)
+    assert swarm.measures == pytest.approx(two_formations.measures, abs=1e-9)
+
+
+def test_affine_formation_swarm_mode_moves_as_the_robots_do_with_stuck_wheels():
+    # Wheel faults reach the swarm as the robots (they decide and talk on): the first 600 steps
+    # of one formation with one robot stuck from step 100.
+    faults = dream.Faults(stuck=0.15, stuck_at=100)
+    robots = af.run(n=7, seed=1, backend="fast", steps=600, trace=True, faults=faults)
+    swarm = af.run(n=7, seed=1, backend="fast", steps=600, trace=True, faults=faults, swarm=True)
+    assert [event["kind"] for event in swarm.faults["events"]] == ["stuck"]
+    assert swarm.faults["events"] == robots.faults["events"]
+    np.testing.assert_allclose(swarm.trace, robots.trace, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("faults", "named"),
+    [
+        (dream.Faults(crash=0.2, crash_at=5), "crash"),
+        (dream.Faults(byzantine=1), "byzantine"),
+        (dream.Faults(loss=0.1), "loss"),
+    ],
+)
+def test_affine_formation_swarm_mode_refuses_faults_it_cannot_model(faults, named):
+    with pytest.raises(ValueError, match=rf"wheels only .* got .*{named}.*failure detector"):
+        af.run(n=7, backend="fast", swarm=True, steps=3, faults=faults)
 
 
 def test_affine_formation_thousand_robots_on_fast_do_not_collide():
@@ -110,3 +154,15 @@ def test_affine_formation_tiles_are_robotarium_sized():
     assert np.all(np.abs(centres[:, 1]) + 1.0 <= arena.ymax + 1e-9)
     gaps = np.linalg.norm(centres[:, None] - centres[None], axis=2) + 10 * np.eye(5)
     assert gaps.min() >= 2.0 - 1e-9
+
+
+def test_affine_formation_swarm_mode_frames_come_from_its_arrays():
+    frames: dict[bool, list] = {False: [], True: []}
+    for swarm in frames:
+        af.run(n=14, seed=0, backend="fast", steps=40, swarm=swarm, record=frames[swarm].append)
+    robots, swarm = frames[False][-1], frames[True][-1]
+    assert np.isfinite(swarm.goals).all() and np.any(swarm.velocities != 0)
+    np.testing.assert_array_equal(swarm.goals, robots.goals)
+    np.testing.assert_array_equal(swarm.velocities, robots.velocities)
+    np.testing.assert_array_equal(swarm.links, robots.links)
+    assert len(swarm.links) == 2 * np.count_nonzero(np.triu(af.WEIGHTS))

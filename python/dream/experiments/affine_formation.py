@@ -45,23 +45,38 @@ robots too. Each robot decides from its own radio, sensors and clock:
   The liar itself moves as a correct robot (it decides from true inputs) but is not judged.
 
 Without faults every decision is as before: runs are the same to the last bit.
+
+Swarm mode (``swarm=True``, :meth:`AffineFormation.swarm_step`) runs the same leaders and followers
+on arrays (:class:`AffineSwarm`), for thousands of formations: each robot at its own timer's steps
+(:func:`dream.timers.due`), radio rounds in which a robot hears the position a robot of lower id
+sent in that very step (the per-robot timers run by id), the same rules (:func:`morph` and
+:func:`dream.rules.toward` for the leaders; :func:`dream.rules.stress`, :func:`dream.rules.capped`,
+settling and stepping aside for the followers; the motion guard) and one HRVO call for the robots
+deciding in a step, in the per-robot mode's order (:mod:`dream.experiments.sightings`). The
+trajectories equal the per-robot mode's to the bit (the tests compare whole runs). It has no
+failure detector and no claim checks, and no radio or sensor model to lose, delay or corrupt
+messages and readings: it takes the faults of the wheels only (``stuck``, ``actuator_noise``,
+which reach it as they reach the robots) and refuses the others (crash, byzantine, radio, sensor
+and clock faults) with the reason.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from dream import rules
-from dream.experiments.line_consensus import settle_or_steer
+from dream import rules, timers
+from dream.experiments.line_consensus import SIDESTEP_UPDATES, Nearby, Sight, settle_or_steer
+from dream.experiments.sightings import decide_in_order, last_detections
 from dream.experiments.spec import Experiment
 from dream.frames import Frame
 from dream.heartbeats import Heartbeats
 from dream.obstacles import Obstacle, touching
 from dream.radios import GraphRadio
-from dream.robot import RobotHRVO
+from dream.robot import GUARD_MARGIN, RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec
 from dream.world import create_timer
@@ -84,6 +99,7 @@ WEIGHTS = np.array(
 NOMINAL = np.array([[2, 0], [1, 1], [1, -1], [0, 1], [0, -1], [-1, 1], [-1, -1]], dtype=np.float64)
 SCALE = 0.3  #: metres per formation unit
 GAIN = 8.0  #: the followers' stress gain k (1/s)
+LEADER_GAIN = 1.5  #: a leader's gain towards its aim (1/s)
 # The same under rps 2.1's rules, whose colliders touch at 0.185 m: with the gathering and the
 # steady changes of shape below, no two robots came closer than 0.175 m (seeds 0-39, both
 # rules); a safety of 0.2 m made the followers lag, and a leader, which does not avoid them,
@@ -100,6 +116,11 @@ SILENCE = 20  #: radio rounds without a heartbeat after which a robot is taken f
 #: survivor's place is, within the tile less ``WALL`` (m).
 CLEAR = 0.2
 WALL = 0.15
+START_DELAY = 10  #: start-up delay of robot i's timer: this plus its place in its formation (i % 7) steps
+#: Steps between a robot's odometry readings, its detections, and its radio rounds and decisions.
+ODOM_GAP, MOVEMENT_GAP, CONTROL_GAP = 2, 3, 4
+#: The faults a swarm takes (see :meth:`AffineFormation.swarm_step`): those of the wheels alone.
+SWARM_FAULTS = frozenset({"stuck", "stuck_at", "actuator_noise"})
 SETTLE = 1200  #: steps for the followers to take their places before the first manoeuvre
 #: How far (m) to the right the leaders stand while the followers gather from the corners, until
 #: step ``GATHER``. The followers from the right-hand corners have the longer way and must pass
@@ -135,9 +156,17 @@ def stress_matrix(weights: np.ndarray = WEIGHTS) -> np.ndarray:
 
 
 def follower_targets(leaders: np.ndarray, weights: np.ndarray = WEIGHTS) -> np.ndarray:
-    """Where the followers converge for leaders at ``leaders`` ``(3, 2)``: ``-Omega_ff^-1 Omega_fl p_l``."""
+    """Where the followers converge ``(..., 4, 2)`` for leaders at ``leaders`` ``(..., 3, 2)`` (one
+    formation, or a stack of them): ``-Omega_ff^-1 Omega_fl p_l``."""
     omega = stress_matrix(weights)
-    return -np.linalg.solve(omega[LEADERS:, LEADERS:], omega[LEADERS:, :LEADERS] @ leaders)
+    pulled = omega[LEADERS:, :LEADERS] @ leaders
+    return -np.linalg.solve(np.broadcast_to(omega[LEADERS:, LEADERS:], (*pulled.shape[:-2], 4, 4)), pulled)
+
+
+def morph(start: np.ndarray, goals: np.ndarray, decisions: Any) -> np.ndarray:
+    """Where leaders' aims stand after ``decisions`` ``(k,)`` or ``()`` of their ``MORPH`` decisions
+    from the places ``start`` to ``goals`` ``(k, 2)`` (m): a steady pace along straight lines."""
+    return start + np.minimum(np.asarray(decisions) / MORPH, 1.0)[..., None] * (goals - start)
 
 
 def formation(shape: str) -> np.ndarray:
@@ -187,8 +216,7 @@ def bars(gap: float, x: float, centre: np.ndarray | None = None) -> list[Obstacl
 def follower_positions(anchors: np.ndarray) -> np.ndarray:
     """Each formation's follower targets ``(4 g, 2)`` for leaders at ``anchors`` ``(7 g, 2)`` (rows
     of followers unused)."""
-    blocks = anchors.reshape(len(anchors) // 7, 7, 2)
-    return np.vstack([follower_targets(block[:LEADERS]) for block in blocks])
+    return follower_targets(anchors.reshape(-1, 7, 2)[:, :LEADERS]).reshape(-1, 2)
 
 
 def affine_image(known: dict[int, np.ndarray], indices: list[int]) -> dict[int, np.ndarray]:
@@ -280,7 +308,7 @@ class Leader(RobotHRVO):
     @property
     def aims(self) -> np.ndarray:
         """The points ``(3, 2)`` (m) the plan has the formation's leaders head for now."""
-        return self.start + min(self.decisions / MORPH, 1.0) * (self.goals - self.start)
+        return morph(self.start, self.goals, self.decisions)
 
     @property
     def aim(self) -> np.ndarray:
@@ -324,10 +352,7 @@ class Leader(RobotHRVO):
         self.decisions += 1
         desired = np.zeros(2)
         if self.has_pose:
-            desired = 1.5 * (self.aim - (self.pos_x, self.pos_y))
-            speed = math.hypot(desired[0], desired[1])
-            if speed > self.v_max:
-                desired *= self.v_max / speed
+            desired = rules.toward((self.pos_x, self.pos_y), self.aim, LEADER_GAIN, self.v_max)
         self.HRVO(self.detections, desired)
         self.command(dxu)
 
@@ -444,14 +469,9 @@ class Follower(RobotHRVO):
         if self.has_pose:
             here = np.array([self.pos_x, self.pos_y])
             self.check_claims(here)
-            pull = sum(
-                (self.weights[j] * (here - there) for j, there in self.positions().items() if self.weights[j]),
-                np.zeros(2),
-            )
-            desired = -GAIN * pull
-            speed = math.hypot(desired[0], desired[1])
-            if speed > self.v_max:
-                desired *= self.v_max / speed
+            known = self.positions()
+            there = np.array(list(known.values())).reshape(-1, 2)
+            desired = rules.capped(-GAIN * rules.stress(here, there, self.weights[list(known)]), self.v_max)
         # Close to its place (the formation keeps robots >= 0.25 m apart) HRVO would forbid the
         # last centimetres towards a neighbour. The thesis's followers check no clearance.
         settle_or_steer(self, desired, FINE, clearance=0.0)
@@ -470,6 +490,84 @@ def schedule() -> list[tuple[int, int, int, str, float]]:
     return passes
 
 
+def tile_places(robots: np.ndarray, shape: str, centres: np.ndarray) -> np.ndarray:
+    """The places ``(k, 2)`` (m) of ``robots`` ``(k,)`` (ids) in ``shape`` about their tiles' ``centres``
+    ``(g, 2)``, as the per-robot leaders compute them (the formation, then the tile's centre)."""
+    return formation(shape)[robots % 7] + centres[robots // 7]
+
+
+def start_delays(n: int) -> np.ndarray:
+    """Start-up delays ``(n,)`` of the robots' timers (steps): staggered by the place in the formation."""
+    return START_DELAY + np.arange(n) % 7
+
+
+@dataclass
+class AffineSwarm:
+    """Every robot's state in swarm mode, one row or column each (see :meth:`AffineFormation.swarm_step`).
+
+    Attributes
+    ----------
+    delays : (n,) int ndarray
+        Start-up delay of each robot's timer (steps), as in the per-robot mode.
+    leader : (n,) bool ndarray
+        Who leads (places 0-2 of each formation).
+    pose : (3, n) ndarray
+        Each robot's last odometry reading (NaN before the first).
+    board : (n, 2) ndarray
+        The radio board: the position each robot sent last (m; NaN before it first spoke).
+    dxi : (n, 2) ndarray
+        The velocities chosen last (m/s).
+    sidestep, side : (n,) ndarrays
+        A follower's decisions left stepping aside, and to which side (see :meth:`~dream.RobotHRVO.steer`).
+    origin, goal : (n, 2) ndarrays
+        A leader's aim moves from ``origin`` to ``goal`` (m) over ``MORPH`` decisions (:func:`morph`;
+        rows of followers unused).
+    decisions : (n,) int ndarray
+        A leader's decisions since it took its goal.
+    """
+
+    delays: np.ndarray
+    leader: np.ndarray
+    pose: np.ndarray
+    board: np.ndarray
+    dxi: np.ndarray
+    sidestep: np.ndarray
+    side: np.ndarray
+    origin: np.ndarray
+    goal: np.ndarray
+    decisions: np.ndarray
+
+    @classmethod
+    def start(cls, n: int, centres: np.ndarray) -> AffineSwarm:
+        """``n`` robots that know nothing yet, in the tiles centred at ``centres`` ``(n / 7, 2)``, the
+        leaders heading for their gathering places (as :meth:`AffineFormation.build` sets them)."""
+        leader = np.arange(n) % 7 < LEADERS
+        leaders = np.flatnonzero(leader)
+        team = cls(
+            delays=start_delays(n),
+            leader=leader,
+            pose=np.full((3, n), np.nan),
+            board=np.full((n, 2), np.nan),
+            dxi=np.zeros((n, 2)),
+            sidestep=np.zeros(n, dtype=np.int64),
+            side=np.ones(n),
+            origin=np.zeros((n, 2)),
+            goal=np.zeros((n, 2)),
+            decisions=np.full(n, MORPH, dtype=np.int64),
+        )
+        team.goal[leaders] = team.origin[leaders] = tile_places(leaders, "nominal", centres)
+        team.head_for(team.goal[leaders] + (SHIFT, 0.0))
+        return team
+
+    def head_for(self, places: np.ndarray) -> None:
+        """:meth:`Leader.head_for` for every leader: its aim moves from where it is now to its place
+        ``places`` ``(g * 3, 2)`` (m, by id) over its next ``MORPH`` decisions."""
+        leaders = np.flatnonzero(self.leader)
+        self.origin[leaders] = morph(self.origin[leaders], self.goal[leaders], self.decisions[leaders])
+        self.goal[leaders] = places
+        self.decisions[leaders] = 0
+
+
 class AffineFormation(Experiment):
     """The affine-formation experiment (see the module docs).
 
@@ -479,6 +577,7 @@ class AffineFormation(Experiment):
 
     name = NAME
     default_n = 7
+    has_swarm_mode = True
     success = (
         "follower error below 0.05 m before the first bars, no robot touching a bar, zero violations, "
         "through both passes and back to the nominal shape; under faults, the correct robots hold the "
@@ -496,11 +595,18 @@ class AffineFormation(Experiment):
     def arena_for(self, n: int) -> ArenaSpec:
         return tiled_arena(n // 7)
 
-    def build(self, n: int) -> None:
+    def _prepare(self, n: int) -> None:
+        """What both modes keep: the tiles, who leads, the passes, the bars and the measures."""
         self.centres = tile_centres(n // 7)
-        self.weights = np.kron(np.eye(n // 7), WEIGHTS)
         self.leader = np.arange(n) % 7 < LEADERS
         self.passes = schedule()
+        self.bars: list[Obstacle] = []
+        self.contacts, self.settled_error, self.deformed_error, self.error = 0, math.nan, 0.0, math.nan
+
+    def build(self, n: int) -> None:
+        self._prepare(n)
+        self.weights = np.kron(np.eye(n // 7), WEIGHTS)
+        delays = start_delays(n)
         # Every robot hears its whole formation (the law uses the weighted neighbours only): the
         # heartbeats, the leaders' plans and the claims a follower checks come from all.
         adjacency = np.kron(np.eye(n // 7), np.ones((7, 7)))
@@ -521,15 +627,114 @@ class AffineFormation(Experiment):
             if isinstance(robot, Leader):
                 robot.sensor, look = movement, robot.watch
             entries = [
-                {"delay": 2, "tag": "odom", "call": odometry.update},
-                {"delay": 3, "tag": "movement", "call": look},
-                {"delay": 4, "tag": "radio", "call": radio.update},
-                {"delay": 4, "tag": "robot", "call": robot.update},
+                {"delay": ODOM_GAP, "tag": "odom", "call": odometry.update},
+                {"delay": MOVEMENT_GAP, "tag": "movement", "call": look},
+                {"delay": CONTROL_GAP, "tag": "radio", "call": radio.update},
+                {"delay": CONTROL_GAP, "tag": "robot", "call": robot.update},
             ]
-            create_timer(i, 10 + i % 7, entries)
+            create_timer(i, int(delays[i]), entries)
             self.robots.append(robot)
-        self.bars: list[Obstacle] = []
-        self.contacts, self.settled_error, self.deformed_error, self.error = 0, math.nan, 0.0, math.nan
+
+    def build_swarm(self, n: int) -> None:
+        self._prepare(n)
+        self.team = AffineSwarm.start(n, self.centres)
+        self.bounds = self.arena.shrunk(GRITSBOT.radius)
+        self.sights: dict[int, Sight] = {}
+
+    def swarm_step(self, step: int, x: np.ndarray) -> np.ndarray:
+        """Every robot's part of step ``step``, at the per-robot mode's rates (:func:`dream.timers.due`
+        of each robot's timer): odometry, the followers' movement sensors, a radio round
+        (:meth:`_talk`) and a decision (:meth:`_decide`); a robot that does not decide keeps its last
+        command."""
+        team = self.team
+        if step == 0:
+            self._refuse_faults()
+            self.nearby = Nearby(RANGE, GRITSBOT.within(self.sim.spec).v_max, self.sim.time_step)
+        # What the followers' movement sensors see (the leaders read theirs only to avoid crashed
+        # robots): the poses, the commands before this step's decisions, who is within RANGE.
+        looking = np.flatnonzero(timers.due(step, team.delays, MOVEMENT_GAP) & ~team.leader)
+        self.sights[step] = Sight(x, self.dxu.copy(), *self.nearby.rows(step, x, looking))
+        self.sights.pop(step - MOVEMENT_GAP, None)
+        reading = timers.due(step, team.delays, ODOM_GAP)
+        team.pose[:, reading] = x[:, reading]
+        # The radio and the controller share their gap and start: a robot talks, then decides.
+        deciding = np.flatnonzero(timers.due(step, team.delays, CONTROL_GAP))
+        commands = self.dxu.copy()
+        if len(deciding):
+            self._decide(step, deciding, self._talk(deciding), commands)
+        return commands
+
+    def _refuse_faults(self) -> None:
+        """Refuse faults other than the wheels' (:data:`SWARM_FAULTS`), saying why."""
+        state = self.world.fault_state
+        others = sorted(set(state.faults.to_dict()) - SWARM_FAULTS) if state is not None else []
+        if others:
+            raise ValueError(
+                f"affine-formation's swarm mode takes faults of the wheels only (stuck, actuator_noise), got "
+                f"{', '.join(others)}: crashes and liars need each robot's failure detector and claim checks, "
+                "and the swarm has no radio or sensor model to lose, delay or corrupt messages, readings or "
+                "clocks; run it robot by robot"
+            )
+
+    def _talk(self, who: np.ndarray) -> np.ndarray:
+        """The radio round of robots ``who`` ``(k,)`` (ids, increasing): the positions ``(k, 7, 2)`` each
+        has heard last from the robots of its formation, by place (NaN: not yet); then they send
+        their own. The per-robot radios talk one after the other by id, so a robot of lower id
+        talking in the same step has already sent its position of now."""
+        team = self.team
+        members = (who - who % 7)[:, None] + np.arange(7)
+        talking = np.zeros(self.n, dtype=bool)
+        talking[who] = True
+        fresh = talking[members] & (members < who[:, None])
+        heard = team.board[members]
+        heard[fresh] = team.pose[:2, members[fresh]].T
+        team.board[who] = team.pose[:2, who].T
+        return heard
+
+    def _decide(self, step: int, who: np.ndarray, heard: np.ndarray, commands: np.ndarray) -> None:
+        """The decisions of robots ``who`` ``(k,)`` (ids, increasing) as :meth:`Leader.update` and
+        :meth:`Follower.update` take them: a leader heads for its aim (:func:`morph`,
+        :func:`dream.rules.toward`) through HRVO, avoiding nobody; a follower obeys the stress law
+        on the positions ``heard`` ``(k, 7, 2)`` (:func:`dream.rules.stress`), settles or steers
+        (:func:`~dream.experiments.line_consensus.settle_or_steer`); one HRVO call for them all,
+        in the per-robot mode's order (:func:`~dream.experiments.sightings.decide_in_order`), puts
+        their limited and guarded commands into ``commands`` ``(2, n)``."""
+        team, k = self.team, len(who)
+        own = team.pose[:2, who].T
+        lead = team.leader[who]
+        leaders, followers = who[lead], who[~lead]
+        desired = np.zeros((k, 2))
+        team.decisions[leaders] += 1
+        aims = morph(team.origin[leaders], team.goal[leaders], team.decisions[leaders])
+        desired[lead] = rules.toward(own[lead], aims, LEADER_GAIN, GRITSBOT.v_max)
+        pull = rules.stress(own[~lead], heard[~lead], WEIGHTS[followers % 7])
+        desired[~lead] = rules.capped(-GAIN * pull, GRITSBOT.v_max)
+        # The leaders read no sensor (they avoid only crashed robots): their rows are empty.
+        seen = last_detections(self.sights, team.delays[who], step, who, MOVEMENT_GAP)
+        nearest = np.full(k, np.inf)
+        np.minimum.at(nearest, seen.owners, seen.distances)
+        # Leaders always go through HRVO, and never step aside (their counters stay at 0).
+        settle = ~lead & rules.settles(desired, nearest, FINE, 0.0)
+        wanted, sidestep = rules.sidestep_preference(desired, team.sidestep[who], team.side[who])
+        chosen = decide_in_order(
+            who,
+            team.pose[:, who],
+            team.dxi[who],
+            desired,
+            wanted,
+            settle,
+            seen,
+            commands,
+            safety=SAFETY,
+            v_max=GRITSBOT.v_max,
+            bounds=self.bounds,
+            limits=GRITSBOT.within(self.sim.spec),
+            near=min(GRITSBOT.diameter + GUARD_MARGIN, SAFETY),
+        )
+        steered = ~lead & ~settle
+        sidestep, side = rules.sidestep_update(chosen, desired, sidestep, team.side[who], SIDESTEP_UPDATES)
+        team.sidestep[who[steered]], team.side[who[steered]] = sidestep[steered], side[steered]
+        team.dxi[who] = np.where(settle[:, None], desired, chosen)
 
     def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
         return corner_starts(rng, self.centres)
@@ -551,6 +756,9 @@ class AffineFormation(Experiment):
 
     def _lead(self, shape: str) -> None:
         """Send every leader towards its place in ``shape`` (the leaders know the plan)."""
+        if self.swarm:
+            self.team.head_for(tile_places(np.flatnonzero(self.leader), shape, self.centres))
+            return
         for robot in self.robots:
             if isinstance(robot, Leader):
                 robot.head_for(formation(shape) + self.centres[robot.robot_id // 7])
@@ -599,15 +807,20 @@ class AffineFormation(Experiment):
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
         goals = np.zeros((self.n, 2))
-        goals[self.leader] = [r.goal for r in self.robots if isinstance(r, Leader)]
+        if self.swarm:
+            goals[self.leader], velocities = self.team.goal[self.leader], self.team.dxi
+        else:
+            goals[self.leader] = [r.goal for r in self.robots if isinstance(r, Leader)]
+            velocities = np.array([r.dxi for r in self.robots])
         goals[~self.leader] = self.targets
+        links = np.argwhere(np.triu(WEIGHTS) != 0)
         return Frame(
             step,
             self.arena,
             poses,
             goals=goals,
-            velocities=np.array([r.dxi for r in self.robots]),
-            links=np.argwhere(np.triu(self.weights) != 0),
+            velocities=velocities,
+            links=(links[None] + 7 * np.arange(self.n // 7)[:, None, None]).reshape(-1, 2),
             obstacles=[bar.polygon for bar in self.bars],
             obstacle_moving=[True] * len(self.bars),
             roles=np.where(self.leader, "leader", "follower"),
