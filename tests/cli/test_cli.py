@@ -20,7 +20,7 @@ def test_cli_list_names_the_experiments(capsys):
     listed = capsys.readouterr().out
     assert all(name in listed for name in ("hrvo-circle", "line-consensus", "voronoi-coverage", "affine-formation"))
     assert re.search(r"^line-consensus\s+swarm\s", listed, re.M)
-    assert re.search(r"^affine-formation\s+[A-Z]", listed, re.M)  # no swarm mode
+    assert re.search(r"^affine-formation\s+swarm\s", listed, re.M)
 
 
 def test_cli_run_prints_summary_and_writes_json(tmp_path, capsys):

@@ -131,10 +131,12 @@ def test_list_says_which_experiments_have_a_swarm_mode(capsys):
     assert main(["list", "line-consensus"]) == 0
     assert "swarm mode: yes (dream run line-consensus --swarm)" in capsys.readouterr().out
     assert main(["list", "affine-formation"]) == 0
+    assert "swarm mode: yes (dream run affine-formation --swarm)" in capsys.readouterr().out
+    assert main(["list", RENDEZVOUS]) == 0
     assert "swarm mode: no" in capsys.readouterr().out
 
 
 def test_swarm_mode_of_an_experiment_without_one_is_refused(capsys):
-    assert main(["run", "affine-formation", "--swarm", "--steps", "5"]) == 2
+    assert main(["run", RENDEZVOUS, "--swarm", "--steps", "5"]) == 2
     err = capsys.readouterr().err
-    assert "affine-formation has no swarm mode" in err and err.count("\n") == 1 and "Traceback" not in err
+    assert "rendezvous has no swarm mode" in err and err.count("\n") == 1 and "Traceback" not in err

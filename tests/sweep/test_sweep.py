@@ -235,8 +235,9 @@ def test_sweep_runs_the_swarm_mode_and_refuses_it_where_there_is_none(drift, tmp
     ]
     assert float(rows[0]["measures.mean_x"]) != 0.0  # the swarm step drove them
     assert not plan(drift, seeds=[0]).tasks[0].swarm
-    with pytest.raises(ValueError, match="swarm: affine-formation has no swarm mode"):
-        plan("affine-formation", seeds=[0], swarm=True)
+    rendezvous = str(Path(__file__).resolve().parents[2] / "examples" / "rendezvous.py")
+    with pytest.raises(ValueError, match="swarm: rendezvous has no swarm mode"):
+        plan(rendezvous, seeds=[0], swarm=True)
 
 
 def test_table_from_before_the_swarm_column_resumes_as_robot_by_robot_runs(drift, tmp_path):
