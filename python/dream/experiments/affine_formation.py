@@ -69,8 +69,8 @@ from typing import Any
 import numpy as np
 
 from dream import rules, timers
-from dream.experiments.line_consensus import SIDESTEP_UPDATES, Nearby, Sight, settle_or_steer
-from dream.experiments.sightings import decide_in_order, last_detections
+from dream.experiments.line_consensus import SIDESTEP_UPDATES, settle_or_steer
+from dream.experiments.sightings import Nearby, Sight, decide_in_order, last_detections
 from dream.experiments.spec import Experiment
 from dream.frames import Frame
 from dream.heartbeats import Heartbeats

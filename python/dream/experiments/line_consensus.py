@@ -38,17 +38,18 @@ Success: y spread and spacing error below 0.02 m, zero collisions.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from dream import kernels, rules, timers
+from dream import rules, timers
+from dream.experiments.sightings import Nearby, Sight, decide_in_order, last_detections
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
 from dream.radios import GraphRadio
-from dream.robot import GUARD_HORIZON, GUARD_MARGIN, RobotHRVO, stopping
-from dream.sensors import MovementSensor, OdometrySensor, seen_velocity
+from dream.robot import GUARD_MARGIN, RobotHRVO
+from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec
 from dream.world import create_timer
 
@@ -236,100 +237,6 @@ class LineRobot(RobotHRVO):
         self.command(dxu)
 
 
-class Nearby:
-    """Who is within ``radius`` (m) of some robots, step after step (swarm mode), as
-    :func:`dream.kernels.neighbours` answers (the same distances, ``sqrt(dx^2 + dy^2)``, and
-    the same inclusive test), from one index of a larger radius rebuilt every ``every`` steps:
-    robots at most ``speed`` (m/s) fast, ``dt`` (s) a step, cannot close the margin between."""
-
-    def __init__(self, radius: float, speed: float, dt: float, every: int = 4) -> None:
-        self.radius, self.every = radius, every
-        self.reach = radius + 2 * speed * dt * every * 1.01
-        self.built = -every
-        self.index = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64))
-
-    def rows(self, step: int, x: np.ndarray, who: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """CSR ``(indptr (n + 1,), indices, distances)`` of the robots within the radius of robots
-        ``who`` ``(k,)`` (ids, increasing; other rows empty) at poses ``x`` ``(3, n)``."""
-        if step - self.built >= self.every:
-            self.index, self.built = kernels.neighbours(x[:2].T, self.reach)[:2], step
-        indptr, indices = self.index
-        starts, counts = indptr[who], np.diff(indptr)[who]
-        owners = np.repeat(who, counts)
-        others = indices[np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
-        dx, dy = x[0, others] - x[0, owners], x[1, others] - x[1, owners]
-        distances = np.sqrt(dx * dx + dy * dy)
-        near = distances <= self.radius
-        ptr = np.concatenate(([0], np.cumsum(np.bincount(owners[near], minlength=x.shape[1]))))
-        return ptr, others[near], distances[near]
-
-
-class Sight(NamedTuple):
-    """What the movement sensors of one step see (swarm mode): the poses ``(3, n)``, every robot's
-    command before the step's decisions ``(2, n)``, and who is within :data:`SENSING` of the
-    robots reading their sensor in that step (CSR, :class:`Nearby`)."""
-
-    poses: np.ndarray
-    before: np.ndarray
-    indptr: np.ndarray
-    indices: np.ndarray
-    distances: np.ndarray
-
-
-@dataclass
-class Detections:
-    """The movement-sensor detections of some robots (swarm mode), one row per detected robot.
-
-    Attributes
-    ----------
-    owners : (m,) int ndarray
-        Which deciding robot (its row among them) detected it.
-    others : (m,) int ndarray
-        The detected robot's id.
-    distances, angles : (m,) ndarrays
-        The sensor's ``[distance, angle]`` (m, rad; the angle from the detected robot towards
-        the detecting one).
-    headings : (m,) ndarray
-        The detected robot's heading then (rad).
-    known : (2, m) ndarray
-        The command ``[v; w]`` the sensor saw it carry out, unless ``chained``...
-    chained : (m,) bool ndarray
-        ...when the reading is of this step and the detected robot decides before the detecting
-        one: it sees the detected robot's command of this step, being decided.
-    """
-
-    owners: np.ndarray
-    others: np.ndarray
-    distances: np.ndarray
-    angles: np.ndarray
-    headings: np.ndarray
-    known: np.ndarray
-    chained: np.ndarray
-    towards: np.ndarray = field(init=False)
-
-    @classmethod
-    def join(cls, parts: list[tuple[np.ndarray, ...]]) -> Detections:
-        """The detections of ``parts``, each a tuple of the fields' values for some robots."""
-        empty = (*(np.zeros(0, dtype=np.int64),) * 2, *(np.zeros(0),) * 3, np.zeros((2, 0)), np.zeros(0, dtype=bool))
-        return cls(*(np.concatenate(values, axis=-1) for values in zip(empty, *parts)))
-
-    def __post_init__(self) -> None:
-        # Where each detected robot is, from the detecting one, as HRVO reads a detection.
-        towards = self.angles + np.pi
-        self.towards = self.distances[:, None] * np.column_stack((np.cos(towards), np.sin(towards)))
-
-    def offsets(self, rows: np.ndarray) -> np.ndarray:
-        """The detecting robot's position less the detected one's ``(k, 2)``, for detections
-        ``rows`` ``(k,)``, as the motion guard reads a detection."""
-        return self.distances[rows, None] * np.column_stack((np.cos(self.angles[rows]), np.sin(self.angles[rows])))
-
-    def velocity(self, commands: np.ndarray, rows: np.ndarray | slice = slice(None)) -> np.ndarray:
-        """The velocities ``(m, 2)`` of the detected robots (of ``rows``) as the sensor estimates
-        them (:func:`dream.sensors.seen_velocity`), ``commands`` ``(2, n)`` holding this step's."""
-        carried = np.where(self.chained[rows], commands[:, self.others[rows]], self.known[:, rows])
-        return np.column_stack(seen_velocity(carried, self.headings[rows]))
-
-
 @dataclass
 class LineSwarm:
     """Every robot's state in swarm mode, one row or column each (see :meth:`LineConsensus.swarm_step`).
@@ -505,23 +412,20 @@ class LineConsensus(Experiment):
     def _decide(self, step: int, who: np.ndarray, commands: np.ndarray) -> None:
         """The decisions of robots ``who`` ``(k,)`` (ids, increasing), as :meth:`LineRobot.update`
         takes them: head for the goal (:func:`dream.rules.line_goal`, :func:`dream.rules.toward`),
-        settle or steer (one HRVO call for them all), then write their limited and guarded commands
-        into ``commands`` ``(2, n)``.
-
-        Each robot sees what its movement sensor saw at its last reading (:meth:`_detections`). A
-        reading of this very step saw the new commands of the robots of lower id that decided
-        before it in the per-robot mode's order, so such robots decide again until no command they
-        see changes: the per-robot mode's decisions, in as many passes as the longest such chain.
+        settle or steer, then write their limited and guarded commands into ``commands`` ``(2, n)``
+        in the per-robot mode's order (:func:`~dream.experiments.sightings.decide_in_order`: one
+        HRVO call for them all), each from what its movement sensor saw at its last reading
+        (:func:`~dream.experiments.sightings.last_detections`).
         """
-        team, lane, n = self.team, self.lane(), self.n
-        own, heading = team.pose[:2, who].T, team.pose[2, who]
+        team, lane = self.team, self.lane()
+        own = team.pose[:2, who].T
         aiming = np.isfinite(team.target[who, 0])
         goals, team.travelling[who[aiming]] = rules.line_goal(
             own[aiming], team.target[who[aiming]], team.travelling[who[aiming]], self.spacing, lane, self.bounds
         )
         desired = np.zeros((len(who), 2))
         desired[aiming] = rules.toward(own[aiming], goals, GAIN, GRITSBOT.v_max)
-        seen = self._detections(step, who)
+        seen = last_detections(self.sights, team.delays[who], step, who, MOVEMENT_GAP)
         settle = np.zeros(len(who), dtype=bool)
         wanted, sidestep = desired, team.sidestep[who]
         if lane > 0:
@@ -529,87 +433,26 @@ class LineConsensus(Experiment):
             np.minimum.at(nearest, seen.owners, seen.distances)
             settle = rules.settles(desired, nearest, FINE, CLEARANCE)
             wanted, sidestep = rules.sidestep_preference(desired, sidestep, team.side[who])
-        chosen = np.zeros((len(who), 2))
-        limits = GRITSBOT.within(self.sim.spec)
-        near = min(GRITSBOT.diameter + GUARD_MARGIN, SAFETY)
-        velocity = seen.velocity(commands)
-        chained = np.flatnonzero(seen.chained)
-        # Only detections this close can stop a robot (robot.stopping): the guard reads no others.
-        close = np.flatnonzero(seen.distances < near + limits.v_max * GUARD_HORIZON + 1e-9)
-        offsets = seen.offsets(close)
-        todo = np.ones(len(who), dtype=bool)
-        while todo.any():
-            velocity[chained] = seen.velocity(commands, chained)
-            pairs = np.flatnonzero(todo[seen.owners])
-            steer = todo & ~settle
-            chosen[steer] = self._hrvo(own, team.dxi[who], wanted, steer, seen, velocity, pairs)
-            dxi = np.where(settle[:, None], desired, chosen)[todo]
-            new = kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, team.pose[:, who[todo]]), limits)
-            local = np.cumsum(todo) - 1  # position of each robot of `who` among those of `todo`
-            guarded = todo[seen.owners[close]]
-            owners = local[seen.owners[close[guarded]]]
-            new[0, stopping(new[0], heading[todo], owners, offsets[guarded], near)] = 0.0
-            changed = np.zeros(n, dtype=bool)
-            changed[who[todo]] = np.any(new != commands[:, who[todo]], axis=0)
-            commands[:, who[todo]] = new
-            todo = np.bincount(seen.owners[chained[changed[seen.others[chained]]]], minlength=len(who)) > 0
+        chosen = decide_in_order(
+            who,
+            team.pose[:, who],
+            team.dxi[who],
+            desired,
+            wanted,
+            settle,
+            seen,
+            commands,
+            safety=SAFETY,
+            v_max=GRITSBOT.v_max,
+            bounds=self.bounds,
+            limits=GRITSBOT.within(self.sim.spec),
+            near=min(GRITSBOT.diameter + GUARD_MARGIN, SAFETY),
+        )
         if lane > 0:
             sidestep, side = rules.sidestep_update(chosen, desired, sidestep, team.side[who], SIDESTEP_UPDATES)
             steered = who[~settle]
             team.sidestep[steered], team.side[steered] = sidestep[~settle], side[~settle]
         team.dxi[who] = np.where(settle[:, None], desired, chosen)
-
-    def _hrvo(
-        self,
-        own: np.ndarray,
-        dxi: np.ndarray,
-        wanted: np.ndarray,
-        steer: np.ndarray,
-        seen: Detections,
-        velocity: np.ndarray,
-        pairs: np.ndarray,
-    ) -> np.ndarray:
-        """HRVO's choice ``(s, 2)`` for the robots ``steer`` ``(k,)`` bool among those at ``own``
-        ``(k, 2)`` with velocities ``dxi`` and wishes ``wanted`` ``(k, 2)``, from their detections
-        ``seen`` (rows ``pairs``, of the detected robots' ``velocity`` ``(m, 2)``): one
-        :func:`dream.kernels.hrvo` call in which every detection is a robot of its own, placed
-        where the detection says."""
-        pairs = pairs[steer[seen.owners[pairs]]]
-        owners = seen.owners[pairs]
-        k = int(steer.sum())
-        ghosts = own[owners] + seen.towards[pairs]
-        counts = np.bincount((np.cumsum(steer) - 1)[owners], minlength=k)
-        indptr = np.concatenate(([0], np.cumsum(counts), np.full(len(ghosts), len(ghosts))))
-        return kernels.hrvo(
-            np.vstack((own[steer], ghosts)),
-            np.vstack((dxi[steer], velocity[pairs])),
-            np.vstack((wanted[steer], np.zeros_like(ghosts))),
-            (indptr, k + np.arange(len(ghosts))),
-            safety=SAFETY,
-            v_max=GRITSBOT.v_max,
-            bounds=self.bounds,
-        )[:k]
-
-    def _detections(self, step: int, who: np.ndarray) -> Detections:
-        """What robots ``who`` ``(k,)`` saw at their last movement-sensor reading (see :class:`Detections`)."""
-        last = timers.last_due(step, self.team.delays[who], MOVEMENT_GAP)
-        parts: list[tuple[np.ndarray, ...]] = []
-        for when in np.unique(last[last >= 0]):
-            sight = self.sights[int(when)]
-            mine = np.flatnonzero(last == when)
-            starts, counts = sight.indptr[who[mine]], np.diff(sight.indptr)[who[mine]]
-            owners = np.repeat(mine, counts)
-            picks = np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
-            others, me = sight.indices[picks], who[owners]
-            x = sight.poses
-            # Robots of lower id had run their timers, decisions included, before this reading.
-            later = others < me
-            chained = later & (when == step)
-            after = sight.before if when == step else self.sights[int(when) + 1].before
-            known = np.where(later, after[:, others], sight.before[:, others])
-            angles = np.arctan2(x[1, me] - x[1, others], x[0, me] - x[0, others])
-            parts.append((owners, others, sight.distances[picks], angles, x[2, others], known, chained))
-        return Detections.join(parts)
 
     def done(self, step: int, poses: np.ndarray) -> bool:
         self.errors = line_errors(poses, self.spacing, self.correct)

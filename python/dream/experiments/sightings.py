@@ -5,20 +5,116 @@ robot's movement sensor sees the commands that robots of lower id have just deci
 mode that keeps each robot's timer schedule (:func:`dream.timers.due`) keeps this too: it takes
 each robot's detections from its last reading (:func:`last_detections`) and lets the robots that
 saw a command of this step decide again until none they see changes (:func:`decide_in_order`).
-The readings themselves are :class:`~dream.experiments.line_consensus.Sight` and
-:class:`~dream.experiments.line_consensus.Detections` (line-consensus's swarm mode, which has its
-own copy of these two functions as methods, built them first).
+The readings themselves are :class:`Sight` (one step's, who is near whom from :class:`Nearby`)
+and :class:`Detections` (some robots' last ones). Line-consensus and affine-formation share them.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
 import numpy as np
 
 from dream import kernels, timers
-from dream.experiments.line_consensus import Detections, Sight
 from dream.kernels import Bounds
 from dream.robot import GUARD_HORIZON, stopping
+from dream.sensors import seen_velocity
 from dream.specs import RobotSpec
+
+
+class Nearby:
+    """Who is within ``radius`` (m) of some robots, step after step (swarm mode), as
+    :func:`dream.kernels.neighbours` answers (the same distances, ``sqrt(dx^2 + dy^2)``, and
+    the same inclusive test), from one index of a larger radius rebuilt every ``every`` steps:
+    robots at most ``speed`` (m/s) fast, ``dt`` (s) a step, cannot close the margin between."""
+
+    def __init__(self, radius: float, speed: float, dt: float, every: int = 4) -> None:
+        self.radius, self.every = radius, every
+        self.reach = radius + 2 * speed * dt * every * 1.01
+        self.built = -every
+        self.index = (np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64))
+
+    def rows(self, step: int, x: np.ndarray, who: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """CSR ``(indptr (n + 1,), indices, distances)`` of the robots within the radius of robots
+        ``who`` ``(k,)`` (ids, increasing; other rows empty) at poses ``x`` ``(3, n)``."""
+        if step - self.built >= self.every:
+            self.index, self.built = kernels.neighbours(x[:2].T, self.reach)[:2], step
+        indptr, indices = self.index
+        starts, counts = indptr[who], np.diff(indptr)[who]
+        owners = np.repeat(who, counts)
+        others = indices[np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+        dx, dy = x[0, others] - x[0, owners], x[1, others] - x[1, owners]
+        distances = np.sqrt(dx * dx + dy * dy)
+        near = distances <= self.radius
+        ptr = np.concatenate(([0], np.cumsum(np.bincount(owners[near], minlength=x.shape[1]))))
+        return ptr, others[near], distances[near]
+
+
+class Sight(NamedTuple):
+    """What the movement sensors of one step see (swarm mode): the poses ``(3, n)``, every robot's
+    command before the step's decisions ``(2, n)``, and who is within the sensors' range of the
+    robots reading their sensor in that step (CSR, :class:`Nearby`)."""
+
+    poses: np.ndarray
+    before: np.ndarray
+    indptr: np.ndarray
+    indices: np.ndarray
+    distances: np.ndarray
+
+
+@dataclass
+class Detections:
+    """The movement-sensor detections of some robots (swarm mode), one row per detected robot.
+
+    Attributes
+    ----------
+    owners : (m,) int ndarray
+        Which deciding robot (its row among them) detected it.
+    others : (m,) int ndarray
+        The detected robot's id.
+    distances, angles : (m,) ndarrays
+        The sensor's ``[distance, angle]`` (m, rad; the angle from the detected robot towards
+        the detecting one).
+    headings : (m,) ndarray
+        The detected robot's heading then (rad).
+    known : (2, m) ndarray
+        The command ``[v; w]`` the sensor saw it carry out, unless ``chained``...
+    chained : (m,) bool ndarray
+        ...when the reading is of this step and the detected robot decides before the detecting
+        one: it sees the detected robot's command of this step, being decided.
+    """
+
+    owners: np.ndarray
+    others: np.ndarray
+    distances: np.ndarray
+    angles: np.ndarray
+    headings: np.ndarray
+    known: np.ndarray
+    chained: np.ndarray
+    towards: np.ndarray = field(init=False)
+
+    @classmethod
+    def join(cls, parts: list[tuple[np.ndarray, ...]]) -> Detections:
+        """The detections of ``parts``, each a tuple of the fields' values for some robots."""
+        empty = (*(np.zeros(0, dtype=np.int64),) * 2, *(np.zeros(0),) * 3, np.zeros((2, 0)), np.zeros(0, dtype=bool))
+        return cls(*(np.concatenate(values, axis=-1) for values in zip(empty, *parts)))
+
+    def __post_init__(self) -> None:
+        # Where each detected robot is, from the detecting one, as HRVO reads a detection.
+        towards = self.angles + np.pi
+        self.towards = self.distances[:, None] * np.column_stack((np.cos(towards), np.sin(towards)))
+
+    def offsets(self, rows: np.ndarray) -> np.ndarray:
+        """The detecting robot's position less the detected one's ``(k, 2)``, for detections
+        ``rows`` ``(k,)``, as the motion guard reads a detection."""
+        return self.distances[rows, None] * np.column_stack((np.cos(self.angles[rows]), np.sin(self.angles[rows])))
+
+    def velocity(self, commands: np.ndarray, rows: np.ndarray | slice = slice(None)) -> np.ndarray:
+        """The velocities ``(m, 2)`` of the detected robots (of ``rows``) as the sensor estimates
+        them (:func:`dream.sensors.seen_velocity`), ``commands`` ``(2, n)`` holding this step's."""
+        carried = np.where(self.chained[rows], commands[:, self.others[rows]], self.known[:, rows])
+        return np.column_stack(seen_velocity(carried, self.headings[rows]))
 
 
 def last_detections(sights: dict[int, Sight], delays: np.ndarray, step: int, who: np.ndarray, gap: int) -> Detections:
