@@ -163,6 +163,13 @@ def in_reach(distances: np.ndarray, speeds: Any, near: float) -> np.ndarray:
     return distances < near + np.abs(speeds) * GUARD_HORIZON + 1e-9
 
 
+def guard_distance(diameter: float, safety: float) -> float:
+    """How close (centre to centre, m) the motion guard of an HRVO robot of ``diameter`` (m) lets it
+    drive to a robot it sees: its body and :data:`GUARD_MARGIN`, or less where HRVO's combined
+    ``safety`` radius (m) allows robots closer (tight formations)."""
+    return min(diameter + GUARD_MARGIN, safety)
+
+
 def stopping(
     speeds: np.ndarray, headings: np.ndarray, owners: np.ndarray, offsets: np.ndarray, near: float
 ) -> np.ndarray:
@@ -336,7 +343,7 @@ class RobotHRVO(Robot):
         """
         if not self.has_pose or not len(self.detections) or self.dxu[0] == 0.0:
             return
-        near = min(self.spec.diameter + GUARD_MARGIN, self.safety)
+        near = guard_distance(self.spec.diameter, self.safety)
         rows = np.asarray(self.detections)
         # The sensor's distances tell who is within reach (the margin covers their rounding).
         rows = rows[in_reach(rows[:, 0], abs(float(self.dxu[0])), near)]

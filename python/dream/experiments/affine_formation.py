@@ -76,7 +76,7 @@ from dream.frames import Frame
 from dream.heartbeats import Heartbeats
 from dream.obstacles import Obstacle, touching
 from dream.radios import GraphRadio
-from dream.robot import GUARD_MARGIN, RobotHRVO
+from dream.robot import RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec
 from dream.world import create_timer
@@ -729,7 +729,6 @@ class AffineFormation(Experiment):
             v_max=GRITSBOT.v_max,
             bounds=self.bounds,
             limits=GRITSBOT.within(self.sim.spec),
-            near=min(GRITSBOT.diameter + GUARD_MARGIN, SAFETY),
         )
         steered = ~lead & ~settle
         sidestep, side = rules.sidestep_update(chosen, desired, sidestep, team.side[who], SIDESTEP_UPDATES)

@@ -45,7 +45,7 @@ from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
 from dream.heartbeats import Heartbeats
 from dream.radios import RangeRadio
-from dream.robot import GUARD_MARGIN, RobotHRVO, guard_swarm
+from dream.robot import RobotHRVO, guard_distance, guard_swarm
 from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec
 from dream.world import create_timer
@@ -463,7 +463,7 @@ class HrvoCircle(Experiment):
         team.dxi = kernels.hrvo(p, team.dxi, wanted, radius=1.0, safety=self.layout.safety, bounds=self.bounds)
         team.sidestep, team.side = rules.sidestep_update(team.dxi, desired, team.sidestep, team.side, SIDESTEP_UPDATES)
         dxu = kernels.actuator_limit(kernels.dxi_to_dxu(team.dxi.T, x), GRITSBOT.within(self.sim.spec))
-        return guard_swarm(dxu, x, min(GRITSBOT.diameter + GUARD_MARGIN, self.layout.safety))
+        return guard_swarm(dxu, x, guard_distance(GRITSBOT.diameter, self.layout.safety))
 
     def steps(self, n: int) -> int:
         return default_steps(n)

@@ -48,7 +48,7 @@ from dream.experiments.sightings import Nearby, Sight, decide_in_order, last_det
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
 from dream.radios import GraphRadio
-from dream.robot import GUARD_MARGIN, RobotHRVO
+from dream.robot import RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec
 from dream.world import create_timer
@@ -446,7 +446,6 @@ class LineConsensus(Experiment):
             v_max=GRITSBOT.v_max,
             bounds=self.bounds,
             limits=GRITSBOT.within(self.sim.spec),
-            near=min(GRITSBOT.diameter + GUARD_MARGIN, SAFETY),
         )
         if lane > 0:
             sidestep, side = rules.sidestep_update(chosen, desired, sidestep, team.side[who], SIDESTEP_UPDATES)

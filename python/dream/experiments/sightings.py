@@ -18,7 +18,7 @@ import numpy as np
 
 from dream import kernels, timers
 from dream.kernels import Bounds
-from dream.robot import GUARD_HORIZON, stopping
+from dream.robot import GUARD_HORIZON, guard_distance, stopping
 from dream.sensors import seen_velocity
 from dream.specs import RobotSpec
 
@@ -155,7 +155,6 @@ def decide_in_order(
     v_max: float,
     bounds: Bounds,
     limits: RobotSpec,
-    near: float,
 ) -> np.ndarray:
     """The commands of robots ``who`` ``(k,)`` (ids, increasing), written into ``commands``
     ``(2, n)``, and HRVO's choices ``(k, 2)`` (m/s; zero for the robots that settle).
@@ -164,12 +163,14 @@ def decide_in_order(
     robot that ``settle`` ``(k,)`` moves at ``desired`` ``(k, 2)``, the others at HRVO's choice
     for ``wanted`` ``(k, 2)`` among their detections ``seen`` (one :func:`dream.kernels.hrvo` call,
     ``safety``, ``v_max``, ``bounds``); the unicycle command, limited to ``limits``, drives no
-    further when the motion guard (:func:`dream.robot.stopping`, ``near`` m) stops it. A reading
+    further when the motion guard (:func:`dream.robot.stopping`, :func:`~dream.robot.guard_distance`)
+    stops it. A reading
     of this very step saw the new commands of the robots of lower id that decided before it in
     the per-robot mode's order, so such robots decide again until no command they see changes:
     the per-robot mode's decisions, in as many passes as the longest such chain.
     """
     k, n = len(who), commands.shape[1]
+    near = guard_distance(limits.diameter, safety)
     own, heading = poses[:2].T, poses[2]
     chosen = np.zeros((k, 2))
     velocity = seen.velocity(commands)
