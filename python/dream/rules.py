@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from dream._checks import Bounds, FloatArray
+from dream._csr import spans
 
 #: Angle (rad) the roundabout aims ahead of the island's tangent point, so that a robot on
 #: the island's edge still has somewhere to go.
@@ -462,7 +463,7 @@ def unheard(seen: Any, seen_rows: Any, heard: Any, heard_rows: Any, same: float)
             starts = np.searchsorted(ordered, mine + shift, side="left")
             counts = np.searchsorted(ordered, mine + shift, side="right") - starts
             pairs = np.repeat(np.arange(len(seen)), counts)
-            others = order[np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+            others = order[spans(starts, counts)]
             gaps = np.hypot(seen[pairs, 0] - heard[others, 0], seen[pairs, 1] - heard[others, 1])
             np.minimum.at(nearest, pairs, gaps)
     return nearest > same

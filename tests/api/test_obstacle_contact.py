@@ -37,3 +37,21 @@ def test_touching_is_strictly_closer_than_the_radius():
 def test_touching_names_a_bad_positions_array():
     with pytest.raises(ValueError, match=r"`positions` must have shape \(n, 2\)"):
         touching([Obstacle((0.0, 0.0), (1.0, 1.0))], np.zeros((3, 3)), 0.1)
+
+
+@pytest.mark.parametrize("column", [False, True])
+def test_touching_matches_each_obstacles_distances(column):
+    # Obstacles of very different sizes (a large one must not hide a small one), turned; robots
+    # scattered or in one column (the axis the query sorts along changes).
+    rng = np.random.default_rng(7)
+    for _ in range(50):
+        obstacles = [
+            Obstacle(rng.uniform(-5, 5, 2), rng.uniform(0.05, 4.0, 2), angle=rng.uniform(-3, 3))
+            for _ in range(rng.integers(1, 20))
+        ]
+        positions = rng.uniform(-6, 6, size=(300, 2))
+        if column:
+            positions[:, 0] = rng.uniform(-0.1, 0.1, 300)
+        radius = rng.uniform(0.0, 0.5)
+        expected = np.any([obstacle.distances(positions) < radius for obstacle in obstacles], axis=0)
+        assert touching(obstacles, positions, radius).tolist() == expected.tolist()

@@ -17,6 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from dream import kernels, timers
+from dream._csr import spans
 from dream.kernels import Bounds
 from dream.robot import GUARD_HORIZON, guard_distance, stopping
 from dream.sensors import seen_velocity
@@ -43,7 +44,7 @@ class Nearby:
         indptr, indices = self.index
         starts, counts = indptr[who], np.diff(indptr)[who]
         owners = np.repeat(who, counts)
-        others = indices[np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+        others = indices[spans(starts, counts)]
         dx, dy = x[0, others] - x[0, owners], x[1, others] - x[1, owners]
         distances = np.sqrt(dx * dx + dy * dy)
         near = distances <= self.radius
@@ -128,7 +129,7 @@ def last_detections(sights: dict[int, Sight], delays: np.ndarray, step: int, who
         mine = np.flatnonzero(last == when)
         starts, counts = sight.indptr[who[mine]], np.diff(sight.indptr)[who[mine]]
         owners = np.repeat(mine, counts)
-        picks = np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
+        picks = spans(starts, counts)
         others, me = sight.indices[picks], who[owners]
         x = sight.poses
         # Robots of lower id had run their timers, decisions included, before this reading.

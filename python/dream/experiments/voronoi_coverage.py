@@ -39,6 +39,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from dream import kernels, rules, timers
+from dream._csr import spans
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
 from dream.obstacles import Obstacle, sensed, touching
@@ -276,7 +277,7 @@ class Seen(NamedTuple):
             mine = np.flatnonzero(last == when)
             starts, counts = reading.indptr[who[mine]], np.diff(reading.indptr)[who[mine]]
             positions.append(
-                reading.positions[np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+                reading.positions[spans(starts, counts)]
             )
             rows.append(np.repeat(mine, counts))
         rows_all = np.concatenate(rows)
@@ -417,7 +418,7 @@ class VoronoiCoverage(Experiment):
         team = self.team
         starts, counts = indptr[who], np.diff(indptr)[who]
         rows = np.repeat(np.arange(len(who)), counts)
-        senders = indices[np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+        senders = indices[spans(starts, counts)]
         talking = np.zeros(self.n, dtype=bool)
         talking[who] = True
         fresh = talking[senders] & (senders < who[rows])
@@ -470,7 +471,7 @@ class VoronoiCoverage(Experiment):
         order = np.argsort(batch, kind="stable")
         indptr = np.searchsorted(rows, np.arange(len(who) + 1))
         counts = np.diff(indptr)[order]
-        clips = clips[np.repeat(indptr[order] - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+        clips = clips[spans(indptr[order], counts)]
         ptr = np.concatenate(([0], np.cumsum(counts)))
         edges = np.flatnonzero(np.diff(batch[order], prepend=-1, append=-1))
         centroids = np.empty((len(who), 2))

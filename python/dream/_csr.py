@@ -1,0 +1,15 @@
+"""Gathering rows of CSR arrays (``indptr``, then each row's entries one after the other)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+
+def spans(starts: Any, counts: Any) -> np.ndarray:
+    """The indices ``(counts.sum(),)`` of the runs ``starts[i] .. starts[i] + counts[i] - 1``, one
+    run after the other: the entries of several rows of a CSR array, gathered without a loop."""
+    counts = np.asarray(counts, dtype=np.int64)
+    first = np.asarray(starts, dtype=np.int64) - np.cumsum(counts) + counts
+    return np.repeat(first, counts) + np.arange(counts.sum())
