@@ -276,9 +276,7 @@ class Seen(NamedTuple):
             reading = seen[int(when)]
             mine = np.flatnonzero(last == when)
             starts, counts = reading.indptr[who[mine]], np.diff(reading.indptr)[who[mine]]
-            positions.append(
-                reading.positions[spans(starts, counts)]
-            )
+            positions.append(reading.positions[spans(starts, counts)])
             rows.append(np.repeat(mine, counts))
         rows_all = np.concatenate(rows)
         order = np.argsort(rows_all, kind="stable")
