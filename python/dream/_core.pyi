@@ -112,8 +112,10 @@ def voronoi_cells(
     virtual_indptr: _Ints | None = None,
     virtual_points: _Floats | None = None,
     resolution: int = 64,
+    neighbours: bool = True,
 ) -> tuple[_Floats, _Floats, _Floats, _Ints]:
-    """(centroids (n, 2), areas (n,), vertices (m, 2), offsets (n+1,)) of disc-bounded Voronoi cells."""
+    """(centroids (n, 2), areas (n,), vertices (m, 2), offsets (n+1,)) of disc-bounded Voronoi cells
+    (without ``neighbours``, each clipped by its virtual points alone)."""
 
 def virtual_agents(
     positions: _Floats, vertices: _Floats, offsets: _Ints, *, range: float, offset: float

@@ -89,3 +89,16 @@ def test_hrvo_circle_full_ring_on_rps_does_not_collide():
     assert result.backend == "robotarium" and result.n == n
     assert result.measures["circle_radius"] == hrvo_circle.ROBOTARIUM.width / 2 - hrvo_circle.EDGE
     assert result.collisions == 0 and result.boundary == 0
+
+
+def test_hrvo_circle_robot_moves_on_when_a_robot_is_already_ahead():
+    # A robot taken for crashed while out of radio reach lets the others go ahead; the robots it
+    # left behind must not wait for states equal to theirs (N = 100 seeds 3, 5, 7-9 waited for good).
+    robot = hrvo_circle.CircleRobot(0, "robot_0", np.zeros((3, 2)), 3)
+    robot.state, robot.change_state = 2, False  # it reached its second goal
+    robot.update_radio([(np.array([2, 3, 2]), np.array([0, 1, 1]))])  # robot 1 reached its third
+    assert robot.change_state  # heads for its third goal
+    robot = hrvo_circle.CircleRobot(0, "robot_0", np.zeros((3, 2)), 3)
+    robot.state, robot.change_state = 2, False
+    robot.update_radio([(np.array([2, 1, 2]), np.array([0, 1, 1]))])  # robot 1 is behind
+    assert not robot.change_state

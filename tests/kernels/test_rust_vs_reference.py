@@ -1017,3 +1017,21 @@ def test_voronoi_cells_are_deterministic_across_calls(rng):
     first = core_cells(p, 0.1)
     for a, b in zip(core_cells(p, 0.1), first):
         assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize(("offset", "scale"), [(0.0, 1.0), (1e6, 1.0), (-3e9, 1.0), (0.0, 1e-40), (2e-39, 1e-40)])
+def test_voronoi_cells_each_clipped_by_its_own_points_match_reference_bit_for_bit(rng, offset, scale):
+    # Robots that each heard a crowd (up to 300 points, most too far to cut the cell, which the
+    # kernel skips), far from the origin or tiny: cells equal the reference's to the bit.
+    n = 40
+    p = offset + scale * rng.uniform(-1.5, 1.5, (n, 2))
+    counts = rng.integers(0, 300, n)
+    indptr = np.concatenate(([0], np.cumsum(counts)))
+    points = np.repeat(p, counts, axis=0) + scale * rng.uniform(-1.0, 1.0, (indptr[-1], 2))
+    bounds = tuple(offset + scale * np.array([-1.6, 1.6, -1.0, 1.0]))
+    kw = dict(radius=scale, bounds=bounds, virtual_indptr=indptr, virtual_points=points, neighbours=False)
+    got, want = _core.voronoi_cells(p, **kw), _reference.voronoi_cells(p, **kw)
+    for a, b in zip(got, want, strict=True):
+        assert_array_equal(a, b)
+    # Alone means alone: the robots (1.5 m apart at most, within 2 radius) would clip each other.
+    assert not np.array_equal(got[0], _core.voronoi_cells(p, **{**kw, "neighbours": True})[0])

@@ -96,7 +96,7 @@ fn bench_voronoi(c: &mut Criterion) {
         let p = points(&xs, &ys);
         let arena = Arena::new(-1.0, side, -1.0, side).unwrap();
         group.bench_with_input(BenchmarkId::new("n", n), &n, |b, _| {
-            b.iter(|| voronoi::voronoi_cells(black_box(&p), 0.5, &arena, None, 64).unwrap())
+            b.iter(|| voronoi::voronoi_cells(black_box(&p), 0.5, &arena, None, 64, true).unwrap())
         });
     }
     group.finish();

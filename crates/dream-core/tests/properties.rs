@@ -87,7 +87,7 @@ proptest! {
         // disc of r / 2, so 20 units cover the box.
         let bounds = arena(scale);
         let radius = (radius * scale).min(f64::MAX);
-        let cells = voronoi::voronoi_cells(&points, radius, &bounds, None, resolution).unwrap();
+        let cells = voronoi::voronoi_cells(&points, radius, &bounds, None, resolution, true).unwrap();
         prop_assert!(cells.centroids.as_flattened().iter().all(|v| v.is_finite()));
         prop_assert!(cells.areas.iter().all(|a| a.is_finite() && *a >= 0.0));
         if !points.is_empty() {
@@ -106,7 +106,7 @@ proptest! {
         resolution in prop::sample::select(vec![3_usize, 5, 16, 64]),
     ) {
         let (bounds, radius, tol) = (arena(scale), radius * scale, 1e-9 * scale);
-        let cells = voronoi::voronoi_cells(&points, radius, &bounds, None, resolution).unwrap();
+        let cells = voronoi::voronoi_cells(&points, radius, &bounds, None, resolution, true).unwrap();
         prop_assert_eq!(cells.offsets.len(), points.len() + 1);
         for (i, &p) in points.iter().enumerate() {
             let polygon = &cells.vertices[cells.offsets[i] as usize..cells.offsets[i + 1] as usize];
@@ -298,7 +298,7 @@ proptest! {
         prop_assert!(named(dynamics::unicycle_step(&mut vec![0.0; 3 * n], &spoiled(2 * n), n, 0.033), "velocities"));
         prop_assert!(named(dynamics::actuator_limit(&mut spoiled(2 * n), n, 0.2, 3.6, &wheels), "dxu"));
         prop_assert!(named(dynamics::dxi_to_dxu(&spoiled(2 * n), &vec![0.0; 3 * n], n, 0.8, 3.0).map(|_| ()), "dxi"));
-        prop_assert!(named(voronoi::voronoi_cells(&points(spoiled(2 * n)), 1.0, &bounds, None, 16).map(|_| ()), "positions"));
+        prop_assert!(named(voronoi::voronoi_cells(&points(spoiled(2 * n)), 1.0, &bounds, None, 16, true).map(|_| ()), "positions"));
         let grid = hrvo::candidate_grid(0.2, 20, 10);
         let params = HrvoParams { safety: 0.24, v_max: 0.2, bounds: None, include_preferred: true };
         let velocities = vec![[0.0; 2]; n];
@@ -320,15 +320,15 @@ fn voronoi_coordinates_beyond_the_limit_are_errors() {
     let bounds = arena(1.0);
     let wide = Arena::new(-2e100, 1.0, -1.0, 1.0).unwrap();
     assert!(beyond(
-        voronoi::voronoi_cells(&far, 1.0, &bounds, None, 16).map(|_| ()),
+        voronoi::voronoi_cells(&far, 1.0, &bounds, None, 16, true).map(|_| ()),
         "positions"
     ));
     assert!(beyond(
-        voronoi::voronoi_cells(&near, 1.0, &wide, None, 16).map(|_| ()),
+        voronoi::voronoi_cells(&near, 1.0, &wide, None, 16, true).map(|_| ()),
         "bounds"
     ));
     assert!(beyond(
-        voronoi::voronoi_cells(&near, 1.0, &bounds, Some((&[0, 1], &far)), 16).map(|_| ()),
+        voronoi::voronoi_cells(&near, 1.0, &bounds, Some((&[0, 1], &far)), 16, true).map(|_| ()),
         "virtual"
     ));
     assert!(beyond(
@@ -353,7 +353,7 @@ fn illegal_parameters_are_errors_naming_them() {
     let points = [[0.0, 0.0], [0.5, 0.0]];
     for bad in [-1.0, 0.0, f64::NAN, f64::INFINITY] {
         assert!(invalid(
-            voronoi::voronoi_cells(&points, bad, &bounds, None, 16).map(|_| ()),
+            voronoi::voronoi_cells(&points, bad, &bounds, None, 16, true).map(|_| ()),
             "radius"
         ));
     }

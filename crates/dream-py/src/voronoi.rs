@@ -15,9 +15,10 @@ type CellArrays<'py> = (
     Bound<'py, PyArray1<i64>>,
 );
 
-/// `(centroids (n, 2), areas (n,), vertices (m, 2), offsets (n + 1,))` of every robot's cell.
+/// `(centroids (n, 2), areas (n,), vertices (m, 2), offsets (n + 1,))` of every robot's cell
+/// (without `neighbours`, each clipped by its virtual points alone).
 #[pyfunction]
-#[pyo3(signature = (positions, *, radius, bounds, virtual_indptr=None, virtual_points=None, resolution=64))]
+#[pyo3(signature = (positions, *, radius, bounds, virtual_indptr=None, virtual_points=None, resolution=64, neighbours=true))]
 pub fn voronoi_cells<'py>(
     py: Python<'py>,
     positions: Bound<'py, PyAny>,
@@ -26,6 +27,7 @@ pub fn voronoi_cells<'py>(
     virtual_indptr: Option<Bound<'py, PyAny>>,
     virtual_points: Option<Bound<'py, PyAny>>,
     resolution: i64,
+    neighbours: bool,
 ) -> PyDreamResult<CellArrays<'py>> {
     let resolution = count_of("resolution", resolution)?;
     let points = points_of::<2>("positions", &positions)?;
@@ -41,7 +43,7 @@ pub fn voronoi_cells<'py>(
         let agents = agents
             .as_ref()
             .map(|(indptr, found)| (indptr.as_slice(), found.as_slice()));
-        core::voronoi_cells(&points, radius, &arena, agents, resolution)
+        core::voronoi_cells(&points, radius, &arena, agents, resolution, neighbours)
     })?;
     let (n, m) = (cells.centroids.len(), cells.vertices.len());
     Ok((

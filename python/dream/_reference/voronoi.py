@@ -123,11 +123,13 @@ def voronoi_cells(
     virtual_indptr: np.ndarray | None = None,
     virtual_points: FloatArray | None = None,
     resolution: int = 64,
+    neighbours: bool = True,
 ) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray]:
     """Centroids ``(n, 2)``, areas ``(n,)`` and the cells as CSR ``(vertices (m, 2), offsets (n + 1,))``.
 
     The virtual agents are CSR ``virtual_indptr`` ``(n + 1,)``, ``virtual_points`` ``(k, 2)`` (both
-    or neither): robot i's are ``virtual_points[virtual_indptr[i]:virtual_indptr[i + 1]]``.
+    or neither): robot i's are ``virtual_points[virtual_indptr[i]:virtual_indptr[i + 1]]``. Without
+    ``neighbours``, a cell is clipped by its virtual agents alone.
     """
     n = len(positions)
     # Robots beyond twice a robot's (shrunk) disc radius cannot clip its cell.
@@ -144,7 +146,7 @@ def voronoi_cells(
             if virtual_indptr is None or virtual_points is None
             else virtual_points[virtual_indptr[i] : virtual_indptr[i + 1]]
         )
-        others, _ = neighbours_of(positions, i, search)
+        others = neighbours_of(positions, i, search)[0] if neighbours else []
         agents = [points[j] for j in others] + [(float(x), float(y)) for x, y in mine]
         polygon = cell(points[i], agents, radius, bounds, resolution)
         areas[i], centroids[i] = area_centroid(polygon, points[i])

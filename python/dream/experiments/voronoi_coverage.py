@@ -13,8 +13,8 @@ each robot at its own timer's steps (:func:`dream.timers.due`), with what its se
 gave it (a radio hears the position a robot of lower id sent in the same step, as the per-robot
 timers, which run by id, imply), the shared rules (:func:`dream.rules.unheard`,
 :func:`dream.rules.approach`, the motion guard of :func:`dream.robot.stopping`) and each robot's
-cell clipped by what it knows alone (:func:`dream.kernels.voronoi_cells` over batches of robots
-too far apart to clip each other's cells). The trajectories equal the per-robot mode's to rounding.
+cell clipped by what it knows alone (one :func:`dream.kernels.voronoi_cells` call, each cell
+clipped by its own points). The trajectories equal the per-robot mode's to rounding.
 
 Success: no robot-robot collision, no contact with the static obstacles, and the team covers
 the arena: its locational coverage cost falls below ``COVERED`` (0.2) of its start and within
@@ -453,42 +453,20 @@ class VoronoiCoverage(Experiment):
     def _cells(self, who: np.ndarray, here: np.ndarray, rows: np.ndarray, clips: np.ndarray) -> np.ndarray:
         """Centroids ``(k, 2)`` of the cells of robots ``who`` at ``here`` ``(k, 2)``, each clipped by
         its points ``clips`` ``(m, 2)`` (``rows``: whose, sorted) alone, as :func:`dream.kernels.voronoi_cell`
-        clips it: :func:`dream.kernels.voronoi_cells` calls, with the clipping points as virtual
-        agents, over batches of robots too far apart (beyond :data:`RADIO_RANGE`) to clip each
-        other's cells. Robots in grid squares of that side whose columns and rows have the same
-        parities are that far apart; the n-th robot of each square goes into the n-th batch."""
-        square = np.floor(here / (RADIO_RANGE * (1 + 1e-9))).astype(np.int64)
-        parity = (square[:, 0] % 2) * 2 + square[:, 1] % 2
-        key = np.unique(square, axis=0, return_inverse=True)[1].ravel()
-        order = np.argsort(key, kind="stable")
-        first = np.searchsorted(key[order], key[order])
-        rank = np.empty(len(who), dtype=np.int64)
-        rank[order] = np.arange(len(who)) - first
-        batch = rank * 4 + parity
-        # Robots by batch, each batch a run of them, their clipping points in the same order.
-        order = np.argsort(batch, kind="stable")
-        indptr = np.searchsorted(rows, np.arange(len(who) + 1))
-        counts = np.diff(indptr)[order]
-        clips = clips[spans(indptr[order], counts)]
-        ptr = np.concatenate(([0], np.cumsum(counts)))
-        edges = np.flatnonzero(np.diff(batch[order], prepend=-1, append=-1))
-        centroids = np.empty((len(who), 2))
-        polygons = []
-        for start, stop in zip(edges[:-1], edges[1:], strict=True):
-            mine = order[start:stop]
-            cells = kernels.voronoi_cells(
-                here[mine],
-                radius=CELL_RADIUS,
-                bounds=cell_bounds(self.arena),
-                virtual=(ptr[start : stop + 1] - ptr[start], clips[ptr[start] : ptr[stop]]),
-                polygons=True,
-            )
-            centroids[mine] = cells.centroids
-            assert cells.vertices is not None and cells.offsets is not None  # polygons=True
-            polygons += np.split(cells.vertices, cells.offsets[1:-1])
-        for i, polygon in zip(who[order], polygons, strict=True):
+        clips it: one :func:`dream.kernels.voronoi_cells` call, with the clipping points as each
+        robot's virtual agents and no clipping by the other robots."""
+        cells = kernels.voronoi_cells(
+            here,
+            radius=CELL_RADIUS,
+            bounds=cell_bounds(self.arena),
+            virtual=(np.searchsorted(rows, np.arange(len(who) + 1)), clips),
+            polygons=True,
+            neighbours=False,
+        )
+        assert cells.vertices is not None and cells.offsets is not None  # polygons=True
+        for i, polygon in zip(who, np.split(cells.vertices, cells.offsets[1:-1]), strict=True):
             self.team.cells[i] = polygon
-        return centroids
+        return cells.centroids
 
     def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
         return corner_poses(n, rng, self.arena)

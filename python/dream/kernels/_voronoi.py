@@ -44,6 +44,7 @@ def voronoi_cells(
     virtual: tuple[Any, Any] | None = None,
     resolution: int = 64,
     polygons: bool = False,
+    neighbours: bool = True,
 ) -> VoronoiCells:
     """Each robot's Voronoi cell within a disc: centroid, area and optionally the polygon.
 
@@ -61,6 +62,11 @@ def voronoi_cells(
         Virtual agents per robot, e.g. from :func:`virtual_agents`.
     polygons : bool
         Also return the cells' vertices (counter-clockwise) as CSR.
+    neighbours : bool
+        Clip each cell by the other robots (default). Without, each cell is clipped by its
+        virtual agents alone: the cells of robots that each know only what they were told, e.g.
+        the positions their radio heard, given as virtual agents (as :func:`voronoi_cell` for
+        every robot in one call).
     """
     p = _within_reach(as_array(positions, "positions", (None, 2)), "positions")
     n = p.shape[0]
@@ -76,7 +82,13 @@ def voronoi_cells(
         if indptr.shape != (n + 1,) or indptr[0] != 0 or np.any(np.diff(indptr) < 0) or indptr[-1] != len(points):
             raise ValueError(f"`virtual` indptr must be non-decreasing of shape ({n + 1},) from 0 to len(points)")
     centroids, areas, vertices, offsets = implementation("voronoi_cells")(
-        p, radius=radius, bounds=box, virtual_indptr=indptr, virtual_points=points, resolution=resolution
+        p,
+        radius=radius,
+        bounds=box,
+        virtual_indptr=indptr,
+        virtual_points=points,
+        resolution=resolution,
+        neighbours=neighbours,
     )
     return VoronoiCells(centroids, areas, vertices if polygons else None, offsets if polygons else None)
 
