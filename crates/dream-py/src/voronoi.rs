@@ -19,6 +19,7 @@ type CellArrays<'py> = (
 /// (without `neighbours`, each clipped by its virtual points alone).
 #[pyfunction]
 #[pyo3(signature = (positions, *, radius, bounds, virtual_indptr=None, virtual_points=None, resolution=64, neighbours=true))]
+#[allow(clippy::too_many_arguments)]
 pub fn voronoi_cells<'py>(
     py: Python<'py>,
     positions: Bound<'py, PyAny>,

@@ -146,7 +146,7 @@ def voronoi_cells(
             if virtual_indptr is None or virtual_points is None
             else virtual_points[virtual_indptr[i] : virtual_indptr[i + 1]]
         )
-        others = neighbours_of(positions, i, search)[0] if neighbours else []
+        others = neighbours_of(positions, i, search)[0] if neighbours else np.zeros(0, dtype=np.int64)
         agents = [points[j] for j in others] + [(float(x), float(y)) for x, y in mine]
         polygon = cell(points[i], agents, radius, bounds, resolution)
         areas[i], centroids[i] = area_centroid(polygon, points[i])
