@@ -5,10 +5,12 @@
     python benches/reliability.py --resilience         # N = 10 and 100 under each fault (Fast)
     python benches/reliability.py --case hrvo-circle:20:robotarium:0-29 --case line-consensus:100:fast:0-9
     python benches/reliability.py --case hrvo-circle:10000:swarm:0 --workers 2
+    python benches/reliability.py --case line-consensus:100:fast:0-9:byzantine=1 --param resilient=1
 
 A case is ``EXPERIMENT:N:BACKEND:SEEDS[:FAULTS]``: BACKEND is ``robotarium``, ``fast`` or
 ``swarm`` (Fast, in the experiment's swarm mode: ``dream.run(..., swarm=True)``), SEEDS ``a-b``
-(inclusive) or one seed, FAULTS ``--fault`` settings joined by ``+`` (``loss=0.3+latency=5``).
+(inclusive) or one seed, FAULTS ``--fault`` settings joined by ``+`` (``loss=0.3+latency=5``);
+``--param NAME=VALUE`` sets an experiment's parameter in every case (W-MSR: ``resilient=1``).
 Runs go to each experiment's own step cap and, but for ``swarm``, through :func:`dream.sweep` on
 a local Dask cluster of ``--workers`` processes. Every table is printed with the machine, its
 load and the date.
@@ -75,18 +77,38 @@ def parse_case(text: str) -> tuple[str, int, str, range, str]:
     return name, int(n), backend, span, faults[0] if faults else ""
 
 
-def measure(name: str, n: int, backend: str, seeds: range, faults: str, workers: int) -> list[object]:
+def parse_param(text: str) -> tuple[str, str]:
+    """``"NAME=VALUE"`` -> ``(NAME, VALUE)`` (the experiment converts the value, as for the CLI)."""
+    name, equals, value = text.partition("=")
+    if not (name and equals and value):
+        raise argparse.ArgumentTypeError(f"a parameter is NAME=VALUE, got {text!r}")
+    return name, value
+
+
+def measure(
+    name: str, n: int, backend: str, seeds: range, faults: str, workers: int, params: dict[str, str]
+) -> list[object]:
     """One row: successes, summed violations, and min/median/max steps of the successful runs."""
     start = time.perf_counter()
     options = [option for option in faults.split("+") if option]
     if backend == "swarm":
         broken = Faults.parse(options) if options else None
         results = [
-            dream.run(name, n=n, seed=seed, backend="fast", swarm=True, faults=broken).to_dict() for seed in seeds
+            dream.run(name, n=n, seed=seed, backend="fast", swarm=True, faults=broken, **params).to_dict()
+            for seed in seeds
         ]
     else:
         grid = {kind: [value] for kind, _, value in (option.partition("=") for option in options)}
-        results = dream.sweep(name, seeds, [n], backend=backend, faults=grid, workers=workers, progress=False)
+        results = dream.sweep(
+            name,
+            seeds,
+            [n],
+            {key: [value] for key, value in params.items()},
+            backend=backend,
+            faults=grid,
+            workers=workers,
+            progress=False,
+        )
     done = [row["completed_step"] for row in results if row["success"]]
     failed = [row["seed"] for row in results if not row["success"]]
     steps = f"{min(done)} / {statistics.median(done):.0f} / {max(done)}" if done else "-"
@@ -94,7 +116,8 @@ def measure(name: str, n: int, backend: str, seeds: range, faults: str, workers:
     seed_text = f"{seeds.start}-{seeds.stop - 1}" if len(seeds) > 1 else str(seeds.start)
     wall = f"{time.perf_counter() - start:.0f}"
     successes = f"{len(done)}/{len(seeds)}"
-    return [name, n, backend, faults or "-", seed_text, successes, *summed, steps, failed or "-", wall]
+    faults_text = "+".join([faults, *(f"{key}={value}" for key, value in params.items())][not faults :]) or "-"
+    return [name, n, backend, faults_text, seed_text, successes, *summed, steps, failed or "-", wall]
 
 
 def main() -> None:
@@ -104,6 +127,7 @@ def main() -> None:
     parser.add_argument("--resilience", action="store_true", help="every experiment under each fault")
     parser.add_argument("--seeds", default="0-9", help="seeds of the resilience table (default 0-9)")
     parser.add_argument("--workers", type=int, default=2, help="local Dask worker processes")
+    parser.add_argument("--param", action="append", type=parse_param, default=[], help="NAME=VALUE, every case")
     args = parser.parse_args()
     if args.case:
         cases = args.case
@@ -121,9 +145,10 @@ def main() -> None:
     print(machine())
     rows = []
     for case in cases:
-        rows.append(measure(*case, workers=args.workers))
+        rows.append(measure(*case, workers=args.workers, params=dict(args.param)))
         print("  " + " | ".join(map(str, rows[-1])), flush=True)
-    header = ["experiment", "N", "backend", "faults", "seeds", "successes", "collisions", "boundary", "actuator"]
+    header = ["experiment", "N", "backend", "faults (+ params)", "seeds", "successes"]
+    header += ["collisions", "boundary", "actuator"]
     print(machine())
     print(table([*header, "steps min/median/max", "failed seeds", "wall s"], rows))
 
