@@ -151,6 +151,20 @@ def test_unheard_matches_every_pair_compared(seed):
     np.testing.assert_array_equal(rules.unheard(seen, seen_rows, heard, heard_rows, vc.SAME_ROBOT), want)
 
 
+def test_unheard_counts_a_robot_heard_at_exactly_the_distance():
+    # Heard straight out along each axis at the tolerance, a hair inside and outside it, and a
+    # crowd heard far away (filtered out before the pairs are measured).
+    same = vc.SAME_ROBOT
+    seen = np.array([[0.3, -0.2], [1.0, 1.0], [-2.0, 0.5], [5.0, 5.0]])
+    offsets = np.array([[same, 0.0], [0.0, -same], [same * (1 - 1e-12), 0.0], [same * (1 + 1e-9), 0.0]])
+    crowd = np.random.default_rng(0).uniform(-3, 3, (300, 2))
+    heard = np.vstack((seen + offsets, crowd))
+    heard_rows = np.concatenate((np.arange(4), np.zeros(300, dtype=np.int64)))
+    want = [not np.any((heard_rows == row) & (np.hypot(*(point - heard).T) <= same)) for row, point in enumerate(seen)]
+    assert want[3] and not all(want[:3])  # (the sums round either way at the tolerance)
+    np.testing.assert_array_equal(rules.unheard(seen, np.arange(4), heard, heard_rows, same), want)
+
+
 @pytest.mark.parametrize("seed", range(10))
 def test_far_from_measures_all_pairs_or_sorts_them_alike(seed):
     # One robot's call (few pairs) measures every pair; a large one sorts them (rules.unheard).
