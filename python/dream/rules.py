@@ -438,35 +438,18 @@ def approach(positions: Any, centroids: Any, gain: float, v_max: float, arrival:
     return np.where((distance >= arrival)[..., None], gain * offset * scale[..., None], 0.0)
 
 
-def _near_seen(
-    seen: FloatArray, seen_rows: np.ndarray, heard: FloatArray, heard_rows: np.ndarray, same: float
-) -> tuple[FloatArray, np.ndarray]:
-    """The positions heard ``(m, 2)`` (and their rows) within the box around what their row sees,
-    grown by twice ``same`` (m): a position within ``same`` of a seen one is in it, roundings
-    included."""
-    rows = int(max(seen_rows.max(initial=-1), heard_rows.max(initial=-1))) + 1
-    low, high = np.full((rows, 2), np.inf), np.full((rows, 2), -np.inf)
-    np.minimum.at(low, seen_rows, seen)
-    np.maximum.at(high, seen_rows, seen)
-    keep = np.all((heard >= low[heard_rows] - 2 * same) & (heard <= high[heard_rows] + 2 * same), axis=1)
-    return heard[keep], heard_rows[keep]
-
-
 def unheard(seen: Any, seen_rows: Any, heard: Any, heard_rows: Any, same: float) -> np.ndarray:
     """Which robots a coverage robot sees ``seen`` ``(k, 2)`` (m) no message accounts for: farther
     than ``same`` (m) from every position ``heard`` ``(m, 2)`` from the robot's radio. Several
     robots at once: ``seen_rows`` ``(k,)`` and ``heard_rows`` ``(m,)`` (ints) say whose each is.
 
     Only positions in the same or a neighbouring square of side ``same`` can be that close, so
-    those are the only pairs measured (found by sorting), not every seen-heard pair; and first,
-    only the positions heard near what their robot sees (a robot in a crowd hears hundreds of
-    robots and sees a dozen).
+    those are the only pairs measured (found by sorting), not every seen-heard pair.
     """
     seen = np.asarray(seen, dtype=np.float64).reshape(-1, 2)
     heard = np.asarray(heard, dtype=np.float64).reshape(-1, 2)
     nearest = np.full(len(seen), np.inf)
     if len(seen) and len(heard):
-        heard, heard_rows = _near_seen(seen, np.asarray(seen_rows), heard, np.asarray(heard_rows), same)
         side = same * (1 + 1e-9)
         squares = np.floor(np.vstack((seen, heard)) / side).astype(np.int64)
         squares -= squares.min(axis=0) - 1
