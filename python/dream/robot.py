@@ -44,7 +44,11 @@ class Robot:
         Single-integrator velocity (m/s) the robot wants.
     dxu : (2,) ndarray
         Unicycle command ``[v, w]`` (m/s, rad/s).
+    guard_horizon : float
+        How far ahead (s) :meth:`stop_short` looks (default :data:`GUARD_HORIZON`).
     """
+
+    guard_horizon: float = GUARD_HORIZON
 
     def __init__(
         self,
@@ -114,16 +118,16 @@ class Robot:
     def stop_short(self, offsets: Any, near: float) -> None:
         """Set the linear speed to 0 (the robot still turns) when driving along its heading would
         bring it within ``near`` (m) of a robot at ``offsets`` ``(k, 2)`` (its own position less
-        theirs, taken as standing still) in the next :data:`GUARD_HORIZON` seconds."""
+        theirs, taken as standing still) in the next :attr:`guard_horizon` seconds."""
         speed = float(self.dxu[0])
         if speed == 0.0:
             return
         offsets = np.asarray(offsets, dtype=np.float64).reshape(-1, 2)
-        offsets = offsets[in_reach(np.hypot(offsets[:, 0], offsets[:, 1]), abs(speed), near)]
+        offsets = offsets[in_reach(np.hypot(offsets[:, 0], offsets[:, 1]), abs(speed), near, self.guard_horizon)]
         if not len(offsets):
             return
         moving = speed * np.array([math.cos(self.rot_w), math.sin(self.rot_w)])
-        if rules.closing_in(offsets, np.broadcast_to(moving, offsets.shape), near, GUARD_HORIZON).any():
+        if rules.closing_in(offsets, np.broadcast_to(moving, offsets.shape), near, self.guard_horizon).any():
             self.dxu[0] = 0.0
 
     def actuator_limit(self) -> None:
@@ -156,11 +160,11 @@ class Robot:
         return self._limits[1]
 
 
-def in_reach(distances: np.ndarray, speeds: Any, near: float) -> np.ndarray:
+def in_reach(distances: np.ndarray, speeds: Any, near: float, horizon: float = GUARD_HORIZON) -> np.ndarray:
     """``(k,)`` bool: which robots at ``distances`` ``(k,)`` (m) a robot driving at ``speeds``
-    ``(k,)`` or ``()`` (m/s) could come within ``near`` (m) of in the next :data:`GUARD_HORIZON`
-    seconds; the guard need not look at the others (the margin covers rounding)."""
-    return distances < near + np.abs(speeds) * GUARD_HORIZON + 1e-9
+    ``(k,)`` or ``()`` (m/s) could come within ``near`` (m) of in the next ``horizon`` seconds;
+    the guard need not look at the others (the margin covers rounding)."""
+    return distances < near + np.abs(speeds) * horizon + 1e-9
 
 
 def guard_distance(diameter: float, safety: float) -> float:
@@ -239,7 +243,7 @@ class RobotHRVO(Robot):
         self._margin = spec.radius if boundary_margin is None else boundary_margin
         self.include_preferred = include_preferred
         self._sampling = {"n_angles": n_angles, "n_speeds": n_speeds, "include_preferred": include_preferred}
-        self._planners: tuple[Bounds, kernels.HrvoPlanner, kernels.HrvoPlanner] | None = None
+        self._planners: tuple[tuple[Bounds, float], kernels.HrvoPlanner, kernels.HrvoPlanner] | None = None
         self._warned_outside = False
         self.detections: FloatArray = np.zeros((0, 4))
         self.sidestep = 0  # decisions left stepping aside (see `steer`)
@@ -308,11 +312,13 @@ class RobotHRVO(Robot):
         return [self.bounds[2], self.bounds[3]]
 
     def _planner(self) -> tuple[kernels.HrvoPlanner, kernels.HrvoPlanner]:
-        """HRVO planners with and without the boundary check, rebuilt when the arena changes."""
-        bounds = self.bounds
-        if self._planners is None or self._planners[0] != bounds:
+        """HRVO planners with and without the boundary check, rebuilt when the arena or the
+        safety radius changes."""
+        key = (self.bounds, self.safety)
+        if self._planners is None or self._planners[0] != key:
             options: dict[str, Any] = {"safety": self.safety, "v_max": self.v_max, **self._sampling}
-            self._planners = (bounds, kernels.HrvoPlanner(bounds=bounds, **options), kernels.HrvoPlanner(**options))
+            bounded, free = kernels.HrvoPlanner(bounds=key[0], **options), kernels.HrvoPlanner(**options)
+            self._planners = (key, bounded, free)
         return self._planners[1], self._planners[2]
 
     def _check_inside(self) -> None:
@@ -331,7 +337,7 @@ class RobotHRVO(Robot):
     def guard(self) -> None:
         """Drive no further (turn only) when the unicycle's motion would bring its body within
         :data:`GUARD_MARGIN` of where a detected robot's is (at most the safety radius apart), in
-        the next :data:`GUARD_HORIZON` seconds.
+        the next :attr:`guard_horizon` seconds.
 
         HRVO chooses a safe ``dxi``, but a unicycle moves along its heading, not along ``dxi``:
         while it turns, the part of ``dxi`` it carries out can close in on a neighbour that
@@ -346,7 +352,7 @@ class RobotHRVO(Robot):
         near = guard_distance(self.spec.diameter, self.safety)
         rows = np.asarray(self.detections)
         # The sensor's distances tell who is within reach (the margin covers their rounding).
-        rows = rows[in_reach(rows[:, 0], abs(float(self.dxu[0])), near)]
+        rows = rows[in_reach(rows[:, 0], abs(float(self.dxu[0])), near, self.guard_horizon)]
         if len(rows):
             offsets = rows[:, :1] * np.column_stack((np.cos(rows[:, 1]), np.sin(rows[:, 1])))
             self.stop_short(offsets, near)

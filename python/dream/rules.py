@@ -138,6 +138,76 @@ def roundabout_aim(positions: Any, goals: Any, semi_axes: tuple[float, float], i
     return np.where(crosses[..., None], edge, g) * scale
 
 
+def dock(
+    positions: Any, goals: Any, semi_axes: tuple[float, float], depth: float, width: float, lead: float
+) -> tuple[FloatArray, np.ndarray]:
+    """Where a robot heads for its goal on a packed ring, reached only from the inside.
+
+    On a ring whose goals are barely a robot's width apart, robots parked at their goals form a
+    wall: a robot that meets the ring beside its goal cannot slide along it, and one that slips
+    outside is shut out. So each goal has a dock, ``depth`` inside it along the ring's inward
+    normal, and a corridor of half-width ``width`` from the dock to the goal. A robot in its
+    corridor heads for the goal; one in the ring's band (beyond the ring of docks, through
+    ``semi_axes``'s scaling) but out of its corridor first goes back in, towards the docks' ring
+    ``lead`` radians ahead counter-clockwise (with the roundabout's traffic); any other heads for
+    its dock (through :func:`roundabout_aim`).
+
+    Parameters
+    ----------
+    positions, goals : (n, 2) or (2,) array_like
+        Positions and goals on the ring (m), relative to the arena's centre.
+    semi_axes : (float, float)
+        Semi-axes of the ring (m).
+    depth, width : float
+        The dock's depth and the corridor's half-width (m).
+    lead : float
+        How far ahead (rad, about the centre) a robot in the band aims as it goes back in.
+
+    Returns
+    -------
+    targets : (n, 2) or (2,) ndarray
+        The goal, a point on the docks' ring, or the dock (m).
+    band : (n,) or () bool ndarray
+        Whether the robot is beyond its dock's ring, where stepping aside pushes it outwards.
+    """
+    scale = np.asarray(semi_axes, dtype=np.float64)
+    p = np.asarray(positions, dtype=np.float64)
+    g = np.asarray(goals, dtype=np.float64)
+    normal = g / scale**2  # the ring's outward normal at the goal
+    normal = normal / np.hypot(normal[..., 0], normal[..., 1])[..., None]
+    docks = g - depth * normal
+    along = np.sum((p - docks) * normal, axis=-1) / depth  # 0 at the dock, 1 at the goal
+    nearest = docks + depth * np.clip(along, 0.0, 1.0)[..., None] * normal
+    corridor = (np.hypot(*np.moveaxis(p - nearest, -1, 0)) < width) & (along > -0.5)
+    q = p / scale
+    radius, dock_radius = np.hypot(q[..., 0], q[..., 1]), np.hypot(*np.moveaxis(docks / scale, -1, 0))
+    angle = np.arctan2(q[..., 1], q[..., 0]) + lead
+    inwards = dock_radius[..., None] * np.stack((np.cos(angle), np.sin(angle)), axis=-1) * scale
+    going_in = ~corridor & (radius > dock_radius + BAND_MARGIN)
+    targets = np.where(corridor[..., None], g, np.where(going_in[..., None], inwards, docks))
+    return targets, radius > dock_radius
+
+
+#: How far (in the ring's scaled units) beyond its dock's ring a robot turns back in (:func:`dock`),
+#: so that one on that ring does not switch between its dock and the way in.
+BAND_MARGIN = 0.02
+
+
+def clear_way(position: Any, goal: Any, others: Any, clearance: float) -> bool:
+    """Whether the straight way from ``position`` to ``goal`` ``(2,)`` keeps ``clearance`` (m) from
+    every one of ``others`` ``(k, 2)`` (robots seen, taken as standing).
+
+    HRVO forbids every velocity that would ever bring a robot within its safety radius of a
+    neighbour, even past the goal: a robot a centimetre off its goal, with a parked neighbour
+    beyond it, may not move towards it at all. Over a short, clear way the goal is safe to take.
+    """
+    others = np.asarray(others, dtype=np.float64).reshape(-1, 2)
+    p = np.asarray(position, dtype=np.float64)
+    way = np.asarray(goal, dtype=np.float64) - p
+    along = np.clip((others - p) @ way / max(float(way @ way), 1e-300), 0.0, 1.0)
+    return bool(np.all(np.hypot(*(others - p - along[:, None] * way).T) >= clearance))
+
+
 def preferred_velocity(positions: Any, aims: Any, goals: Any, v_max: float, gain: float) -> FloatArray:
     """Towards ``aims``, at a speed that falls in proportion to the distance left to ``goals``.
 

@@ -83,8 +83,9 @@ def test_hrvo_circle_swarm_mode_runs_large_swarms_without_collision():
 
 
 def test_hrvo_circle_full_ring_on_rps_does_not_collide():
-    # rps's arena cannot grow: as many robots as its ring holds, goals on the ellipse filling it.
-    n = hrvo_circle.circle_capacity()
+    # rps's arena cannot grow: as many robots as its ring holds with the 5 cm tolerance, goals on
+    # the ellipse filling it (the packed ring beyond: test_hrvo_circle_packed.py).
+    n = hrvo_circle.circle_capacity(packed=False)
     result = hrvo_circle.run(n=n, seed=0, backend="robotarium", steps=600)
     assert result.backend == "robotarium" and result.n == n
     assert result.measures["circle_radius"] == hrvo_circle.ROBOTARIUM.width / 2 - hrvo_circle.EDGE

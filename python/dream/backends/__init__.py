@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -32,24 +33,30 @@ def initial_poses(
     rng: np.random.Generator,
     arena: ArenaSpec = ROBOTARIUM,
     spacing: float = 0.2,
+    where: Callable[[np.ndarray, np.ndarray], Any] | None = None,
 ) -> FloatArray:
     """Random poses ``(3, n)`` on a grid of ``spacing`` in the central part of the arena.
 
     As rps's ``generate_initial_conditions`` (distinct grid points in a 2.5 x 1.5 m area of the
-    3.2 x 2 m arena, random headings), scaled to ``arena``, drawn from ``rng``.
+    3.2 x 2 m arena, random headings), scaled to ``arena``, drawn from ``rng``. ``where(x, y)``,
+    if given, keeps the grid points ``(k,)`` it is true of (relative to the arena's centre).
     """
     width, height = arena.width * 2.5 / 3.2, arena.height * 1.5 / 2.0
     columns, rows = int(width // spacing), int(height // spacing)
-    if columns * rows < n:
-        raise ValueError(
-            f"{n} robots do not fit {spacing} m apart in the central {width:.2f} x {height:.2f} m of the arena: "
-            "use a larger arena"
-        )
-    cells = rng.choice(columns * rows, size=n, replace=False)
+    cells = np.arange(columns * rows)
     cx, cy = (arena.xmin + arena.xmax) / 2, (arena.ymin + arena.ymax) / 2
+    x = cx - (columns - 1) * spacing / 2 + (cells // rows) * spacing
+    y = cy - (rows - 1) * spacing / 2 + (cells % rows) * spacing
+    if where is not None:
+        cells = cells[np.asarray(where(x - cx, y - cy), dtype=np.bool_)]
+    if len(cells) < n:
+        raise ValueError(
+            f"{n} robots do not fit {spacing} m apart in the central {width:.2f} x {height:.2f} m of the arena"
+            f"{'' if where is None else ' where they may start'}: use a larger arena"
+        )
+    cells = cells[rng.choice(len(cells), size=n, replace=False)]
     poses = np.empty((3, n))
-    poses[0] = cx - (columns - 1) * spacing / 2 + (cells // rows) * spacing
-    poses[1] = cy - (rows - 1) * spacing / 2 + (cells % rows) * spacing
+    poses[0], poses[1] = x[cells], y[cells]
     poses[2] = rng.uniform(-np.pi, np.pi, size=n)
     return poses
 

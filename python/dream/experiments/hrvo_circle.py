@@ -26,10 +26,28 @@ the ring once goals would be closer than 0.34 m, keeping the thesis's safety rad
 then leaves a corridor around the ring); the real Robotarium's cannot, so there the goals
 close up and the safety radius shrinks with them. Robots within the arrival tolerance
 of neighbouring goals must not block each other, so the safety radius is at most the
-spacing less twice the tolerance; it must stay a robot's diameter plus a margin, so
-:func:`circle_layout` refuses more robots than the Robotarium's ring holds that way (30).
-With goals closer than that (the thesis's 0.85 m circle beyond 17 robots, or 50 robots on
-the largest ellipse, 0.155 m apart) the robots that park first wall in the others.
+spacing less twice the tolerance.
+
+Packed ring. Up to 30 robots on the Robotarium keep a safety radius of a robot's diameter
+plus 4 cm (:data:`MIN_SAFETY`) with the 5 cm tolerance. Beyond, up to 50, the ring is packed:
+goals 0.155 m apart (at 50) for robots 0.11 m wide. Traces showed what HRVO alone does there:
+robots that park first wall in the others, robots meeting the ring beside their goal cannot
+slide along it, a robot that slips between the ring and a wall is shut out for good, and a
+robot a centimetre off its goal may not move towards it (HRVO forbids any velocity that would
+ever close on the parked neighbour beyond it). So on a packed ring:
+
+- the tolerance is 1.5 cm and the safety radius the spacing less twice that, at least the
+  robot's diameter plus 1 cm (:data:`PACKED_SAFETY`; rps 0.0.0 counts a collision at 0.11 m);
+- robots start on grid points inside the ring, not in the corners outside it;
+- a robot reaches its goal only through its corridor from a dock 0.3 m inside
+  (:func:`dream.rules.dock`), and does not step aside in the ring's band or near its goal;
+- within 5 cm of its goal, a robot whose straight way there is clear drives it
+  (:func:`dream.rules.clear_way`);
+- a robot that has arrived stands still until it moves on, so that the others dock beside a
+  neighbour that keeps its place;
+- the motion guard looks twice as far ahead (:data:`PACKED_GUARD_HORIZON`): it takes the others
+  for standing, and two robots turning towards each other between their decisions closed the
+  1.5 cm between the safety radius and a collision (1 of 8 runs at 50 robots without it).
 """
 
 from __future__ import annotations
@@ -41,11 +59,12 @@ from typing import Any
 import numpy as np
 
 from dream import kernels, rules
+from dream.backends import initial_poses
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
 from dream.heartbeats import Heartbeats
 from dream.radios import RangeRadio
-from dream.robot import RobotHRVO, guard_distance, guard_swarm
+from dream.robot import GUARD_HORIZON, RobotHRVO, guard_distance, guard_swarm
 from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec
 from dream.world import create_timer
@@ -59,6 +78,15 @@ ARRIVAL = 0.05  #: a robot within this distance of its goal has arrived (m)
 GOAL_SPACING = SAFETY + 2 * ARRIVAL  #: goal spacing a grown arena keeps (m)
 EDGE = 0.08  #: distance from the ring's ends to the walls when the ring fills the arena (m)
 MIN_SAFETY = GRITSBOT.diameter + 0.04  #: the least safety radius: a robot's diameter plus a margin (m)
+PACKED_SAFETY = GRITSBOT.diameter + 0.01  #: the least safety radius of a packed ring (m)
+PACKED_ARRIVAL = 0.015  #: the arrival tolerance on a packed ring (m)
+DOCK_DEPTH = 0.3  #: on a packed ring, how far inside its goal a robot's dock lies (m)
+DOCK_WIDTH = 0.05  #: the half-width of the corridor from a dock to its goal (m)
+DOCK_LEAD = 0.15  #: how far ahead a robot in the packed ring's band aims as it goes back in (rad)
+FINAL_REACH = 0.05  #: on a packed ring, a robot this close to its goal drives there if the way is clear (m)
+START_INSIDE = 0.85  #: on a packed ring, robots start on grid points within this fraction of it
+PACKED_GUARD_HORIZON = 2 * GUARD_HORIZON  #: how far ahead a packed ring's motion guard looks (s)
+PACKED_STEPS = 20000  #: the packed ring's step cap (three crossings took 7,200-12,900 steps at 50 robots)
 CORRIDOR = 2 * SAFETY  #: free width between the ring and the walls of a grown arena (m)
 ISLAND = 0.5  #: the roundabout's island, as a fraction of the ring (see dream.rules.roundabout_aim)
 APPROACH_GAIN = 1.0  #: preferred speed per metre left to the goal near it (1/s)
@@ -82,6 +110,10 @@ class CircleLayout:
     safety : float
         Combined safety radius of HRVO (m).
     arena : ArenaSpec
+    arrival : float
+        The arrival tolerance (m).
+    packed : bool
+        Whether the ring is packed (see the module docs).
     """
 
     goals: np.ndarray
@@ -89,6 +121,8 @@ class CircleLayout:
     spacing: float
     safety: float
     arena: ArenaSpec
+    arrival: float = ARRIVAL
+    packed: bool = False
 
 
 def circle_layout(n: int, grow: bool = True) -> CircleLayout:
@@ -101,13 +135,14 @@ def circle_layout(n: int, grow: bool = True) -> CircleLayout:
     neighbouring goals would be closer than :data:`GOAL_SPACING`; else (the real Robotarium,
     whose arena cannot grow) the goals close up. The safety radius is the thesis's, or the
     spacing less twice the arrival tolerance if smaller (so that robots anywhere within the
-    tolerance of neighbouring goals do not block each other).
+    tolerance of neighbouring goals do not block each other). Below :data:`MIN_SAFETY` the ring
+    is packed: the tolerance is :data:`PACKED_ARRIVAL`.
 
     Raises
     ------
     ValueError
         If ``n`` is negative, or the fixed arena cannot hold ``n`` robots on its ring (their
-        safety radius would fall below :data:`MIN_SAFETY`).
+        safety radius would fall below :data:`PACKED_SAFETY`).
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
         raise ValueError(f"the number of robots `n` must be an integer >= 0, got {n!r}")
@@ -121,14 +156,17 @@ def circle_layout(n: int, grow: bool = True) -> CircleLayout:
     scale = max(1.0, GOAL_SPACING / spacing) if grow else 1.0
     # Two robots anywhere within the arrival tolerance of neighbouring goals must not block
     # each other: HRVO keeps them a safety radius apart.
-    safety = min(SAFETY, scale * spacing - 2 * ARRIVAL)
-    if safety < MIN_SAFETY:
+    safety, arrival = min(SAFETY, scale * spacing - 2 * ARRIVAL), ARRIVAL
+    packed = safety < MIN_SAFETY
+    if packed:
+        safety, arrival = spacing - 2 * PACKED_ARRIVAL, PACKED_ARRIVAL
+    if safety < PACKED_SAFETY:
         most = circle_capacity()
         raise ValueError(
             f"n={n} robots do not fit on the ring of the {ROBOTARIUM.width} x {ROBOTARIUM.height} m arena: "
-            f"their goals would be {spacing:.3f} m apart, less than the {MIN_SAFETY + 2 * ARRIVAL:.2f} m "
+            f"their goals would be {spacing:.3f} m apart, less than the {PACKED_SAFETY + 2 * PACKED_ARRIVAL:.2f} m "
             f"that robots of diameter {GRITSBOT.diameter} m need to reach neighbouring goals (within "
-            f"{ARRIVAL} m) keeping a safety radius of {MIN_SAFETY:.2f} m; "
+            f"{PACKED_ARRIVAL} m) keeping a safety radius of {PACKED_SAFETY:.2f} m; "
             f"at most {most} robots fit (or use a backend whose arena can grow)"
         )
     # A grown arena leaves a corridor around the ring, so that robots starting outside it can
@@ -136,14 +174,16 @@ def circle_layout(n: int, grow: bool = True) -> CircleLayout:
     extra = 0.0 if scale == 1.0 else 2 * CORRIDOR
     arena = ArenaSpec.centred(ROBOTARIUM.width * scale + extra, ROBOTARIUM.height * scale + extra)
     ring = (scale * semi_axes[0], scale * semi_axes[1])
-    return CircleLayout(scale * goals, ring, scale * spacing, safety, arena)
+    return CircleLayout(scale * goals, ring, scale * spacing, safety, arena, arrival, packed)
 
 
-def circle_capacity() -> int:
-    """The most robots the Robotarium arena's ring holds (see :func:`circle_layout`)."""
+def circle_capacity(packed: bool = True) -> int:
+    """The most robots the Robotarium arena's ring holds (see :func:`circle_layout`), packed or
+    (``packed=False``) with the 5 cm tolerance and a safety radius of :data:`MIN_SAFETY`."""
     a, b = ROBOTARIUM.width / 2 - EDGE, ROBOTARIUM.height / 2 - EDGE
-    n = int(_ellipse_arc(a, b)[1][-1] / (MIN_SAFETY + 2 * ARRIVAL)) + 1  # chords are shorter than arcs
-    while n > THESIS_N and _least_gap(_ellipse_points(n, a, b)) < MIN_SAFETY + 2 * ARRIVAL:
+    gap = PACKED_SAFETY + 2 * PACKED_ARRIVAL if packed else MIN_SAFETY + 2 * ARRIVAL
+    n = int(_ellipse_arc(a, b)[1][-1] / gap) + 1  # chords are shorter than arcs
+    while n > THESIS_N and _least_gap(_ellipse_points(n, a, b)) < gap:
         n -= 1
     return n
 
@@ -206,6 +246,11 @@ class CircleRobot(RobotHRVO):
         The ring's semi-axes (m), which size the roundabout; default: :func:`circle_layout`'s.
     island : float
         The roundabout's island as a fraction of the ring (0: go straight).
+    arrival : float
+        The arrival tolerance (m).
+    packed : bool
+        Whether its goals lie on a packed ring (docks, parking and the clear final approach of
+        the module docs).
     **kwargs
         Passed to :class:`~dream.RobotHRVO` (e.g. ``safety``, ``arena``).
     """
@@ -219,6 +264,8 @@ class CircleRobot(RobotHRVO):
         *,
         semi_axes: tuple[float, float] | None = None,
         island: float = ISLAND,
+        arrival: float = ARRIVAL,
+        packed: bool = False,
         **kwargs: Any,
     ) -> None:
         super().__init__(robot_id, tag, **kwargs)
@@ -232,6 +279,10 @@ class CircleRobot(RobotHRVO):
         self.desired_velocity = np.zeros(2)
         self.semi_axes = circle_layout(n).semi_axes if semi_axes is None else semi_axes
         self.island = island
+        self.arrival = arrival
+        self.packed = packed
+        if packed:
+            self.guard_horizon = PACKED_GUARD_HORIZON
 
     def update_radio(self, messages: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
         """Merge the states and heartbeats heard (element-wise max); move on when every robot not
@@ -260,25 +311,48 @@ class CircleRobot(RobotHRVO):
         the safety radius of this robot's goal while this robot is as close as HRVO lets it come:
         the goal then counts as reached, else a crash on a goal would stop the circles for good."""
         rows = np.asarray(self.detections)
-        if not len(rows) or math.dist(position, self.current_goal) > self.safety + ARRIVAL:
+        if not len(rows) or math.dist(position, self.current_goal) > self.safety + self.arrival:
             return False
         others = rules.seen_positions(position, rows)
         still = np.hypot(rows[:, 2], rows[:, 3]) < STILL
         return bool(np.any(still & (np.hypot(*(others - self.current_goal).T) < self.safety)))
 
     def update(self, dxu: np.ndarray) -> None:
-        if self.has_pose:
-            position = np.array([self.pos_x, self.pos_y])
-            _, reached = rules.arrival(position, self.current_goal, self.change_state, ARRIVAL)
-            if reached or (self.change_state and self.suspects and self.goal_taken(position)):
-                self.state += 1
-                self.change_state = False
-            aim = rules.roundabout_aim(position, self.current_goal, self.semi_axes, self.island)
-            self.desired_velocity = rules.preferred_velocity(
-                position, aim, self.current_goal, self.v_max, APPROACH_GAIN
-            )
-        self.steer(self.detections, self.desired_velocity, SIDESTEP_UPDATES)
+        if not self.has_pose:
+            self.steer(self.detections, self.desired_velocity, SIDESTEP_UPDATES)
+            self.command(dxu)
+            return
+        position = np.array([self.pos_x, self.pos_y])
+        goal = self.current_goal
+        _, reached = rules.arrival(position, goal, self.change_state, self.arrival)
+        if reached or (self.change_state and self.suspects and self.goal_taken(position)):
+            self.state += 1
+            self.change_state = False
+        if not self.packed:
+            aim = rules.roundabout_aim(position, goal, self.semi_axes, self.island)
+            self.desired_velocity = rules.preferred_velocity(position, aim, goal, self.v_max, APPROACH_GAIN)
+            self.steer(self.detections, self.desired_velocity, SIDESTEP_UPDATES)
+        elif self.change_state:
+            self.dock(position, goal)
+        else:  # parked: neighbours dock beside a robot that keeps its place
+            self.desired_velocity, self.dxi = np.zeros(2), np.zeros(2)
         self.command(dxu)
+
+    def dock(self, position: np.ndarray, goal: np.ndarray) -> None:
+        """Choose ``dxi`` on a packed ring: through the dock and corridor of :func:`dream.rules.dock`,
+        without stepping aside in the ring's band or near the goal, and straight to the goal over
+        the last :data:`FINAL_REACH` when the way is clear of the robots seen."""
+        target, band = rules.dock(position, goal, self.semi_axes, DOCK_DEPTH, DOCK_WIDTH, DOCK_LEAD)
+        aim = rules.roundabout_aim(position, target, self.semi_axes, self.island)
+        self.desired_velocity = rules.preferred_velocity(position, aim, goal, self.v_max, APPROACH_GAIN)
+        near = math.dist(position, goal) < FINAL_REACH
+        if band or near:  # aside is outwards here, where a robot is shut out
+            self.sidestep = 0
+        self.steer(self.detections, self.desired_velocity, SIDESTEP_UPDATES)
+        if near:
+            clearance = guard_distance(self.spec.diameter, self.safety)
+            if rules.clear_way(position, goal, rules.seen_positions(position, self.detections), clearance):
+                self.dxi = self.desired_velocity.copy()
 
 
 def circle_frame(
@@ -411,6 +485,13 @@ class HrvoCircle(Experiment):
         return self.layout.arena
 
     def build(self, n: int) -> None:
+        if self.layout.packed and (self.rules.collider_offset > 0 or self.rules.diameter >= self.layout.safety):
+            raise ValueError(
+                f"n={n} robots pack the Robotarium's ring (goals {self.layout.spacing:.3f} m apart), which only "
+                f"rps 0.0.0's rules leave room for: {self.rules.rules}'s colliders ({self.rules.diameter} m, "
+                f"{self.rules.collider_offset} m ahead of the centre) would touch; at most "
+                f"{circle_capacity(packed=False)} robots run by them"
+            )
         goals = circle_goals(n, self.grow)
         for i in range(n):
             robot = CircleRobot(
@@ -419,6 +500,8 @@ class HrvoCircle(Experiment):
                 goals[i],
                 n,
                 semi_axes=self.layout.semi_axes,
+                arrival=self.layout.arrival,
+                packed=self.layout.packed,
                 safety=self.layout.safety,
                 arena=self.arena,
             )
@@ -438,6 +521,12 @@ class HrvoCircle(Experiment):
             self.robots.append(robot)
 
     def build_swarm(self, n: int) -> None:
+        if self.layout.packed:
+            raise ValueError(
+                f"n={n} robots pack the Robotarium's ring: run them robot by robot (swarm mode is for rings that "
+                f"grow; the packed ring's docking and parking are per robot); at most "
+                f"{circle_capacity(packed=False)} robots run in swarm mode on the Robotarium"
+            )
         self.team = CircleSwarm.start(circle_goals(n, self.grow))
         self.bounds = self.arena.shrunk(GRITSBOT.radius)
 
@@ -448,7 +537,7 @@ class HrvoCircle(Experiment):
         team, everyone = self.team, np.arange(self.n)
         p = x[:2].T
         goal = team.goal
-        arrived, reached = rules.arrival(p, goal, team.unreached, ARRIVAL)
+        arrived, reached = rules.arrival(p, goal, team.unreached, self.layout.arrival)
         team.state += reached
         team.unreached &= ~arrived
         team.known[reached] = 0  # a new level: start over from itself
@@ -469,7 +558,15 @@ class HrvoCircle(Experiment):
         return guard_swarm(dxu, x, guard_distance(GRITSBOT.diameter, self.layout.safety))
 
     def steps(self, n: int) -> int:
-        return default_steps(n)
+        return PACKED_STEPS if self.layout.packed else default_steps(n)
+
+    def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """rps's random grid poses; on a packed ring only grid points well inside it (a robot
+        starting in a corner outside the ring is shut out once its neighbours park)."""
+        if not self.layout.packed:
+            return super().initial_poses(n, rng)
+        a, b = self.layout.semi_axes
+        return initial_poses(n, rng, self.arena, where=lambda x, y: np.hypot(x / a, y / b) <= START_INSIDE)
 
     def states(self) -> np.ndarray:
         """The goals each robot has reached ``(n,)``, in either mode."""
