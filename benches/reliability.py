@@ -35,6 +35,8 @@ SIZES = [
     "hrvo-circle:10:robotarium:0-99",
     "hrvo-circle:20:robotarium:0-29",
     "hrvo-circle:30:robotarium:0-9",
+    "hrvo-circle:40:robotarium:0-9",
+    "hrvo-circle:50:robotarium:0-9",
     "hrvo-circle:100:fast:0-9",
     "hrvo-circle:1000:swarm:0-2",
     "hrvo-circle:10000:swarm:0",

@@ -47,7 +47,12 @@ ever close on the parked neighbour beyond it). So on a packed ring:
   neighbour that keeps its place;
 - the motion guard looks twice as far ahead (:data:`PACKED_GUARD_HORIZON`): it takes the others
   for standing, and two robots turning towards each other between their decisions closed the
-  1.5 cm between the safety radius and a collision (1 of 8 runs at 50 robots without it).
+  1.5 cm between the safety radius and a collision (1 of 8 runs at 50 robots without it);
+- the movement sensor reaches 0.5 m (:data:`PACKED_SENSING`), not 1 m. HRVO's cones reach to
+  infinity: from the centre, the parked robots of a packed ring within 1 m closed every way
+  towards it (cones 15 degrees wide, neighbours 9 degrees apart), and the last robots to arrive
+  circled for thousands of steps (three crossings took 8,500-19,300 steps, one seed of 20 none;
+  with 0.5 m, 4,550-5,900).
 """
 
 from __future__ import annotations
@@ -85,8 +90,9 @@ DOCK_WIDTH = 0.05  #: the half-width of the corridor from a dock to its goal (m)
 DOCK_LEAD = 0.15  #: how far ahead a robot in the packed ring's band aims as it goes back in (rad)
 FINAL_REACH = 0.05  #: on a packed ring, a robot this close to its goal drives there if the way is clear (m)
 START_INSIDE = 0.85  #: on a packed ring, robots start on grid points within this fraction of it
+SENSING = 1.0  #: the movement sensor's range (m)
+PACKED_SENSING = 0.5  #: the movement sensor's range on a packed ring (m)
 PACKED_GUARD_HORIZON = 2 * GUARD_HORIZON  #: how far ahead a packed ring's motion guard looks (s)
-PACKED_STEPS = 20000  #: the packed ring's step cap (three crossings took 7,200-12,900 steps at 50 robots)
 CORRIDOR = 2 * SAFETY  #: free width between the ring and the walls of a grown arena (m)
 ISLAND = 0.5  #: the roundabout's island, as a fraction of the ring (see dream.rules.roundabout_aim)
 APPROACH_GAIN = 1.0  #: preferred speed per metre left to the goal near it (1/s)
@@ -273,7 +279,7 @@ class CircleRobot(RobotHRVO):
         self.current_goal = self.goals[0]
         self.robot_states = np.zeros(n, dtype=np.int64)  # what this robot knows of every robot's state
         self.heartbeats = Heartbeats(n, robot_id, SILENCE)
-        self.suspects = False  # whether it takes some robot for crashed
+        self.suspects = False  # whether it takes some robot for crashed, or was taken for crashed
         self.state = 0  # goals reached so far
         self.change_state = True  # the current goal has not been reached yet
         self.desired_velocity = np.zeros(2)
@@ -296,7 +302,10 @@ class CircleRobot(RobotHRVO):
         self.heartbeats.round([beats for _, beats in messages])
         self.robot_states[self.robot_id] = self.state
         alive = self.heartbeats.alive
-        self.suspects = not alive.all()
+        # A robot two goals ahead means this one was taken for crashed and the others went on:
+        # a robot parked on its goal may then be one that has finished there (seen at N = 100
+        # under 30 % loss: it waited beside its goal for good).
+        self.suspects = not alive.all() or int(self.robot_states.max()) > self.state + 1
         # At least its own state, not equal to it: a robot taken for crashed while out of radio
         # reach (a 100-robot ring is tens of hops across) lets the others go ahead, and a robot
         # waiting for equal states would then wait for good (seen at N = 100, no fault).
@@ -307,9 +316,10 @@ class CircleRobot(RobotHRVO):
         return self.robot_states, self.heartbeats.beats
 
     def goal_taken(self, position: np.ndarray) -> bool:
-        """Whether a robot standing still (one taken for crashed stops where it is) sits within
-        the safety radius of this robot's goal while this robot is as close as HRVO lets it come:
-        the goal then counts as reached, else a crash on a goal would stop the circles for good."""
+        """Whether a robot standing still (one taken for crashed stops where it is, one that has
+        finished stays) sits within the safety radius of this robot's goal while this robot is as
+        close as HRVO lets it come: the goal then counts as reached, else a crash on a goal would
+        stop the circles for good."""
         rows = np.asarray(self.detections)
         if not len(rows) or math.dist(position, self.current_goal) > self.safety + self.arrival:
             return False
@@ -362,6 +372,7 @@ def circle_frame(
     velocities: Any,
     states: np.ndarray,
     radio_range: float = 1.0,
+    sensing: float = SENSING,
 ) -> Frame:
     """What a renderer shows of the circle experiment: goals, HRVO velocities, radio links.
 
@@ -379,7 +390,7 @@ def circle_frame(
         goals=np.asarray(goals, dtype=np.float64).reshape(-1, 2),
         velocities=np.asarray(velocities, dtype=np.float64).reshape(-1, 2),
         links=links[links[:, 0] < links[:, 1]],
-        ranges={"sensing": 1.0, "radio": radio_range},
+        ranges={"sensing": sensing, "radio": radio_range},
         title=f"{NAME}: circles {int(np.min(states, initial=CIRCLES))}/{CIRCLES}, "
         f"collisions {sim.violations.collision}",
     )
@@ -480,6 +491,7 @@ class HrvoCircle(Experiment):
         # which refuses more robots than the ring holds).
         self.grow = backend != "robotarium"
         self.layout = circle_layout(n, self.grow)
+        self.sensing = PACKED_SENSING if self.layout.packed else SENSING
 
     def arena_for(self, n: int) -> ArenaSpec:
         return self.layout.arena
@@ -506,7 +518,7 @@ class HrvoCircle(Experiment):
                 arena=self.arena,
             )
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
-            movement = MovementSensor(i, f"movement_{i}", robot.update_sensor)
+            movement = MovementSensor(i, f"movement_{i}", robot.update_sensor, range=self.sensing)
             radio = RangeRadio(i, f"radio_{i}", robot.update_radio)
             create_timer(
                 i,
@@ -552,13 +564,13 @@ class HrvoCircle(Experiment):
         aim = rules.roundabout_aim(p, goal, self.layout.semi_axes, ISLAND)
         desired = rules.preferred_velocity(p, aim, goal, GRITSBOT.v_max, APPROACH_GAIN)
         wanted, team.sidestep = rules.sidestep_preference(desired, team.sidestep, team.side)
-        team.dxi = kernels.hrvo(p, team.dxi, wanted, radius=1.0, safety=self.layout.safety, bounds=self.bounds)
+        team.dxi = kernels.hrvo(p, team.dxi, wanted, radius=self.sensing, safety=self.layout.safety, bounds=self.bounds)
         team.sidestep, team.side = rules.sidestep_update(team.dxi, desired, team.sidestep, team.side, SIDESTEP_UPDATES)
         dxu = kernels.actuator_limit(kernels.dxi_to_dxu(team.dxi.T, x), GRITSBOT.within(self.sim.spec))
         return guard_swarm(dxu, x, guard_distance(GRITSBOT.diameter, self.layout.safety))
 
     def steps(self, n: int) -> int:
-        return PACKED_STEPS if self.layout.packed else default_steps(n)
+        return default_steps(n)
 
     def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """rps's random grid poses; on a packed ring only grid points well inside it (a robot
@@ -588,7 +600,7 @@ class HrvoCircle(Experiment):
             return circle_frame(step, self.sim, self.team.goal, self.team.dxi, self.team.state)
         goals = [robot.current_goal for robot in self.robots]
         velocities = [robot.dxi for robot in self.robots]
-        return circle_frame(step, self.sim, goals, velocities, self.states())
+        return circle_frame(step, self.sim, goals, velocities, self.states(), sensing=self.sensing)
 
 
 run = HrvoCircle.run
