@@ -330,22 +330,22 @@ class CircleRobot(RobotHRVO):
     def update(self, dxu: np.ndarray) -> None:
         if not self.has_pose:
             self.steer(self.detections, self.desired_velocity, SIDESTEP_UPDATES)
-            self.command(dxu)
-            return
-        position = np.array([self.pos_x, self.pos_y])
-        goal = self.current_goal
-        _, reached = rules.arrival(position, goal, self.change_state, self.arrival)
-        if reached or (self.change_state and self.suspects and self.goal_taken(position)):
-            self.state += 1
-            self.change_state = False
-        if not self.packed:
-            aim = rules.roundabout_aim(position, goal, self.semi_axes, self.island)
-            self.desired_velocity = rules.preferred_velocity(position, aim, goal, self.v_max, APPROACH_GAIN)
-            self.steer(self.detections, self.desired_velocity, SIDESTEP_UPDATES)
-        elif self.change_state:
-            self.dock(position, goal)
-        else:  # parked: neighbours dock beside a robot that keeps its place
-            self.desired_velocity, self.dxi = np.zeros(2), np.zeros(2)
+        else:
+            position = np.array([self.pos_x, self.pos_y])
+            _, reached = rules.arrival(position, self.current_goal, self.change_state, self.arrival)
+            if reached or (self.change_state and self.suspects and self.goal_taken(position)):
+                self.state += 1
+                self.change_state = False
+            if not self.packed:
+                aim = rules.roundabout_aim(position, self.current_goal, self.semi_axes, self.island)
+                self.desired_velocity = rules.preferred_velocity(
+                    position, aim, self.current_goal, self.v_max, APPROACH_GAIN
+                )
+                self.steer(self.detections, self.desired_velocity, SIDESTEP_UPDATES)
+            elif self.change_state:
+                self.dock(position, self.current_goal)
+            else:  # parked: neighbours dock beside a robot that keeps its place
+                self.desired_velocity, self.dxi = np.zeros(2), np.zeros(2)
         self.command(dxu)
 
     def dock(self, position: np.ndarray, goal: np.ndarray) -> None:
