@@ -21,6 +21,7 @@ def test_packed_ring_starts_where_the_five_centimetre_tolerance_stops():
         assert layout.packed and layout.arrival == hrvo_circle.PACKED_ARRIVAL
         # robots anywhere within the tolerance of neighbouring goals keep the safety radius
         assert hrvo_circle.PACKED_SAFETY <= layout.safety <= layout.spacing - 2 * layout.arrival + 1e-12
+        assert layout.safety <= hrvo_circle.PACKED_SAFETY_CAP
         assert layout.safety >= dream.specs.GRITSBOT.diameter + 0.01  # rps 0.0.0 collides at 0.11 m
     assert not hrvo_circle.circle_layout(200, grow=True).packed  # a growing arena never packs
 

@@ -37,7 +37,11 @@ robot a centimetre off its goal may not move towards it (HRVO forbids any veloci
 ever close on the parked neighbour beyond it). So on a packed ring:
 
 - the tolerance is 1.5 cm and the safety radius the spacing less twice that, at least the
-  robot's diameter plus 1 cm (:data:`PACKED_SAFETY`; rps 0.0.0 counts a collision at 0.11 m);
+  robot's diameter plus 1 cm (:data:`PACKED_SAFETY`; rps 0.0.0 counts a collision at 0.11 m)
+  and at most what 50 robots leave (:data:`PACKED_SAFETY_CAP`): with more, the motion guard
+  (0.12 m) lets robots come within each other's safety radius, where HRVO forbids every way
+  but apart, and two robots in the ring's band each blocked the other's way out for good
+  (40 robots, 1 seed of 10, with 0.164 m);
 - robots start on grid points inside the ring, not in the corners outside it;
 - a robot reaches its goal only through its corridor from a dock 0.3 m inside
   (:func:`dream.rules.dock`), and does not step aside in the ring's band or near its goal;
@@ -84,6 +88,7 @@ GOAL_SPACING = SAFETY + 2 * ARRIVAL  #: goal spacing a grown arena keeps (m)
 EDGE = 0.08  #: distance from the ring's ends to the walls when the ring fills the arena (m)
 MIN_SAFETY = GRITSBOT.diameter + 0.04  #: the least safety radius: a robot's diameter plus a margin (m)
 PACKED_SAFETY = GRITSBOT.diameter + 0.01  #: the least safety radius of a packed ring (m)
+PACKED_SAFETY_CAP = 0.125  #: the most safety radius of a packed ring: what 50 robots leave (m)
 PACKED_ARRIVAL = 0.015  #: the arrival tolerance on a packed ring (m)
 DOCK_DEPTH = 0.3  #: on a packed ring, how far inside its goal a robot's dock lies (m)
 DOCK_WIDTH = 0.05  #: the half-width of the corridor from a dock to its goal (m)
@@ -165,7 +170,7 @@ def circle_layout(n: int, grow: bool = True) -> CircleLayout:
     safety, arrival = min(SAFETY, scale * spacing - 2 * ARRIVAL), ARRIVAL
     packed = safety < MIN_SAFETY
     if packed:
-        safety, arrival = spacing - 2 * PACKED_ARRIVAL, PACKED_ARRIVAL
+        safety, arrival = min(PACKED_SAFETY_CAP, spacing - 2 * PACKED_ARRIVAL), PACKED_ARRIVAL
     if safety < PACKED_SAFETY:
         most = circle_capacity()
         raise ValueError(
