@@ -138,6 +138,12 @@ def roundabout_aim(positions: Any, goals: Any, semi_axes: tuple[float, float], i
     return np.where(crosses[..., None], edge, g) * scale
 
 
+def outside_ring(positions: Any, semi_axes: tuple[float, float]) -> np.ndarray:
+    """Whether each position lies beyond the ring with ``semi_axes`` (m), centred on the origin."""
+    q = np.asarray(positions, dtype=np.float64) / np.asarray(semi_axes, dtype=np.float64)
+    return np.hypot(q[..., 0], q[..., 1]) > 1.0
+
+
 def dock(
     positions: Any, goals: Any, semi_axes: tuple[float, float], depth: float, width: float, lead: float
 ) -> tuple[FloatArray, np.ndarray]:

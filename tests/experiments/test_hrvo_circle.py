@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from dream import rules
 from dream.experiments import hrvo_circle
 
 
@@ -103,3 +104,48 @@ def test_hrvo_circle_robot_moves_on_when_a_robot_is_already_ahead():
     robot.state, robot.change_state = 2, False
     robot.update_radio([(np.array([2, 1, 2]), np.array([0, 1, 1]))])  # robot 1 is behind
     assert not robot.change_state
+
+
+def _stalled_robot(position, detections):
+    """A robot of a 100-robot ring at ``position`` whose goal lies across the ring, stalled."""
+    layout = hrvo_circle.circle_layout(100)
+    goals = np.array([[-5.67, 2.10], [5.67, -2.10], [-5.67, 2.10]])
+    robot = hrvo_circle.CircleRobot(0, "robot_0", goals, 100, semi_axes=layout.semi_axes, safety=layout.safety)
+    robot.update_odom([*position, 0.0])
+    robot.update_sensor(detections)
+    for _ in range(hrvo_circle.STALL + 1):  # the first sets how close it has come
+        robot.squeeze(np.asarray(position, dtype=float))
+    return robot, layout
+
+
+def test_circle_robot_stalled_outside_the_ring_squeezes_through_it():
+    # Traced at N = 100 under latency: a robot pushed outside the ring of parked robots (0.34 m
+    # apart, safety radius 0.24 m) slid along it for 7,000 steps. It now takes the least safety
+    # radius until no robot it sees is within the ring's.
+    near = np.array([[0.17, 2.0, 0.0, 0.0], [0.17, -2.0, 0.0, 0.0]])  # two parked robots beside it
+    a, b = hrvo_circle.circle_layout(100).semi_axes
+    assert rules.outside_ring([a + 0.2, 0.0], (a, b)) and not rules.outside_ring([a - 0.2, 0.0], (a, b))
+    robot, layout = _stalled_robot([a + 0.2, 0.0], near)
+    assert robot.safety == hrvo_circle.PACKED_SAFETY < layout.safety
+    robot.update_sensor(near)
+    robot.closest = 100.0  # progress: it keeps the least radius while those robots are within the ring's
+    robot.squeeze(np.array([a + 0.1, 0.0]))
+    assert robot.stalled == 0 and robot.safety == hrvo_circle.PACKED_SAFETY
+    robot.update_sensor(np.array([[0.5, 2.0, 0.0, 0.0]]))
+    robot.squeeze(np.array([a - 0.1, 0.0]))
+    assert robot.safety == layout.safety
+    inside, _ = _stalled_robot([a - 0.5, 0.0], near)  # stalled inside the ring: a crowd, not a wall
+    assert inside.safety == layout.safety
+
+
+def test_circle_robot_stalled_beside_a_robot_standing_on_its_goal_takes_the_goal():
+    # Traced at N = 100 under a crash: robot 80 stayed 0.39 m from its last goal, walled off by the
+    # crashed robot 0.19 m off the goal and a finished one beside it.
+    goal = np.array([-5.67, 2.10])
+    here = goal + (0.39, 0.0)
+    still = np.array([[0.20, 0.0, 0.0, 0.0]])  # a robot standing 0.19 m from the goal, towards it
+    robot, layout = _stalled_robot(here, still)
+    robot.suspects = True
+    assert robot.goal_taken(here)
+    robot.stalled = 0
+    assert not robot.goal_taken(here)  # not stalled: 0.39 m is beyond the safety radius plus the tolerance

@@ -107,6 +107,29 @@ def test_affine_follower_takes_a_claim_that_matches_no_robot_seen_for_a_lie():
     assert_allclose(follower.positions()[0], truth[0], atol=1e-12)  # the one robot no claim accounts for
 
 
+def test_affine_follower_takes_a_claim_out_of_sight_but_off_its_plan_or_tile_for_a_lie():
+    from dream.experiments import affine_formation as af
+
+    follower = af.Follower(10, "follower_10", np.kron(np.eye(2), af.WEIGHTS), tile=(1.6, 4.8, -1.0, 1.0))
+    follower.update_odom([3.2, 0.0, 0.0])
+    beats = np.ones(7, dtype=np.int64)
+    # Leader 7 lies: it claims the arena's centre, out of sight, and plans the others there too;
+    # leaders 8 and 9 plan it at (3.8, 0) and each other where they say they are.
+    plans = {7: {8: (0.0, 0.0), 9: (0.0, 0.0)}, 8: {7: (3.8, 0.0), 9: (3.0, -0.5)}, 9: {7: (3.8, 0.0), 8: (3.0, 0.5)}}
+    claims = {7: (0.0, 0.0), 8: (3.1, 0.5), 9: (3.0, -0.4), 11: (4.6, 0.9)}
+    follower.update_radio([(j, *claims[j], beats, plans.get(j, {})) for j in claims])
+    seen = [np.subtract(claims[j], (3.2, 0.0)) for j in (8, 9, 11)]  # all but leader 7, out of sight
+    follower.update_sensor(np.array([[math.hypot(*p), math.atan2(-p[1], -p[0]), 0.0, 0.0] for p in seen]))
+    ids = list(claims)
+    assert follower.implausible(ids, np.array([claims[j] for j in ids])).tolist() == [True, False, False, False]
+    assert follower.implausible([11], np.array([[5.2, 0.0]])).tolist() == [True]  # beyond its tile
+    for _ in range(af.STRIKES):
+        assert not follower.liars
+        follower.check_claims(np.array([3.2, 0.0]))
+    assert list(follower.liars) == [7]
+    assert_allclose(follower.positions()[7], (3.8, 0.0))  # where the correct leader plans it
+
+
 def test_clearing_shift_moves_places_off_a_crashed_robot_along_x():
     from dream.experiments import affine_formation as af
 

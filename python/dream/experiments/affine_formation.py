@@ -36,9 +36,11 @@ robots too. Each robot decides from its own radio, sensors and clock:
   clear of the robots taken for crashed (movement sensor) and shift the formation along the
   bars' way (x) until no survivor's place lies within :data:`CLEAR` of one.
 - A liar (its radio values replaced by an adversary's): a follower checks every claimed position
-  within reach of its movement sensor (:data:`VERIFY`); a robot whose claims match no robot seen
-  (or, when the follower sees close by a robot that no claim accounts for, the one robot whose
-  claim lies out of its sight) :data:`STRIKES` decisions in a row is taken for a liar, its radio
+  within reach of its movement sensor (:data:`VERIFY`), and every claim against where a correct
+  robot can be (its formation's tile; for a leader, within :data:`PLAN_SLACK` of the other
+  leaders' plans for it); a robot whose claims match no robot seen or no such place (or, when
+  the follower sees close by a robot that no claim accounts for, the one robot whose claim lies
+  out of its sight) :data:`STRIKES` decisions in a row is taken for a liar, its radio
   values are ignored from then on, and the follower puts in the law where it sees it (the one
   robot seen that no other claim accounts for), or, out of sight, its place in the plan (a
   leader) or in the affine image.
@@ -110,6 +112,7 @@ RANGE = 0.6  #: robots within this distance (m) are the ones a follower's HRVO a
 VERIFY = 1.0  #: a follower's movement sensor sees this far (m), to check claimed positions
 MATCH = 0.15  #: a claimed position this close (m) to a robot seen matches it (radio lag, latency)
 STRIKES = 3  #: decisions in a row whose claims match no robot seen make a liar
+PLAN_SLACK = 0.5  #: a leader claiming to be this far (m) from every place the other leaders plan for it lies
 SILENCE = 20  #: radio rounds without a heartbeat after which a robot is taken for crashed
 #: A place closer than this (m) to a crashed robot is taken: the follower's HRVO (safety 0.15 m)
 #: would keep it off. The leaders then shift the formation along the bars' way (x) until no
@@ -370,9 +373,17 @@ class Follower(RobotHRVO):
     the plan (a leader) or in the affine image (a follower).
     """
 
-    def __init__(self, robot_id: int, tag: str, weights: np.ndarray = WEIGHTS, **kwargs: Any) -> None:
+    def __init__(
+        self,
+        robot_id: int,
+        tag: str,
+        weights: np.ndarray = WEIGHTS,
+        tile: tuple[float, float, float, float] | None = None,
+        **kwargs: Any,
+    ) -> None:
         super().__init__(robot_id, tag, **kwargs)
         self.weights = weights[robot_id]
+        self.tile = self.arena.bounds if tile is None else tile  # its formation's tile, which none leaves
         self.first = robot_id - robot_id % 7  # the first robot of its formation
         self.heard: dict[int, np.ndarray] = {}  # the last position each robot of its formation claimed
         self.plans: dict[int, dict[int, tuple[float, float]]] = {}  # each leader's last word on the others' places
@@ -407,7 +418,7 @@ class Follower(RobotHRVO):
         trusted = [j for j in self.heard if j not in self.liars]
         claims = np.array([self.heard[j] for j in trusted]).reshape(-1, 2)
         checkable = np.hypot(*(claims - here).T) < VERIFY - MATCH
-        missed = checkable & rules.far_from(claims, self.seen, MATCH)
+        missed = (checkable & rules.far_from(claims, self.seen, MATCH)) | self.implausible(trusted, claims)
         if not missed.any() and (~checkable).sum() == 1 and all(last is not None for last in self.liars.values()):
             # Robots seen nearby that neither a claim nor a liar found before accounts for.
             accounted = np.vstack([claims, *(p for p in self.liars.values() if p is not None)])
@@ -430,6 +441,24 @@ class Follower(RobotHRVO):
                 gaps = np.hypot(*(unclaimed_seen - last).T)
                 if gaps.min() < 2 * MATCH:  # the same robot, moved on a little
                     self.liars[j] = self.sensed[j] = unclaimed_seen[np.argmin(gaps)]
+
+    def implausible(self, ids: list[int], claims: np.ndarray) -> np.ndarray:
+        """Which ``claims`` ``(k, 2)`` of robots ``ids`` no correct robot makes, seen or not: a place
+        outside the formation's tile, or a leader's place :data:`PLAN_SLACK` from every place the
+        other (correct, living) leaders' plans give it.
+
+        Only claims within sight can be checked against the sensor, and a liar that claims a
+        place metres away defeated every seed at N = 98 (seed 0: a leader claimed the arena's
+        centre, three tiles off; the followers followed it). One liar among three leaders
+        cannot outvote two: a correct leader agrees with the other correct one's plan."""
+        xmin, xmax, ymin, ymax = self.tile
+        x, y = claims.T
+        out = (x < xmin - MATCH) | (x > xmax + MATCH) | (y < ymin - MATCH) | (y > ymax + MATCH)
+        alive = self.heartbeats.alive
+        for row, j in enumerate(ids):
+            places = [plan[j] for k, plan in self.plans.items() if j in plan and alive[k % 7] and k not in self.liars]
+            out[row] |= bool(places) and bool(np.hypot(*(np.array(places) - claims[row]).T).min() > PLAN_SLACK)
+        return out
 
     def positions(self) -> dict[int, np.ndarray]:
         """Where it takes the robots of its formation to be ``{id: (2,)}`` (m), for the law: what
@@ -618,7 +647,9 @@ class AffineFormation(Experiment):
                 robot.goals = robot.start = robot.plan[:LEADERS]
                 robot.head_for(robot.plan + (SHIFT, 0.0))
             else:
-                robot = Follower(i, f"follower_{i}", self.weights, safety=SAFETY, arena=self.arena)
+                (cx, cy), half = self.centres[i // 7], (ROBOTARIUM.width / 2, ROBOTARIUM.height / 2)
+                tile = (cx - half[0], cx + half[0], cy - half[1], cy + half[1])
+                robot = Follower(i, f"follower_{i}", self.weights, tile, safety=SAFETY, arena=self.arena)
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             radio = GraphRadio(i, f"radio_{i}", robot.update_radio, adjacency)
             # One range for all, so that the world builds one neighbour index per step.
