@@ -405,7 +405,9 @@ class Follower(RobotHRVO):
         """HRVO avoids the robots within ``RANGE``; claims are checked against all detected."""
         rows = np.asarray(detections, dtype=np.float64).reshape(-1, 4)
         self.detections = rows[rows[:, 0] <= RANGE]
-        self.seen = rules.seen_positions((self.pos_x, self.pos_y), rows)
+        seen = rules.seen_positions((self.pos_x, self.pos_y), rows)
+        # Robots beyond its tile belong to other formations: neither claimed nor liars.
+        self.seen = seen[self.in_tile(seen)]
 
     def check_claims(self, here: np.ndarray) -> None:
         """Take for a liar a robot blamed :data:`STRIKES` decisions in a row; find the liars among
@@ -442,6 +444,12 @@ class Follower(RobotHRVO):
                 if gaps.min() < 2 * MATCH:  # the same robot, moved on a little
                     self.liars[j] = self.sensed[j] = unclaimed_seen[np.argmin(gaps)]
 
+    def in_tile(self, points: np.ndarray) -> np.ndarray:
+        """Which ``points`` ``(k, 2)`` (m) lie in its formation's tile, give or take :data:`MATCH`."""
+        xmin, xmax, ymin, ymax = self.tile
+        x, y = np.reshape(points, (-1, 2)).T
+        return (x >= xmin - MATCH) & (x <= xmax + MATCH) & (y >= ymin - MATCH) & (y <= ymax + MATCH)
+
     def implausible(self, ids: list[int], claims: np.ndarray) -> np.ndarray:
         """Which ``claims`` ``(k, 2)`` of robots ``ids`` no correct robot makes, seen or not: a place
         outside the formation's tile, or a leader's place :data:`PLAN_SLACK` from every place the
@@ -451,9 +459,7 @@ class Follower(RobotHRVO):
         place metres away defeated every seed at N = 98 (seed 0: a leader claimed the arena's
         centre, three tiles off; the followers followed it). One liar among three leaders
         cannot outvote two: a correct leader agrees with the other correct one's plan."""
-        xmin, xmax, ymin, ymax = self.tile
-        x, y = claims.T
-        out = (x < xmin - MATCH) | (x > xmax + MATCH) | (y < ymin - MATCH) | (y > ymax + MATCH)
+        out = ~self.in_tile(claims)
         alive = self.heartbeats.alive
         for row, j in enumerate(ids):
             places = [plan[j] for k, plan in self.plans.items() if j in plan and alive[k % 7] and k not in self.liars]
