@@ -23,6 +23,26 @@ def test_wmsr_drops_the_extremes_on_each_side_of_the_own_value():
     assert list(rules.wmsr_keep([3.0], 0.0, 2)) == []
 
 
+def test_wmsr_graph_gives_every_robot_enough_neighbours_and_keeps_the_plain_graph():
+    from dream.experiments import line_consensus as lc
+
+    plain = lc.graph(100, np.random.default_rng(3))
+    assert lc.resilient_reach(0) == 1 and lc.resilient_reach(1) == 3
+    resilient = lc.graph(100, np.random.default_rng(3), lc.resilient_reach(1))
+    assert resilient.sum(axis=1).min() >= 6 and (resilient >= plain).all()  # the same chords, a wider ring
+    ids = np.arange(100)
+    assert (resilient[ids, (ids + 3) % 100] == 1).all() and (resilient == resilient.T).all()
+
+
+@pytest.mark.parametrize("seed", [0, 2])
+def test_line_consensus_with_wmsr_converges_despite_a_liar(seed):
+    # With one link on either side, these seeds never converged (robots hearing two ring
+    # neighbours, one on either side of their own value, kept nothing and stood still).
+    result = dream.run("line-consensus", n=30, backend="fast", seed=seed, faults=dream.Faults(byzantine=1), resilient=1)
+    assert result.success, result.summary()
+    assert (result.collisions, result.boundary, result.actuator) == (0, 0, 0)
+
+
 def test_line_errors_of_the_correct_robots_keep_the_gaps_of_the_missing():
     x = np.array([0.9, 0.6, 5.0, 0.0])  # robot 2 has crashed far away
     poses = np.vstack((x, np.zeros(4), np.zeros(4)))
