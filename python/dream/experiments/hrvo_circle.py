@@ -365,11 +365,12 @@ class CircleRobot(RobotHRVO):
             self.closest, self.stalled = distance, 0
         else:
             self.stalled += 1
-        rows = np.asarray(self.detections)
         if self.stalled >= STALL and rules.outside_ring(position, self.semi_axes):
             self.safety = min(PACKED_SAFETY, self.ring_safety)
-        elif not len(rows) or rows[:, 0].min() >= self.ring_safety:
-            self.safety = self.ring_safety
+        elif self.safety != self.ring_safety:
+            rows = np.asarray(self.detections)
+            if not len(rows) or rows[:, 0].min() >= self.ring_safety:
+                self.safety = self.ring_safety
 
     def update(self, dxu: np.ndarray) -> None:
         if not self.has_pose:
