@@ -317,7 +317,10 @@ class LineConsensus(Experiment):
     has_swarm_mode = True
     spacing: float = param(SPACING, "distance between neighbours on the line (m)")
     radio_gap: int = param(10, "steps between radio exchanges")
-    resilient: int = param(0, "W-MSR: ignore this many of the largest and smallest neighbour values (liars tolerated)")
+    resilient: int = param(
+        0,
+        "W-MSR: ignore the F largest and F smallest neighbour values; the ring then links 2F+1 ids each side",
+    )
 
     def arena_for(self, n: int) -> ArenaSpec:
         return line_arena(n, self.spacing)
