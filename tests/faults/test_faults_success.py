@@ -160,6 +160,11 @@ def test_affine_follower_takes_a_claim_out_of_sight_but_off_its_plan_or_tile_for
         follower.check_claims(np.array([3.2, 0.0]))
     assert list(follower.liars) == [7]
     assert_allclose(follower.positions()[7], (3.8, 0.0))  # where the correct leader plans it
+    # A crashed leader stands where it stopped, off the plan that moves on: no liar (seed 0 of the
+    # crash row at N = 98 took one for a liar and lost its formation).
+    follower.heartbeats.news[8 % 7] = follower.heartbeats.rounds - af.SILENCE - 1
+    assert not follower.heartbeats.alive[8 % 7]
+    assert not follower.implausible([8], np.array([[2.0, 0.9]]))[0]
 
 
 def test_clearing_shift_moves_places_off_a_crashed_robot_along_x():

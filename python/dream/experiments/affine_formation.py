@@ -452,8 +452,8 @@ class Follower(RobotHRVO):
 
     def implausible(self, ids: list[int], claims: np.ndarray) -> np.ndarray:
         """Which ``claims`` ``(k, 2)`` of robots ``ids`` no correct robot makes, seen or not: a place
-        outside the formation's tile, or a leader's place :data:`PLAN_SLACK` from every place the
-        other (correct, living) leaders' plans give it.
+        outside the formation's tile, or a living leader's place :data:`PLAN_SLACK` from every place
+        the other (correct, living) leaders' plans give it.
 
         Only claims within sight can be checked against the sensor, and a liar that claims a
         place metres away defeated every seed at N = 98 (seed 0: a leader claimed the arena's
@@ -462,6 +462,8 @@ class Follower(RobotHRVO):
         out = ~self.in_tile(claims)
         alive = self.heartbeats.alive
         for row, j in enumerate(ids):
+            if not alive[j % 7]:  # a crashed leader stands where it stopped, off the moving plan
+                continue
             places = [plan[j] for k, plan in self.plans.items() if j in plan and alive[k % 7] and k not in self.liars]
             out[row] |= bool(places) and bool(np.hypot(*(np.array(places) - claims[row]).T).min() > PLAN_SLACK)
         return out
