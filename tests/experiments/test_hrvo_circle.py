@@ -145,7 +145,27 @@ def test_circle_robot_stalled_beside_a_robot_standing_on_its_goal_takes_the_goal
     here = goal + (0.39, 0.0)
     still = np.array([[0.20, 0.0, 0.0, 0.0]])  # a robot standing 0.19 m from the goal, towards it
     robot, layout = _stalled_robot(here, still)
-    robot.suspects = True
     assert robot.goal_taken(here)
     robot.stalled = 0
     assert not robot.goal_taken(here)  # not stalled: 0.39 m is beyond the safety radius plus the tolerance
+
+
+def test_circle_robot_counts_stalls_only_while_it_travels_to_one_goal():
+    a, _ = hrvo_circle.circle_layout(100).semi_axes
+    robot, _ = _stalled_robot([a + 0.2, 0.0], np.zeros((0, 4)))
+    assert robot.stalled == hrvo_circle.STALL
+    robot.state, robot.change_state = 1, False  # arrived: waiting on a goal is not a stall
+    robot.squeeze(np.array([a + 0.2, 0.0]))
+    assert robot.stalled == 0 and robot.safety == robot.ring_safety  # nobody near: the ring's radius
+    robot.stalled, robot.closest = 7, 1.0
+    robot.robot_states[:] = 1
+    robot.update_radio([])  # every robot has reached its first goal: on to the next, counting over
+    assert robot.change_state and (robot.stalled, robot.closest) == (0, np.inf)
+
+
+def test_squeeze_keeps_the_colliders_of_the_rules_apart():
+    from dream.backends import rules_named
+
+    assert hrvo_circle.squeeze_radius(rules_named("rps0")) == hrvo_circle.PACKED_SAFETY
+    rps2 = rules_named("rps2")  # colliders 0.135 m wide, 0.025 m ahead: facing robots touch at 0.185 m
+    assert hrvo_circle.squeeze_radius(rps2) > rps2.diameter + 2 * rps2.collider_offset

@@ -27,11 +27,20 @@ def test_wmsr_graph_gives_every_robot_enough_neighbours_and_keeps_the_plain_grap
     from dream.experiments import line_consensus as lc
 
     plain = lc.graph(100, np.random.default_rng(3))
+    # The plain graph as it was drawn before `reach`: the ring's next id plus the same n chords.
+    rng, old = np.random.default_rng(3), np.zeros((100, 100))
+    chords = np.array([rng.choice(100, size=2, replace=False) for _ in range(100)])
+    old[np.arange(100), (np.arange(100) + 1) % 100] = old[chords[:, 0], chords[:, 1]] = 1.0
+    old = np.maximum(old, old.T)
+    np.fill_diagonal(old, 0.0)
+    assert (plain == old).all()
     assert lc.resilient_reach(0) == 1 and lc.resilient_reach(1) == 3
     resilient = lc.graph(100, np.random.default_rng(3), lc.resilient_reach(1))
     assert resilient.sum(axis=1).min() >= 6 and (resilient >= plain).all()  # the same chords, a wider ring
     ids = np.arange(100)
     assert (resilient[ids, (ids + 3) % 100] == 1).all() and (resilient == resilient.T).all()
+    with pytest.raises(ValueError, match="resilient is the number of liars"):
+        dream.run("line-consensus", n=10, backend="fast", steps=1, resilient=-1)
 
 
 @pytest.mark.parametrize("seed", [0, 2])
@@ -155,6 +164,9 @@ def test_affine_follower_takes_a_claim_out_of_sight_but_off_its_plan_or_tile_for
     ids = list(claims)
     assert follower.implausible(ids, np.array([claims[j] for j in ids])).tolist() == [True, False, False, False]
     assert follower.implausible([11], np.array([[5.2, 0.0]])).tolist() == [True]  # beyond its tile
+    # Inside the tile but 0.6 m from where both other leaders plan it: a lie too.
+    assert follower.implausible([7], np.array([[3.2, 0.0]])).tolist() == [True]
+    assert follower.implausible([7], np.array([[3.5, 0.0]])).tolist() == [False]  # 0.3 m off: lagging
     for _ in range(af.STRIKES):
         assert not follower.liars
         follower.check_claims(np.array([3.2, 0.0]))

@@ -71,6 +71,7 @@ from typing import Any
 import numpy as np
 
 from dream import rules, timers
+from dream._checks import Bounds
 from dream.experiments.line_consensus import SIDESTEP_UPDATES, settle_or_steer
 from dream.experiments.sightings import Nearby, Sight, decide_in_order, last_detections
 from dream.experiments.spec import Experiment
@@ -186,6 +187,12 @@ def tile_centres(groups: int) -> np.ndarray:
     return np.column_stack(
         ((k % columns - (columns - 1) / 2) * ROBOTARIUM.width, (k // columns - (rows - 1) / 2) * ROBOTARIUM.height)
     )
+
+
+def tile_bounds(centre: np.ndarray) -> Bounds:
+    """``(xmin, xmax, ymin, ymax)`` of the Robotarium-sized tile centred at ``centre`` ``(2,)`` (m)."""
+    (x, y), half_width, half_height = centre, ROBOTARIUM.width / 2, ROBOTARIUM.height / 2
+    return (float(x - half_width), float(x + half_width), float(y - half_height), float(y + half_height))
 
 
 def tiled_arena(groups: int) -> ArenaSpec:
@@ -378,12 +385,12 @@ class Follower(RobotHRVO):
         robot_id: int,
         tag: str,
         weights: np.ndarray = WEIGHTS,
-        tile: tuple[float, float, float, float] | None = None,
+        tile: Bounds | None = None,
         **kwargs: Any,
     ) -> None:
         super().__init__(robot_id, tag, **kwargs)
         self.weights = weights[robot_id]
-        self.tile = self.arena.bounds if tile is None else tile  # its formation's tile, which none leaves
+        self.tile = tile  # its formation's tile, which none leaves (None: its arena)
         self.first = robot_id - robot_id % 7  # the first robot of its formation
         self.heard: dict[int, np.ndarray] = {}  # the last position each robot of its formation claimed
         self.plans: dict[int, dict[int, tuple[float, float]]] = {}  # each leader's last word on the others' places
@@ -445,10 +452,16 @@ class Follower(RobotHRVO):
                     self.liars[j] = self.sensed[j] = unclaimed_seen[np.argmin(gaps)]
 
     def in_tile(self, points: np.ndarray) -> np.ndarray:
-        """Which ``points`` ``(k, 2)`` (m) lie in its formation's tile, give or take :data:`MATCH`."""
-        xmin, xmax, ymin, ymax = self.tile
+        """Which ``points`` ``(k, 2)`` (m) lie in its formation's tile, give or take :data:`MATCH`
+        (claims lag; a robot of the next formation that close to the edge passes too)."""
+        xmin, xmax, ymin, ymax = self.arena.bounds if self.tile is None else self.tile
         x, y = np.reshape(points, (-1, 2)).T
         return (x >= xmin - MATCH) & (x <= xmax + MATCH) & (y >= ymin - MATCH) & (y <= ymax + MATCH)
+
+    def living_plans(self) -> list[dict[int, tuple[float, float]]]:
+        """The last plans of the leaders it takes for neither crashed nor liars."""
+        alive = self.heartbeats.alive
+        return [plan for j, plan in self.plans.items() if alive[j % 7] and j not in self.liars]
 
     def implausible(self, ids: list[int], claims: np.ndarray) -> np.ndarray:
         """Which ``claims`` ``(k, 2)`` of robots ``ids`` no correct robot makes, seen or not: a place
@@ -460,12 +473,12 @@ class Follower(RobotHRVO):
         centre, three tiles off; the followers followed it). One liar among three leaders
         cannot outvote two: a correct leader agrees with the other correct one's plan."""
         out = ~self.in_tile(claims)
-        alive = self.heartbeats.alive
+        alive, plans = self.heartbeats.alive, self.living_plans()
         for row, j in enumerate(ids):
-            if not alive[j % 7]:  # a crashed leader stands where it stopped, off the moving plan
-                continue
-            places = [plan[j] for k, plan in self.plans.items() if j in plan and alive[k % 7] and k not in self.liars]
-            out[row] |= bool(places) and bool(np.hypot(*(np.array(places) - claims[row]).T).min() > PLAN_SLACK)
+            places = [plan[j] for plan in plans if j in plan]
+            # A crashed leader stands where it stopped, off the plan that moves on.
+            if places and alive[j % 7]:
+                out[row] |= bool(rules.far_from(claims[row], places, PLAN_SLACK)[0])
         return out
 
     def positions(self) -> dict[int, np.ndarray]:
@@ -474,12 +487,7 @@ class Follower(RobotHRVO):
         the plan has them (the correct leaders say); the others (crashed followers, lying ones
         out of sight) at their places in the affine image of the nominal shape that the rest span."""
         alive = self.heartbeats.alive
-        planned = {
-            k: np.array(place)
-            for j, plan in self.plans.items()
-            if alive[j % 7] and j not in self.liars
-            for k, place in plan.items()
-        }
+        planned = {k: np.array(place) for plan in self.living_plans() for k, place in plan.items()}
         known: dict[int, np.ndarray] = {}
         for j, claim in self.heard.items():
             if j in self.liars:
@@ -655,9 +663,9 @@ class AffineFormation(Experiment):
                 robot.goals = robot.start = robot.plan[:LEADERS]
                 robot.head_for(robot.plan + (SHIFT, 0.0))
             else:
-                (cx, cy), half = self.centres[i // 7], (ROBOTARIUM.width / 2, ROBOTARIUM.height / 2)
-                tile = (cx - half[0], cx + half[0], cy - half[1], cy + half[1])
-                robot = Follower(i, f"follower_{i}", self.weights, tile, safety=SAFETY, arena=self.arena)
+                robot = Follower(
+                    i, f"follower_{i}", self.weights, tile_bounds(self.centres[i // 7]), safety=SAFETY, arena=self.arena
+                )
             odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
             radio = GraphRadio(i, f"radio_{i}", robot.update_radio, adjacency)
             # One range for all, so that the world builds one neighbour index per step.

@@ -82,7 +82,7 @@ from dream.heartbeats import Heartbeats
 from dream.radios import RangeRadio
 from dream.robot import GUARD_HORIZON, RobotHRVO, guard_distance, guard_swarm
 from dream.sensors import MovementSensor, OdometrySensor
-from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec
+from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec, SimulatorSpec
 from dream.world import create_timer
 
 NAME = "hrvo-circle"
@@ -95,6 +95,7 @@ GOAL_SPACING = SAFETY + 2 * ARRIVAL  #: goal spacing a grown arena keeps (m)
 EDGE = 0.08  #: distance from the ring's ends to the walls when the ring fills the arena (m)
 MIN_SAFETY = GRITSBOT.diameter + 0.04  #: the least safety radius: a robot's diameter plus a margin (m)
 PACKED_SAFETY = GRITSBOT.diameter + 0.01  #: the least safety radius of a packed ring (m)
+SQUEEZE_MARGIN = 0.01  #: what a squeezing robot keeps between the colliders (m; see CircleRobot.squeeze)
 PACKED_SAFETY_CAP = 0.125  #: the most safety radius of a packed ring: what 50 robots leave (m)
 PACKED_ARRIVAL = 0.015  #: the arrival tolerance on a packed ring (m)
 DOCK_DEPTH = 0.3  #: on a packed ring, how far inside its goal a robot's dock lies (m)
@@ -208,6 +209,13 @@ def circle_capacity(packed: bool = True) -> int:
     return n
 
 
+def squeeze_radius(rules: SimulatorSpec) -> float:
+    """The least safety radius (m) of a robot squeezing through the ring (:meth:`CircleRobot.squeeze`)
+    under ``rules``: two colliders ``collider_offset`` ahead of facing robots stay
+    :data:`SQUEEZE_MARGIN` apart (0.12 m under rps 0.0.0's rules, 0.195 m under rps 2.1's)."""
+    return rules.diameter + 2 * rules.collider_offset + SQUEEZE_MARGIN
+
+
 def circle_radius(n: int, grow: bool = True) -> float:
     """The ring's larger semi-axis (m): the circle's radius up to :data:`THESIS_N` robots."""
     return circle_layout(n, grow).semi_axes[0]
@@ -271,6 +279,9 @@ class CircleRobot(RobotHRVO):
     packed : bool
         Whether its goals lie on a packed ring (docks, parking and the clear final approach of
         the module docs).
+    squeeze_to : float
+        The safety radius it takes while stalled outside the ring (m; :meth:`squeeze`): what
+        keeps two colliders :data:`SQUEEZE_MARGIN` apart (:func:`squeeze_radius`).
     **kwargs
         Passed to :class:`~dream.RobotHRVO` (e.g. ``safety``, ``arena``).
     """
@@ -286,6 +297,7 @@ class CircleRobot(RobotHRVO):
         island: float = ISLAND,
         arrival: float = ARRIVAL,
         packed: bool = False,
+        squeeze_to: float = PACKED_SAFETY,
         **kwargs: Any,
     ) -> None:
         super().__init__(robot_id, tag, **kwargs)
@@ -304,7 +316,8 @@ class CircleRobot(RobotHRVO):
         if packed:
             self.guard_horizon = PACKED_GUARD_HORIZON
         self.ring_safety = self.safety  # the safety radius it squeezes from (see squeeze)
-        self.closest = math.inf  # the closest it has come to its current goal (m)
+        self.squeeze_to = min(squeeze_to, self.ring_safety)
+        self.closest = math.inf  # its distance to its current goal when it last made PROGRESS (m)
         self.stalled = 0  # decisions since it last came PROGRESS closer
 
     def update_radio(self, messages: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
@@ -349,8 +362,9 @@ class CircleRobot(RobotHRVO):
         return bool(np.any(still & (np.hypot(*(others - self.current_goal).T) < self.ring_safety)))
 
     def squeeze(self, position: np.ndarray) -> None:
-        """Take the least safety radius (:data:`PACKED_SAFETY`, the body plus 1 cm) while stalled
-        outside the ring, and the ring's again once no robot seen is within it.
+        """At ``position`` ``(2,)`` (m): take the least safety radius (:attr:`squeeze_to`, under
+        rps 0.0.0's rules the body plus 1 cm) while stalled outside the ring, and the ring's again
+        once no robot seen is within it.
 
         Robots parked on a ring (goals 0.34 m apart with a safety radius of 0.24 m) form a wall
         that a robot outside cannot pass. Traces at N = 100 under latency and clock drift: a robot
@@ -366,7 +380,7 @@ class CircleRobot(RobotHRVO):
         else:
             self.stalled += 1
         if self.stalled >= STALL and rules.outside_ring(position, self.semi_axes):
-            self.safety = min(PACKED_SAFETY, self.ring_safety)
+            self.safety = self.squeeze_to
         elif self.safety != self.ring_safety:
             rows = np.asarray(self.detections)
             if not len(rows) or rows[:, 0].min() >= self.ring_safety:
@@ -524,7 +538,9 @@ class HrvoCircle(Experiment):
     HRVO parameters, and the decision rules of :mod:`dream.rules` that :class:`CircleRobot`
     calls: arrival, roundabout, settling, stepping aside; progress spread by range radio every
     ``radio_gap`` steps), but every robot decides every step through one
-    :func:`dream.kernels.hrvo` call, with its state in a :class:`CircleSwarm`.
+    :func:`dream.kernels.hrvo` call, with its state in a :class:`CircleSwarm`. Not carried over:
+    the squeeze and the stalled robot's wider reach for a taken goal (:meth:`CircleRobot.squeeze`),
+    since one HRVO call takes one safety radius for all.
     """
 
     name = NAME
@@ -564,6 +580,7 @@ class HrvoCircle(Experiment):
                 semi_axes=self.layout.semi_axes,
                 arrival=self.layout.arrival,
                 packed=self.layout.packed,
+                squeeze_to=squeeze_radius(self.rules),
                 safety=self.layout.safety,
                 arena=self.arena,
             )

@@ -319,8 +319,12 @@ class LineConsensus(Experiment):
     radio_gap: int = param(10, "steps between radio exchanges")
     resilient: int = param(
         0,
-        "W-MSR: ignore the F largest and F smallest neighbour values; the ring then links 2F+1 ids each side",
+        "W-MSR: drop the F largest and F smallest neighbour values; beyond 6 robots the ring links 2F+1 ids a side",
     )
+
+    def check(self, n: int, backend: str) -> None:
+        if self.resilient < 0:
+            raise ValueError(f"resilient is the number of liars W-MSR tolerates, at least 0, got {self.resilient}")
 
     def arena_for(self, n: int) -> ArenaSpec:
         return line_arena(n, self.spacing)
