@@ -50,6 +50,7 @@ class World:
         self.timers: list[Timer] = []
         self.simulator: Backend | None = None  #: the simulator made last in this world
         self._board: dict[int, Any] = {}
+        self._mutable: set[int] = set()  # senders whose message on the board each reader must copy
         self._in_flight: list[tuple[float, int, Any]] = []  # (visible at, sender, data)
         self._indexed_poses: np.ndarray | None = None  # the pose array the indexes were built for
         self._indexed_xy = b""  # ...and the bytes of its positions then, to notice in-place changes
@@ -135,6 +136,7 @@ class World:
     def _silence(self, robot_id: int) -> None:
         """A crashed robot stops talking: its messages leave the board and the air."""
         self._board.pop(robot_id, None)
+        self._mutable.discard(robot_id)
         self._in_flight = [message for message in self._in_flight if message[1] != robot_id]
 
     # -- radio -----------------------------------------------------------------------------
@@ -155,7 +157,14 @@ class World:
         if latency > 0:
             self._in_flight.append((self.time + latency, robot_id, snapshot))
         else:
-            self._board[robot_id] = snapshot
+            self._post(robot_id, snapshot)
+
+    def _post(self, sender: int, data: Any) -> None:
+        """Make ``data`` the board's message of ``sender``, noting once whether readers must copy
+        it (a coverage robot's ``(id, x, y)`` is read by hundreds: checking it for each cost a
+        tenth of a 1000-robot step)."""
+        self._board[sender] = data
+        (self._mutable.discard if _immutable(data) else self._mutable.add)(sender)
 
     @property
     def messages(self) -> dict[int, Any]:
@@ -170,10 +179,12 @@ class World:
         ``loss``, drawn from the world's generator, and by the world's radio faults, if any
         (``receiver`` names the robot listening, for per-link and distance losses).
         """
-        board = self.messages
+        board, mutable = self.messages, self._mutable
         state = self.fault_state
         if state is None and loss <= 0:  # nothing lost: the common case, hundreds of senders a call
-            return [_copy(board[sender]) for sender in senders if sender in board]
+            return [
+                _copy(board[sender]) if sender in mutable else board[sender] for sender in senders if sender in board
+            ]
         received = []
         for sender in senders:
             if sender not in board:
@@ -183,7 +194,7 @@ class World:
             else:
                 through = state.delivered(receiver, sender, loss, self._distance(receiver, sender))
             if through:
-                received.append(_copy(board[sender]))
+                received.append(_copy(board[sender]) if sender in mutable else board[sender])
         return received
 
     def _distance(self, a: int | None, b: int) -> float:
@@ -199,7 +210,7 @@ class World:
         waiting = []
         for visible_at, sender, data in self._in_flight:
             if visible_at <= self.time:
-                self._board[sender] = data
+                self._post(sender, data)
             else:
                 waiting.append((visible_at, sender, data))
         self._in_flight = waiting
@@ -254,8 +265,7 @@ def _copy(data: Any) -> Any:
     for each of 300 listeners was most of a 1000-robot coverage step), arrays of numbers, alone
     or in a tuple or list, copied directly, the rest through pickle when possible, which is many
     times faster than ``deepcopy`` for the lists and arrays robots usually send."""
-    kind = type(data)
-    if kind in _IMMUTABLE or (kind is tuple and _IMMUTABLE.issuperset(map(type, data))):
+    if _immutable(data):
         return data
     if _plain_array(data):
         return data.copy(order="K")
@@ -265,6 +275,12 @@ def _copy(data: Any) -> Any:
         return pickle.loads(pickle.dumps(data, protocol=pickle.HIGHEST_PROTOCOL))
     except (pickle.PicklingError, TypeError, AttributeError):
         return copy.deepcopy(data)
+
+
+def _immutable(data: Any) -> bool:
+    """Whether no reader can change ``data``: a number or string, alone or in a tuple of them."""
+    kind = type(data)
+    return kind in _IMMUTABLE or (kind is tuple and _IMMUTABLE.issuperset(map(type, data)))
 
 
 def _plain_array(data: Any) -> bool:

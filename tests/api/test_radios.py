@@ -130,6 +130,22 @@ def test_range_radio_shares_only_what_no_reader_can_change(world):
     assert inbox.received[-1] == [(2, 0.5, 1.0)]
 
 
+def test_board_notes_per_message_whether_readers_must_copy_it(world):
+    # The board decides once per message, also for one that arrives late: a list sent after a
+    # tuple (and a tuple after a list) is read as what it is.
+    world.publish(2, (2, 0.5))
+    shared = world.receive([2])[0]
+    assert shared is world.messages[2]
+    world.publish(2, [1.0], latency=2)
+    assert world.receive([2]) == [(2, 0.5)]  # the list is still in the air
+    world.time = 2
+    first, second = world.receive([2])[0], world.receive([2])[0]
+    first.append("mutated")
+    assert second == [1.0] and world.messages[2] == [1.0]
+    world.publish(2, (3, 0.25))
+    assert world.receive([2])[0] is world.messages[2]
+
+
 def test_range_radio_copies_messages_of_arrays_deeply(world):
     # Arrays, alone or in a tuple, skip pickle: they must still be copies, dtype and values kept.
     x = _poses((0, 0), (0.1, 0), (0.2, 0))
