@@ -21,8 +21,9 @@ of :mod:`dream.rules` (the per-robot :class:`CircleRobot` and the swarm mode,
   settles on the goal rather than anywhere within the tolerance.
 - Squeezing (per robot). Robots parked on the ring form a wall that a robot outside it cannot
   pass with the ring's safety radius. A robot that has come no :data:`PROGRESS` closer to its
-  goal for :data:`STALL` decisions while outside the ring takes the least safety radius
-  (:data:`PACKED_SAFETY`) until no robot it sees is within the ring's (:meth:`CircleRobot.squeeze`).
+  goal for :data:`STALL` decisions while outside the ring takes the least safety radius its
+  rules allow (:func:`squeeze_radius`) until no robot it sees is within the ring's
+  (:meth:`CircleRobot.squeeze`).
 
 Up to 10 robots use the thesis's circle (radius 0.85 m) and safety radius (0.24 m). Beyond,
 the goals lie equally spaced along the ellipse that fills the arena. A Fast arena grows with
