@@ -117,7 +117,7 @@ def resilient_reach(trimmed: int) -> int:
     A ring that links the 2F + 1 next ids on either side is (2F + 1)-robust: a run of consecutive
     ids always has an end robot with 2F + 1 neighbours beyond it.
     """
-    return 2 * trimmed + 1 if trimmed > 0 else 1
+    return 2 * max(trimmed, 0) + 1
 
 
 def graph(n: int, rng: np.random.Generator, reach: int = 1) -> np.ndarray:
