@@ -35,6 +35,16 @@ def as_array(value: Any, name: str, shape: tuple[int | None, ...]) -> FloatArray
     return array
 
 
+def as_flags(value: Any, name: str, n: int) -> NDArray[np.bool_]:
+    """``value`` as a C-contiguous ``(n,)`` bool array (which robots a kernel answers for)."""
+    array = np.ascontiguousarray(value)
+    if array.dtype != np.bool_:
+        raise ValueError(f"`{name}` must be a bool array of shape ({n},), got dtype {array.dtype}")
+    if array.shape != (n,):
+        raise ValueError(f"`{name}` must have shape ({n},), got {array.shape}")
+    return array
+
+
 def all_finite(array: np.ndarray) -> bool:
     """Whether every value of the float ``array`` is finite; a robot's small arrays through
     :func:`math.isfinite` (several times faster there than NumPy's per-call cost)."""

@@ -75,8 +75,10 @@ def neighbours(
     direction: float = 0.0,
     fov: float = ...,
     max_neighbours: int | None = None,
+    rows: NDArray[np.bool_] | None = None,
 ) -> tuple[_Ints, _Ints, _Floats]:
-    """CSR (indptr (n+1,), indices, distances) of every robot's neighbours within radius and field of view."""
+    """CSR (indptr (n+1,), indices, distances) of every robot's (or each flagged robot's) neighbours
+    within radius and field of view."""
 
 def hrvo(
     positions: _Floats,

@@ -520,18 +520,28 @@ def unheard(seen: Any, seen_rows: Any, heard: Any, heard_rows: Any, same: float)
     robots at once: ``seen_rows`` ``(k,)`` and ``heard_rows`` ``(m,)`` (ints) say whose each is.
 
     Only positions in the same or a neighbouring square of side ``same`` can be that close, so
-    those are the only pairs measured (found by sorting), not every seen-heard pair.
+    those are the only pairs measured (found by sorting), not every seen-heard pair; and first,
+    only the positions heard within ``same`` of the box around what their robot saw are kept (a
+    robot in a crowd hears hundreds of robots and sees a few).
     """
     seen = np.asarray(seen, dtype=np.float64).reshape(-1, 2)
     heard = np.asarray(heard, dtype=np.float64).reshape(-1, 2)
+    seen_rows = np.asarray(seen_rows, dtype=np.int64)
+    heard_rows = np.asarray(heard_rows, dtype=np.int64)
     nearest = np.full(len(seen), np.inf)
+    side = same * (1 + 1e-9)  # a hair wider than ``same``: rounding cannot lose a match
     if len(seen) and len(heard):
-        side = same * (1 + 1e-9)
+        rows = int(max(seen_rows.max(), heard_rows.max())) + 1
+        low, high = np.full((rows, 2), np.inf), np.full((rows, 2), -np.inf)
+        np.minimum.at(low, seen_rows, seen)
+        np.maximum.at(high, seen_rows, seen)
+        near = np.all((heard >= low[heard_rows] - side) & (heard <= high[heard_rows] + side), axis=1)
+        heard, heard_rows = heard[near], heard_rows[near]
+    if len(seen) and len(heard):
         squares = np.floor(np.vstack((seen, heard)) / side).astype(np.int64)
         squares -= squares.min(axis=0) - 1
         span = squares.max(axis=0) + 2
-        rows = np.concatenate((seen_rows, heard_rows)).astype(np.int64)
-        keys = (rows * span[0] + squares[:, 0]) * span[1] + squares[:, 1]
+        keys = (np.concatenate((seen_rows, heard_rows)) * span[0] + squares[:, 0]) * span[1] + squares[:, 1]
         mine, theirs = keys[: len(seen)], keys[len(seen) :]
         order = np.argsort(theirs, kind="stable")
         ordered = theirs[order]

@@ -247,6 +247,8 @@ def test_neighbours_property_on_a_coarse_lattice(points, radius):
             r"`headings`.*non-finite",
         ),
         (lambda: kernels.neighbours(np.zeros((3, 2)), 1.0, max_neighbours=-1), r"`max_neighbours`"),
+        (lambda: kernels.neighbours(np.zeros((3, 2)), 1.0, rows=np.ones(2, bool)), r"`rows` must have shape \(3,\)"),
+        (lambda: kernels.neighbours(np.zeros((3, 2)), 1.0, rows=np.ones(3)), r"`rows` must be a bool array"),
         (lambda: kernels.neighbours_of(np.zeros((3, 3)), 0, 1.0), r"`positions` must have shape \(n, 2\)"),
         (lambda: kernels.neighbours_of(np.zeros((3, 2)), 0, -1.0), r"`radius`"),
     ],

@@ -45,13 +45,13 @@ def assert_csr_equal(got, want):
     assert_array_equal(distances, r_distances)
 
 
-def core_neighbours(p, radius, headings=None, direction=0.0, fov=TAU, max_neighbours=None):
-    return _core.neighbours(p, radius, headings, direction, fov, max_neighbours)
+def core_neighbours(p, radius, headings=None, direction=0.0, fov=TAU, max_neighbours=None, rows=None):
+    return _core.neighbours(p, radius, headings, direction, fov, max_neighbours, rows)
 
 
-def ref_neighbours(p, radius, headings=None, direction=0.0, fov=TAU, max_neighbours=None):
+def ref_neighbours(p, radius, headings=None, direction=0.0, fov=TAU, max_neighbours=None, rows=None):
     return _reference.neighbours(
-        p, radius, headings=headings, direction=direction, fov=fov, max_neighbours=max_neighbours
+        p, radius, headings=headings, direction=direction, fov=fov, max_neighbours=max_neighbours, rows=rows
     )
 
 
@@ -150,6 +150,24 @@ def test_neighbours_matches_reference_on_random_swarms(rng, n, radius, view):
     assert_csr_equal(got, ref_neighbours(p, radius, **kw))
     if n >= 50 and radius > 0:
         assert len(got[1]) > 0  # the comparison is not vacuous
+
+
+@pytest.mark.parametrize("n", [1, 50, 3000])
+@pytest.mark.parametrize("share", [0.0, 0.2, 1.0])
+@pytest.mark.parametrize("with_view", [False, True])
+def test_neighbours_of_some_rows_match_reference(rng, n, share, with_view):
+    # The rows of the robots that read this step: theirs as in the full query, the others empty.
+    p = rng.uniform(-4.0, 4.0, (n, 2))
+    rows = rng.random(n) < share
+    kw = dict(headings=rng.uniform(-np.pi, np.pi, n), direction=0.3, fov=2.0) if with_view else {}
+    got = core_neighbours(p, 0.8, rows=rows, **kw)
+    assert_csr_equal(got, ref_neighbours(p, 0.8, rows=rows, **kw))
+    full = core_neighbours(p, 0.8, **kw)
+    counts = np.diff(got[0])
+    assert np.all(counts[~rows] == 0)
+    assert_array_equal(counts[rows], np.diff(full[0])[rows])
+    if n == 3000 and share > 0:
+        assert counts.sum() > 0  # the comparison is not vacuous
 
 
 @pytest.mark.parametrize("n", [2, 50, 3000])
@@ -719,8 +737,8 @@ def with_value(array, value, index=(1, 0)):
     return out
 
 
-def call_neighbours(positions=P, radius=1.0, headings=None, direction=0.0, fov=TAU, max_neighbours=None):
-    return lambda: _core.neighbours(positions, radius, headings, direction, fov, max_neighbours)
+def call_neighbours(positions=P, radius=1.0, headings=None, direction=0.0, fov=TAU, max_neighbours=None, rows=None):
+    return lambda: _core.neighbours(positions, radius, headings, direction, fov, max_neighbours, rows)
 
 
 def call_hrvo(positions=P, velocities=P, preferred=P, indptr=None, indices=None, **kw):
@@ -788,6 +806,8 @@ def test_core_rejects_wrong_shape_or_dtype_naming_the_argument(make, name, bad):
         (call_hrvo(indptr=CSR[0][:, None], indices=CSR[1]), "indptr"),
         (call_cells(virtual_indptr=np.array([0.0, 0, 0, 0]), virtual_points=np.zeros((0, 2))), "virtual_indptr"),
         (call_agents(offsets=np.array([0.0, 4.0])), "offsets"),
+        (call_neighbours(rows=np.ones(2, dtype=bool)), "rows"),
+        (call_neighbours(rows=np.ones(3)), "rows"),
         (call_planner(detections=np.zeros((2, 3))), "detections"),
         (call_planner(detections=np.zeros(4)), "detections"),
         (call_planner(velocity=np.zeros(3)), "velocity"),

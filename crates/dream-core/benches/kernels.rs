@@ -56,7 +56,7 @@ fn bench_neighbours(c: &mut Criterion) {
     for n in [1_000, 10_000, 100_000] {
         for (scene, xs, ys) in scenes(n) {
             group.bench_with_input(BenchmarkId::new(scene, format!("n={n}")), &n, |b, _| {
-                b.iter(|| neighbours::within(black_box(&xs), black_box(&ys), 1.0, None, None).unwrap())
+                b.iter(|| neighbours::within(black_box(&xs), black_box(&ys), 1.0, None, None, None).unwrap())
             });
         }
     }

@@ -70,7 +70,9 @@ pub(crate) fn wrap_angle(angle: f64) -> f64 {
     (angle + PI).rem_euclid(TAU) - PI
 }
 
-/// Neighbours of every robot at `(xs[i], ys[i])` within `radius` (inclusive), as CSR.
+/// Neighbours of every robot at `(xs[i], ys[i])` within `radius` (inclusive), as CSR. With
+/// `rows`, only the rows of robots i with `rows[i]` are found (the others stay empty): the
+/// robots whose sensors read this step, say; every robot can still be their neighbour.
 ///
 /// # Errors
 /// Length mismatches, non-finite coordinates or headings, a negative or non-finite radius, or a
@@ -81,9 +83,13 @@ pub fn within(
     radius: f64,
     view: Option<FieldOfView<'_>>,
     max_neighbours: Option<usize>,
+    rows: Option<&[bool]>,
 ) -> Result<Csr> {
     let n = xs.len();
     check_len("ys", n, ys.len())?;
+    if let Some(rows) = rows {
+        check_len("rows", n, rows.len())?;
+    }
     check_finite("positions", xs)?;
     check_finite("positions", ys)?;
     if !(radius.is_finite() && radius >= 0.0) {
@@ -121,15 +127,20 @@ pub fn within(
         radius_squared: radius * radius * (1.0 + 4.0 * f64::EPSILON),
         view,
         max_neighbours,
+        rows,
     };
     // Robots are processed cell by cell: the robots of one cell share their candidates (the
     // 3x3 block of cells around it), gathered and sorted once.
-    let cells: Vec<&[usize]> = grid.occupied().collect();
-    let blocks: Vec<Block> = if n >= PARALLEL_ROWS {
+    let cells: Vec<&[usize]> = grid
+        .occupied()
+        .filter(|members| query.asks(members).next().is_some())
+        .collect();
+    let asked = rows.map_or(n, |rows| rows.iter().filter(|&&r| r).count());
+    let blocks: Vec<Block> = if asked >= PARALLEL_ROWS {
         let mut chunks = Vec::new();
         let (mut first, mut robots) = (0, 0);
         for (c, members) in cells.iter().enumerate() {
-            robots += members.len();
+            robots += query.asks(members).count();
             if robots >= BLOCK_ROWS {
                 chunks.push(first..c + 1);
                 (first, robots) = (c + 1, 0);
@@ -244,6 +255,7 @@ struct Query<'a> {
     radius_squared: f64,
     view: Option<FieldOfView<'a>>,
     max_neighbours: Option<usize>,
+    rows: Option<&'a [bool]>,
 }
 
 /// Candidates shared by the robots of one cell, in increasing index order.
@@ -257,6 +269,15 @@ struct Candidates {
 }
 
 impl Query<'_> {
+    /// The robots of `members` whose rows are asked for.
+    fn asks<'m>(&'m self, members: &'m [usize]) -> impl Iterator<Item = usize> + 'm {
+        let rows = self.rows;
+        members
+            .iter()
+            .copied()
+            .filter(move |&i| rows.is_none_or(|rows| rows[i]))
+    }
+
     fn block(&self, cells: &[&[usize]]) -> Block {
         let mut out = Block::default();
         let mut near = Candidates::default();
@@ -270,7 +291,7 @@ impl Query<'_> {
             near.ys.clear();
             near.xs.extend(near.indices.iter().map(|&j| self.xs[j]));
             near.ys.extend(near.indices.iter().map(|&j| self.ys[j]));
-            for &i in *members {
+            for i in self.asks(members) {
                 self.row(i, &mut near, &mut out);
             }
         }
@@ -363,14 +384,14 @@ mod tests {
             .map(|i| ((i as f64) * 0.569_840_290).fract() * 12.0 - 6.0)
             .collect();
         for radius in [0.0, 0.3, 1.7] {
-            let csr = within(&xs, &ys, radius, None, None).unwrap();
+            let csr = within(&xs, &ys, radius, None, None, None).unwrap();
             assert_eq!(rows(&csr), brute(&xs, &ys, radius));
         }
     }
 
     #[test]
     fn self_is_excluded_by_index_and_colocated_robots_count() {
-        let csr = within(&[1.0, 1.0, 1.5], &[2.0, 2.0, 2.0], 0.5, None, None).unwrap();
+        let csr = within(&[1.0, 1.0, 1.5], &[2.0, 2.0, 2.0], 0.5, None, None, None).unwrap();
         assert_eq!(rows(&csr), vec![vec![1, 2], vec![0, 2], vec![0, 1]]);
         assert_eq!(csr.distances[..2], [0.0, 0.5]);
     }
@@ -385,16 +406,30 @@ mod tests {
             direction: 0.0,
             fov: PI / 2.0,
         };
-        let csr = within(&xs, &ys, 2.0, Some(view), None).unwrap();
+        let csr = within(&xs, &ys, 2.0, Some(view), None, None).unwrap();
         assert_eq!(rows(&csr)[0], vec![1, 4]);
-        let capped = within(&xs, &ys, 2.0, None, Some(1)).unwrap();
+        let capped = within(&xs, &ys, 2.0, None, Some(1), None).unwrap();
         assert_eq!(rows(&capped)[0], vec![4]);
     }
 
     #[test]
+    fn rows_leave_the_others_empty() {
+        let n = 500;
+        let xs: Vec<f64> = (0..n).map(|i| ((i as f64) * 0.754_877_666).fract() * 6.0).collect();
+        let ys: Vec<f64> = (0..n).map(|i| ((i as f64) * 0.569_840_290).fract() * 4.0).collect();
+        let asked: Vec<bool> = (0..n).map(|i| i % 3 == 1).collect();
+        let all = rows(&within(&xs, &ys, 0.7, None, None, None).unwrap());
+        let some = rows(&within(&xs, &ys, 0.7, None, None, Some(&asked)).unwrap());
+        for i in 0..n {
+            assert_eq!(some[i], if asked[i] { all[i].clone() } else { vec![] });
+        }
+        assert!(within(&xs, &ys, 0.7, None, None, Some(&asked[1..])).is_err());
+    }
+
+    #[test]
     fn bad_input_is_an_error() {
-        assert!(within(&[0.0], &[f64::NAN], 1.0, None, None).is_err());
-        assert!(within(&[0.0], &[0.0], -1.0, None, None).is_err());
-        assert!(within(&[0.0, 1.0], &[0.0], 1.0, None, None).is_err());
+        assert!(within(&[0.0], &[f64::NAN], 1.0, None, None, None).is_err());
+        assert!(within(&[0.0], &[0.0], -1.0, None, None, None).is_err());
+        assert!(within(&[0.0, 1.0], &[0.0], 1.0, None, None, None).is_err());
     }
 }

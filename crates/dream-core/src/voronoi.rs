@@ -239,7 +239,14 @@ pub fn voronoi_cells(
         .map(|&p| radius.min(covering_radius(p, arena)))
         .fold(0.0, f64::max);
     let near = if neighbours {
-        Some(neighbours::within(&xs, &ys, (2.0 * reach).min(f64::MAX), None, None)?)
+        Some(neighbours::within(
+            &xs,
+            &ys,
+            (2.0 * reach).min(f64::MAX),
+            None,
+            None,
+            None,
+        )?)
     } else {
         None
     };

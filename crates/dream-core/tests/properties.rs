@@ -135,7 +135,7 @@ proptest! {
     ) {
         let radius = (radius * scale).min(f64::MAX);
         let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|p| (p[0], p[1])).unzip();
-        let csr = neighbours::within(&xs, &ys, radius, None, None).unwrap();
+        let csr = neighbours::within(&xs, &ys, radius, None, None, None).unwrap();
         let n = points.len();
         let row = |i: usize| &csr.indices[csr.indptr[i] as usize..csr.indptr[i + 1] as usize];
         for i in 0..n {
@@ -307,7 +307,7 @@ proptest! {
             "preferred"
         ));
         let (xs, ys) = (spoiled(n), vec![0.0; n]);
-        prop_assert!(named(neighbours::within(&xs, &ys, 1.0, None, None).map(|_| ()), "positions"));
+        prop_assert!(named(neighbours::within(&xs, &ys, 1.0, None, None, None).map(|_| ()), "positions"));
         prop_assert!(named(obstacles::virtual_agents(&points(spoiled(2 * n)), &Obstacles::new(&[], &[0]).unwrap(), 1.0, 0.0).map(|_| ()), "positions"));
     }
 }
@@ -359,7 +359,7 @@ fn illegal_parameters_are_errors_naming_them() {
     }
     for bad in [-1.0, f64::NAN, f64::INFINITY] {
         assert!(invalid(
-            neighbours::within(&[0.0], &[0.0], bad, None, None).map(|_| ()),
+            neighbours::within(&[0.0], &[0.0], bad, None, None, None).map(|_| ()),
             "radius"
         ));
         let params = HrvoParams {

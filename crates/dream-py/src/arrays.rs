@@ -68,6 +68,15 @@ pub fn indices_of(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<Vec<i64
     Ok(values)
 }
 
+/// Copies a `(len,)` bool array (which robots to answer for).
+pub fn flags_of(arg: &str, object: &Bound<'_, PyAny>, len: usize) -> PyDreamResult<Vec<bool>> {
+    let (values, shape) = values_of::<bool>(arg, object, "bool")?;
+    if shape != [len] {
+        return Err(shape_error(arg, &format!("({len},)"), &shape));
+    }
+    Ok(values)
+}
+
 /// A count given from Python (`int`): negative values are a `ValueError` naming `arg`.
 pub fn count_of(arg: &str, value: i64) -> PyDreamResult<usize> {
     usize::try_from(value).map_err(|_| value_error(format!("`{arg}` must be >= 0, got {value}")))

@@ -4,7 +4,7 @@ use dream_core::neighbours::{self as core, FieldOfView};
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 
-use crate::arrays::{count_of, points_of, vector_of};
+use crate::arrays::{count_of, flags_of, points_of, vector_of};
 use crate::errors::PyDreamResult;
 
 type CsrArrays<'py> = (
@@ -13,9 +13,11 @@ type CsrArrays<'py> = (
     Bound<'py, PyArray1<f64>>,
 );
 
-/// Neighbours of every robot within `radius` (and field of view) as `(indptr, indices, distances)`.
+/// Neighbours of every robot (or of those flagged in `rows`) within `radius` (and field of view)
+/// as `(indptr, indices, distances)`.
 #[pyfunction]
-#[pyo3(signature = (positions, radius, headings=None, direction=0.0, fov=std::f64::consts::TAU, max_neighbours=None))]
+#[pyo3(signature = (positions, radius, headings=None, direction=0.0, fov=std::f64::consts::TAU, max_neighbours=None, rows=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn neighbours<'py>(
     py: Python<'py>,
     positions: Bound<'py, PyAny>,
@@ -24,12 +26,14 @@ pub fn neighbours<'py>(
     direction: f64,
     fov: f64,
     max_neighbours: Option<i64>,
+    rows: Option<Bound<'py, PyAny>>,
 ) -> PyDreamResult<CsrArrays<'py>> {
     let points = points_of::<2>("positions", &positions)?;
     let max_neighbours = max_neighbours.map(|k| count_of("max_neighbours", k)).transpose()?;
     let headings = headings
         .map(|h| vector_of("headings", &h, Some(points.len())))
         .transpose()?;
+    let rows = rows.map(|r| flags_of("rows", &r, points.len())).transpose()?;
     let csr = py.detach(|| {
         let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|p| (p[0], p[1])).unzip();
         let view = headings.as_deref().map(|headings| FieldOfView {
@@ -37,7 +41,7 @@ pub fn neighbours<'py>(
             direction,
             fov,
         });
-        core::within(&xs, &ys, radius, view, max_neighbours)
+        core::within(&xs, &ys, radius, view, max_neighbours, rows.as_deref())
     })?;
     Ok((
         csr.indptr.into_pyarray(py),

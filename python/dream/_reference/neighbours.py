@@ -50,10 +50,13 @@ def neighbours(
     direction: float = 0.0,
     fov: float = 2 * np.pi,
     max_neighbours: int | None = None,
+    rows: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, FloatArray]:
-    """Every robot's :func:`neighbours_of`, as CSR ``(indptr (n+1,), indices, distances)``."""
+    """Every robot's :func:`neighbours_of`, as CSR ``(indptr (n+1,), indices, distances)``; with
+    ``rows`` ``(n,)`` bool, only the flagged robots' (the others' rows are empty)."""
     n = len(positions)
-    rows = [
+    none = (np.zeros(0, dtype=np.int64), np.zeros(0))
+    found = [
         neighbours_of(
             positions,
             i,
@@ -63,10 +66,12 @@ def neighbours(
             fov=fov,
             max_neighbours=max_neighbours,
         )
+        if rows is None or rows[i]
+        else none
         for i in range(n)
     ]
     indptr = np.zeros(n + 1, dtype=np.int64)
-    indptr[1:] = np.cumsum([len(js) for js, _ in rows])
-    indices = np.concatenate([js for js, _ in rows]) if rows else np.zeros(0, dtype=np.int64)
-    distances = np.concatenate([d for _, d in rows]) if rows else np.zeros(0)
+    indptr[1:] = np.cumsum([len(js) for js, _ in found])
+    indices = np.concatenate([js for js, _ in found]) if found else np.zeros(0, dtype=np.int64)
+    distances = np.concatenate([d for _, d in found]) if found else np.zeros(0)
     return indptr, indices.astype(np.int64), distances

@@ -249,22 +249,16 @@ class Seen(NamedTuple):
 
     @classmethod
     def read(
-        cls,
-        x: np.ndarray,
-        beliefs: np.ndarray,
-        reading: np.ndarray,
-        indptr: np.ndarray,
-        indices: np.ndarray,
-        distances: np.ndarray,
+        cls, x: np.ndarray, beliefs: np.ndarray, indptr: np.ndarray, indices: np.ndarray, distances: np.ndarray
     ) -> Seen:
-        """The readings of robots ``reading`` ``(n,)`` bool at poses ``x`` ``(3, n)``, believing
-        themselves at ``beliefs`` ``(3, n)``, from the step's neighbour index (CSR)."""
-        owners = np.repeat(np.arange(len(reading)), np.diff(indptr))
-        keep = reading[owners] & (distances <= SEEN)
-        owners, others, d = owners[keep], indices[keep], distances[keep]
-        angles = np.arctan2(x[1, owners] - x[1, others], x[0, owners] - x[0, others])
-        positions = np.column_stack((beliefs[0, owners] - d * np.cos(angles), beliefs[1, owners] - d * np.sin(angles)))
-        return cls(np.searchsorted(owners, np.arange(len(reading) + 1)), positions)
+        """The readings of the robots at poses ``x`` ``(3, n)``, believing themselves at ``beliefs``
+        ``(3, n)``, from the neighbour index (CSR) of the robots reading, within :data:`SEEN`."""
+        owners = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
+        angles = np.arctan2(x[1, owners] - x[1, indices], x[0, owners] - x[0, indices])
+        positions = np.column_stack(
+            (beliefs[0, owners] - distances * np.cos(angles), beliefs[1, owners] - distances * np.sin(angles))
+        )
+        return cls(indptr, positions)
 
     @staticmethod
     def last(seen: dict[int, Seen], step: int, who: np.ndarray, delays: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -395,34 +389,35 @@ class VoronoiCoverage(Experiment):
         team = self.team
         reading = timers.due(step, team.delays, ODOM_GAP)
         team.pose[:, reading] = x[:, reading]
-        # One neighbour index for the step: the radio's range holds the movement sensor's.
-        indptr, indices, distances = kernels.neighbours(x[:2].T, RADIO_RANGE)
         sensing = timers.due(step, team.delays, SENSING_GAP)
         team.points[sensing] = sensed(self.obstacles, x[:2, sensing].T, CELL_RADIUS)
-        self.seen[step] = Seen.read(x, team.pose, sensing, indptr, indices, distances)
+        # Neighbour rows of the robots whose movement sensors read, then of those whose radios talk.
+        self.seen[step] = Seen.read(x, team.pose, *kernels.neighbours(x[:2].T, SEEN, rows=sensing))
         self.seen.pop(step - SENSING_GAP, None)
-        deciding = np.flatnonzero(timers.due(step, team.delays, CONTROL_GAP))
+        talking = timers.due(step, team.delays, CONTROL_GAP)
         commands = self.dxu.copy()
-        if len(deciding):
-            others, heard = self._talk(deciding, indptr, indices)
+        if talking.any():
+            deciding = np.flatnonzero(talking)
+            others, heard = self._talk(talking, *kernels.neighbours(x[:2].T, RADIO_RANGE, rows=talking)[:2])
             self._decide(step, deciding, others, heard, commands)
         return commands
 
-    def _talk(self, who: np.ndarray, indptr: np.ndarray, indices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The radio round of robots ``who`` ``(k,)``: the positions ``(m, 2)`` they hear from the
-        robots within :data:`RADIO_RANGE`, by increasing id, and whose row of ``who`` hears each
-        ``(m,)``; then they send their own. The per-robot radios talk one after the other by id,
-        so a robot of lower id talking in the same step has already sent its position of now."""
+    def _talk(self, talking: np.ndarray, indptr: np.ndarray, senders: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The radio round of the robots ``talking`` ``(n,)`` bool: the positions ``(m, 2)`` they hear
+        from the robots within :data:`RADIO_RANGE` (their neighbour rows, CSR), by increasing id,
+        and whose row of the talking robots hears each ``(m,)``; then they send their own. The
+        per-robot radios talk one after the other by id, so a robot of lower id talking in the
+        same step has already sent its position of now."""
         team = self.team
-        starts, counts = indptr[who], np.diff(indptr)[who]
+        who = np.flatnonzero(talking)
+        counts = np.diff(indptr)[who]
         rows = np.repeat(np.arange(len(who)), counts)
-        senders = indices[spans(starts, counts)]
-        talking = np.zeros(self.n, dtype=bool)
-        talking[who] = True
-        fresh = talking[senders] & (senders < who[rows])
-        said = np.where(fresh[:, None], team.pose[:2, senders].T, team.board[senders])
-        heard = ~np.isnan(said[:, 0])  # robots that have not spoken yet send nothing
+        before = team.board.copy()
         team.board[who] = team.pose[:2, who].T
+        # Rows 0..n-1: the board before this round; n..2n-1: after it (a robot hears the latter
+        # from lower ids, which have talked already; the same unless the sender talks now).
+        said = np.vstack((before, team.board))[senders + self.n * (senders < np.repeat(who, counts))]
+        heard = ~np.isnan(said[:, 0])  # robots that have not spoken yet send nothing
         return said[heard], rows[heard]
 
     def _decide(self, step: int, who: np.ndarray, others: np.ndarray, heard: np.ndarray, commands: np.ndarray) -> None:

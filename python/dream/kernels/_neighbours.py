@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 import dream._reference as _reference
-from dream._checks import FloatArray, as_array, check_nonnegative, check_robot_id
+from dream._checks import FloatArray, as_array, as_flags, check_nonnegative, check_robot_id
 from dream.kernels._dispatch import implementation
 
 
@@ -19,6 +19,7 @@ def neighbours(
     direction: float = 0.0,
     fov: float = 2 * np.pi,
     max_neighbours: int | None = None,
+    rows: Any = None,
 ) -> tuple[np.ndarray, np.ndarray, FloatArray]:
     """Each robot's neighbours within ``radius`` (and field of view) as CSR arrays.
 
@@ -34,6 +35,9 @@ def neighbours(
         ``heading + direction`` are kept (a co-located robot is always kept).
     max_neighbours : int, optional
         Keep only the nearest ones (ties: lower index).
+    rows : (n,) bool, optional
+        Find only the flagged robots' rows (those whose sensors read this step, say); the
+        others' rows are empty, though every robot can be a flagged robot's neighbour.
 
     Returns
     -------
@@ -49,7 +53,8 @@ def neighbours(
     check_nonnegative(fov, "fov")
     if max_neighbours is not None and max_neighbours < 0:
         raise ValueError(f"`max_neighbours` must be >= 0, got {max_neighbours}")
-    return implementation("neighbours")(p, radius, h, direction, fov, max_neighbours)
+    asked = None if rows is None else as_flags(rows, "rows", p.shape[0])
+    return implementation("neighbours")(p, radius, h, direction, fov, max_neighbours, asked)
 
 
 def neighbours_of(
