@@ -2,9 +2,10 @@
 //!
 //! Robot i's cell starts as the disc of `radius` around it (a regular polygon of `resolution`
 //! vertices, the first at angle 0), is clipped by the arena, then by the perpendicular-bisector
-//! half-plane of every other robot within `2 radius` (increasing index) and of each of its
-//! virtual agents (given order). A robot whose cell is empty gets area 0 and its own position
-//! as centroid. The arithmetic matches the NumPy reference operation by operation.
+//! half-plane of every other robot within `2 radius` and of each of its virtual agents, nearest
+//! first (ties: robots by increasing index, then virtual agents in the given order). A robot
+//! whose cell is empty gets area 0 and its own position as centroid. The arithmetic matches the
+//! NumPy reference operation by operation.
 //!
 //! A disc far larger than the arena clips nothing but ruins the clipping's precision (at a
 //! radius of 1e20 the intersections with the walls lose every digit), so each robot's disc is
@@ -88,15 +89,24 @@ pub fn covering_radius(p: Vec2, arena: &Arena) -> f64 {
     2.0 * ((dx * dx + dy * dy).sqrt() + 0.5 * (width * width + height * height).sqrt())
 }
 
-fn cell(p: Vec2, radius: f64, arena: &Arena, agents: impl Iterator<Item = Vec2>, resolution: usize) -> Vec<Vec2> {
-    let radius = radius.min(covering_radius(p, arena));
-    let mut polygon: Vec<Vec2> = (0..resolution)
+/// The directions `(cos, sin)` of a disc polygon's `resolution` vertices, the first at angle 0.
+fn unit_circle(resolution: usize) -> Vec<Vec2> {
+    (0..resolution)
         .map(|k| {
             let angle = TAU * k as f64 / resolution as f64;
-            [p[0] + radius * angle.cos(), p[1] + radius * angle.sin()]
+            [angle.cos(), angle.sin()]
         })
+        .collect()
+}
+
+/// The cell around `p` from the disc of `radius` (vertex directions `circle`, [`unit_circle`]).
+fn cell(p: Vec2, radius: f64, arena: &Arena, agents: impl Iterator<Item = Vec2>, circle: &[Vec2]) -> Vec<Vec2> {
+    let radius = radius.min(covering_radius(p, arena));
+    let mut polygon: Vec<Vec2> = circle
+        .iter()
+        .map(|u| [p[0] + radius * u[0], p[1] + radius * u[1]])
         .collect();
-    let mut scratch = Vec::with_capacity(resolution + 8);
+    let mut scratch = Vec::with_capacity(circle.len() + 8);
     let walls = [
         ([arena.xmin, 0.0], [-1.0, 0.0]),
         ([arena.xmax, 0.0], [1.0, 0.0]),
@@ -107,29 +117,65 @@ fn cell(p: Vec2, radius: f64, arena: &Arena, agents: impl Iterator<Item = Vec2>,
         clip(&polygon, point, normal, &mut scratch);
         std::mem::swap(&mut polygon, &mut scratch);
     }
+    // Nearest first (ties in the given order): the first few clips shrink the cell and the rest
+    // lie beyond it. Only a batch of the nearest is sorted at a time, and once the next agent
+    // lies beyond the cell, so do all later ones: a robot in a crowd hears hundreds of robots,
+    // of which a dozen shape its cell.
+    let mut agents: Vec<Agent> = agents
+        .enumerate()
+        .map(|(k, q)| (squared_distance(p, q).to_bits(), k, q))
+        .collect();
+    let widest = agents
+        .iter()
+        .map(|&(_, _, q)| q[0].abs() + q[1].abs())
+        .fold(0.0, f64::max);
     let mut reach = farthest(&polygon, p);
-    for q in agents {
-        if polygon.is_empty() {
-            break;
+    let mut done = 0;
+    while done < agents.len() {
+        let rest = &mut agents[done..];
+        let batch = rest.len().min(NEAREST_BATCH);
+        if batch < rest.len() {
+            rest.select_nth_unstable_by_key(batch - 1, |&(d, k, _)| (d, k));
         }
-        if beyond(p, q, reach) {
-            continue;
+        rest[..batch].sort_unstable_by_key(|&(d, k, _)| (d, k));
+        for &(squared, _, q) in &rest[..batch] {
+            // Nonnegative floats order as their bits do; `beyond` skips every later agent too.
+            let bound = skip_bound(p, widest, reach);
+            if polygon.is_empty() || (bound > 1e-100 && f64::from_bits(squared) > bound * bound) {
+                return polygon;
+            }
+            if beyond(p, q, reach) {
+                continue;
+            }
+            let middle = [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0];
+            clip(&polygon, middle, [q[0] - p[0], q[1] - p[1]], &mut scratch);
+            std::mem::swap(&mut polygon, &mut scratch);
+            reach = farthest(&polygon, p);
         }
-        let middle = [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0];
-        clip(&polygon, middle, [q[0] - p[0], q[1] - p[1]], &mut scratch);
-        std::mem::swap(&mut polygon, &mut scratch);
-        reach = farthest(&polygon, p);
+        done += batch;
     }
     polygon
 }
 
+/// An agent of a cell: `(|q - p|^2 as bits, place in the given order, q)`.
+type Agent = (u64, usize, Vec2);
+
+/// Agents sorted at a time, nearest first (a cell in a crowd has a dozen sides).
+const NEAREST_BATCH: usize = 32;
+
+/// `|q - p|^2`, as the NumPy reference computes it.
+fn squared_distance(p: Vec2, q: Vec2) -> f64 {
+    let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+    dx * dx + dy * dy
+}
+
 /// Distance (m) from `p` to the farthest vertex of `polygon`.
 fn farthest(polygon: &[Vec2], p: Vec2) -> f64 {
-    let squared = polygon.iter().map(|v| {
-        let (dx, dy) = (v[0] - p[0], v[1] - p[1]);
-        dx * dx + dy * dy
-    });
-    squared.fold(0.0, f64::max).sqrt()
+    polygon
+        .iter()
+        .map(|&v| squared_distance(p, v))
+        .fold(0.0, f64::max)
+        .sqrt()
 }
 
 /// Whether the bisector of `p` and `q` surely misses a cell around `p` whose vertices lie within
@@ -139,11 +185,15 @@ fn farthest(polygon: &[Vec2], p: Vec2) -> f64 {
 /// bisector's midpoint). Skipping such points costs one distance instead of a pass over the
 /// cell: a robot in a crowd hears hundreds of robots, of which a dozen shape its cell.
 fn beyond(p: Vec2, q: Vec2, reach: f64) -> bool {
-    let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
-    let size = p[0].abs() + p[1].abs() + q[0].abs() + q[1].abs();
-    let bound = 2.0 * (reach * (1.0 + 1e-6) + 1e-12 * size);
+    let bound = skip_bound(p, q[0].abs() + q[1].abs(), reach);
     // Below ~1e-100 the squares lose their precision to underflow: no skipping there.
-    bound > 1e-100 && dx * dx + dy * dy > bound * bound
+    bound > 1e-100 && squared_distance(p, q) > bound * bound
+}
+
+/// The distance from `p` beyond which [`beyond`] skips an agent whose `|x| + |y|` is `size`; it
+/// grows with `size`, so with the largest `size` of a cell's agents it holds for all of them.
+fn skip_bound(p: Vec2, size: f64, reach: f64) -> f64 {
+    2.0 * (reach * (1.0 + 1e-6) + 1e-12 * (p[0].abs() + p[1].abs() + size))
 }
 
 /// One robot's cell at `p`, clipped by the robots `others` (those beyond `2 radius` change
@@ -165,7 +215,8 @@ pub fn voronoi_cell(
     check_coordinates("others", others.as_flattened())?;
     check_coordinates("virtual", agents.as_flattened())?;
     check_cell_parameters(radius, arena, resolution)?;
-    Ok(cell(p, radius, arena, others.iter().chain(agents).copied(), resolution))
+    let agents = others.iter().chain(agents).copied();
+    Ok(cell(p, radius, arena, agents, &unit_circle(resolution)))
 }
 
 /// Finite values of magnitude at most [`MAX_COORDINATE`].
@@ -250,6 +301,7 @@ pub fn voronoi_cells(
     } else {
         None
     };
+    let circle = unit_circle(resolution);
     let robot = |i: usize| {
         let others = match &near {
             Some(near) => &near.indices[near.indptr[i] as usize..near.indptr[i + 1] as usize],
@@ -260,13 +312,7 @@ pub fn voronoi_cells(
             Some((indptr, points)) => &points[indptr[i] as usize..indptr[i + 1] as usize],
             None => &[],
         };
-        let polygon = cell(
-            positions[i],
-            radius,
-            arena,
-            others.chain(own.iter().copied()),
-            resolution,
-        );
+        let polygon = cell(positions[i], radius, arena, others.chain(own.iter().copied()), &circle);
         let (area, centroid) = area_centroid(&polygon, positions[i]);
         (polygon, area, centroid)
     };

@@ -2,9 +2,9 @@
 
 Robot i's cell is the disc of ``radius`` around it (a regular polygon of ``resolution``
 vertices, the first at angle 0), clipped by the arena and then by the perpendicular-bisector
-half-plane of every other robot within ``2 radius`` (in increasing index order) and of each
-of robot i's virtual agents (in the given order). A robot whose cell is empty (outside the
-arena) gets area 0 and its own position as centroid.
+half-plane of every other robot within ``2 radius`` and of each of robot i's virtual agents,
+nearest first (ties: robots by increasing index, then virtual agents in the given order). A
+robot whose cell is empty (outside the arena) gets area 0 and its own position as centroid.
 
 A disc far larger than the arena clips nothing but ruins the clipping's precision (at a radius
 of 1e20 the intersections with the walls lose every digit), so each robot's disc is first
@@ -78,8 +78,8 @@ def cell(
     bounds: tuple[float, float, float, float],
     resolution: int,
 ) -> list[tuple[float, float]]:
-    """The cell of a robot at ``position`` clipped by ``agents`` (robots, then virtual agents), in
-    order: a counter-clockwise vertex list (empty if nothing is left)."""
+    """The cell of a robot at ``position`` clipped by ``agents`` (robots, then virtual agents),
+    nearest first: a counter-clockwise vertex list (empty if nothing is left)."""
     px, py = position
     radius = min(radius, covering_radius(position, bounds))
     angles = 2 * np.pi * np.arange(resolution) / resolution
@@ -92,7 +92,9 @@ def cell(
         ((0.0, ymax), (0.0, 1.0)),
     ):
         polygon = clip(polygon, point, normal)
-    for qx, qy in agents:
+    # Nearest first (a stable sort: ties keep the given order), as the Rust core clips.
+    nearest = sorted(agents, key=lambda q: (q[0] - px) * (q[0] - px) + (q[1] - py) * (q[1] - py))
+    for qx, qy in nearest:
         polygon = clip(polygon, ((px + qx) / 2, (py + qy) / 2), (qx - px, qy - py))
     return polygon
 
