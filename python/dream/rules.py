@@ -535,8 +535,10 @@ def unheard(seen: Any, seen_rows: Any, heard: Any, heard_rows: Any, same: float)
         low, high = np.full((rows, 2), np.inf), np.full((rows, 2), -np.inf)
         np.minimum.at(low, seen_rows, seen)
         np.maximum.at(high, seen_rows, seen)
-        near = np.all((heard >= low[heard_rows] - side) & (heard <= high[heard_rows] + side), axis=1)
-        heard, heard_rows = heard[near], heard_rows[near]
+        low, high = low - side, high + side
+        for axis in (0, 1):  # x first, then y on what is left: most are dropped by x alone
+            near = (heard[:, axis] >= low[heard_rows, axis]) & (heard[:, axis] <= high[heard_rows, axis])
+            heard, heard_rows = heard[near], heard_rows[near]
     if len(seen) and len(heard):
         squares = np.floor(np.vstack((seen, heard)) / side).astype(np.int64)
         squares -= squares.min(axis=0) - 1
