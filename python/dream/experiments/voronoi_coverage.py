@@ -410,7 +410,10 @@ class VoronoiCoverage(Experiment):
         team.board[who] = team.pose[:2, who].T
         # Rows 0..n-1: the board before this round; n..2n-1: after it (a robot hears the latter
         # from lower ids, which have talked already; the same unless the sender talks now).
-        said = np.vstack((before, team.board))[senders + self.n * (senders < np.repeat(who, counts))]
+        table = np.vstack((before, team.board))
+        said = table[senders + self.n * (senders < np.repeat(who, counts))]
+        if not np.isnan(table).any():  # (after the first rounds) every robot has spoken
+            return said, rows
         heard = ~np.isnan(said[:, 0])  # robots that have not spoken yet send nothing
         return said[heard], rows[heard]
 
@@ -427,28 +430,34 @@ class VoronoiCoverage(Experiment):
         owners = np.repeat(np.arange(k), team.points.shape[1])
         agents = kernels.obstacle_agents(here[owners], points, robot_radius=GRITSBOT.radius, margin=MARGIN)
         sensed_agent = ~np.isnan(agents[:, 0])
-        # Each cell is clipped by what its robot knows, in its order: robots heard, robots seen
-        # but not heard, obstacles.
-        rows = np.concatenate((heard, looked[silent], owners[sensed_agent]))
-        clips = np.vstack((others, seen[silent], agents[sensed_agent]))
-        order = np.argsort(rows, kind="stable")
-        team.centroid[who] = self._cells(who, here, rows[order], clips[order])
+        # Each cell is clipped by what its robot knows, in its order: robots heard, then robots
+        # seen but not heard and obstacles (the extras), each row's after its robots heard.
+        extra_rows = np.concatenate((looked[silent], owners[sensed_agent]))
+        order = np.argsort(extra_rows, kind="stable")
+        extras = np.vstack((seen[silent], agents[sensed_agent]))[order]
+        heard_counts, extra_counts = np.bincount(heard, minlength=k), np.bincount(extra_rows, minlength=k)
+        indptr = np.concatenate(([0], np.cumsum(heard_counts + extra_counts)))
+        extras_before = np.cumsum(extra_counts) - extra_counts
+        clips = np.empty((indptr[-1], 2))
+        clips[np.arange(len(heard)) + extras_before[heard]] = others
+        clips[np.arange(len(extras)) + (indptr[:-1] + heard_counts - extras_before)[extra_rows[order]]] = extras
+        team.centroid[who] = self._cells(who, here, indptr, clips)
         dxi = rules.approach(here, team.centroid[who], GAIN, GRITSBOT.v_max, arrival_for(self.n))
         new = kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, team.pose[:, who]), GRITSBOT.within(self.sim.spec))
         near = guard_distance(self.rules)
         new[0, stopping(new[0], team.pose[2, who], looked, here[looked] - seen, near)] = 0.0
         commands[:, who] = new
 
-    def _cells(self, who: np.ndarray, here: np.ndarray, rows: np.ndarray, clips: np.ndarray) -> np.ndarray:
+    def _cells(self, who: np.ndarray, here: np.ndarray, indptr: np.ndarray, clips: np.ndarray) -> np.ndarray:
         """Centroids ``(k, 2)`` of the cells of robots ``who`` at ``here`` ``(k, 2)``, each clipped by
-        its points ``clips`` ``(m, 2)`` (``rows``: whose, sorted) alone, as :func:`dream.kernels.voronoi_cell`
+        its points ``clips`` ``(m, 2)`` (CSR rows ``indptr``) alone, as :func:`dream.kernels.voronoi_cell`
         clips it: one :func:`dream.kernels.voronoi_cells` call, with the clipping points as each
         robot's virtual agents and no clipping by the other robots."""
         cells = kernels.voronoi_cells(
             here,
             radius=CELL_RADIUS,
             bounds=cell_bounds(self.arena),
-            virtual=(np.searchsorted(rows, np.arange(len(who) + 1)), clips),
+            virtual=(indptr, clips),
             polygons=True,
             neighbours=False,
         )
