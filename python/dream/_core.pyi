@@ -15,6 +15,7 @@ __all__ = [
     "dxi_to_dxu",
     "actuator_limit",
     "neighbours",
+    "far_from",
     "hrvo",
     "HrvoPlanner",
     "voronoi_cells",
@@ -79,6 +80,15 @@ def neighbours(
 ) -> tuple[_Ints, _Ints, _Floats]:
     """CSR (indptr (n+1,), indices, distances) of every robot's (or each flagged robot's) neighbours
     within radius and field of view."""
+
+def far_from(
+    points: _Floats,
+    others: _Floats,
+    distance: float,
+    points_offsets: _Ints | None = None,
+    others_offsets: _Ints | None = None,
+) -> NDArray[np.bool_]:
+    """(k,) bool: points farther than distance from every one of others in the same row."""
 
 def hrvo(
     positions: _Floats,

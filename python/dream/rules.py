@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from dream import kernels
 from dream._checks import Bounds, FloatArray
-from dream._csr import spans
 
 #: Angle (rad) the roundabout aims ahead of the island's tangent point, so that a robot on
 #: the island's edge still has somewhere to go.
@@ -361,21 +361,14 @@ def seen_positions(position: Any, detections: Any) -> FloatArray:
     return np.column_stack((position[0] - d * np.cos(angle), position[1] - d * np.sin(angle)))
 
 
-SMALL_PAIRS = 8192  #: up to this many point pairs, :func:`far_from` measures them all (one robot's call)
-
-
-def far_from(points: Any, others: Any, distance: float) -> np.ndarray:
+def far_from(points: Any, others: Any, distance: float, offsets: tuple[Any, Any] | None = None) -> np.ndarray:
     """``(k,)`` bool: which of ``points`` ``(k, 2)`` lie farther than ``distance`` (m) from every one
     of ``others`` ``(m, 2)`` (all of them when there are none): robots seen that no claimed
-    position accounts for, or claims that match no robot seen."""
+    position accounts for, or claims that match no robot seen. Several robots at once: their
+    rows cut by ``offsets`` (see :func:`dream.kernels.far_from`)."""
     points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     others = np.asarray(others, dtype=np.float64).reshape(-1, 2)
-    if len(points) * len(others) <= SMALL_PAIRS:
-        # Every pair at once: what :func:`unheard` measures and more, and the pairs it skips lie
-        # farther apart than ``distance``, so the answer is the same.
-        gaps = np.hypot(points[:, None, 0] - others[None, :, 0], points[:, None, 1] - others[None, :, 1])
-        return np.all(gaps > distance, axis=1)
-    return unheard(points, np.zeros(len(points), np.int64), others, np.zeros(len(others), np.int64), distance)
+    return kernels.far_from(points, others, distance, offsets=offsets)
 
 
 def line_places(senders: Any, receivers: Any, x: Any, y: Any, spacing: float) -> FloatArray:
@@ -512,46 +505,3 @@ def approach(positions: Any, centroids: Any, gain: float, v_max: float, arrival:
     distance = length(offset)
     scale = np.minimum(1.0, v_max / (gain * np.maximum(distance, 1e-300)))
     return np.where((distance >= arrival)[..., None], gain * offset * scale[..., None], 0.0)
-
-
-def unheard(seen: Any, seen_rows: Any, heard: Any, heard_rows: Any, same: float) -> np.ndarray:
-    """Which robots a coverage robot sees ``seen`` ``(k, 2)`` (m) no message accounts for: farther
-    than ``same`` (m) from every position ``heard`` ``(m, 2)`` from the robot's radio. Several
-    robots at once: ``seen_rows`` ``(k,)`` and ``heard_rows`` ``(m,)`` (ints) say whose each is.
-
-    Only positions in the same or a neighbouring square of side ``same`` can be that close, so
-    those are the only pairs measured (found by sorting), not every seen-heard pair; and first,
-    only the positions heard within ``same`` of the box around what their robot saw are kept (a
-    robot in a crowd hears hundreds of robots and sees a few).
-    """
-    seen = np.asarray(seen, dtype=np.float64).reshape(-1, 2)
-    heard = np.asarray(heard, dtype=np.float64).reshape(-1, 2)
-    seen_rows = np.asarray(seen_rows, dtype=np.int64)
-    heard_rows = np.asarray(heard_rows, dtype=np.int64)
-    nearest = np.full(len(seen), np.inf)
-    side = same * (1 + 1e-9)  # a hair wider than ``same``: rounding cannot lose a match
-    if len(seen) and len(heard):
-        rows = int(max(seen_rows.max(), heard_rows.max())) + 1
-        low, high = np.full((rows, 2), np.inf), np.full((rows, 2), -np.inf)
-        np.minimum.at(low, seen_rows, seen)
-        np.maximum.at(high, seen_rows, seen)
-        low, high = low - side, high + side
-        for axis in (0, 1):  # x first, then y on what is left: most are dropped by x alone
-            near = (heard[:, axis] >= low[heard_rows, axis]) & (heard[:, axis] <= high[heard_rows, axis])
-            heard, heard_rows = heard[near], heard_rows[near]
-    if len(seen) and len(heard):
-        squares = np.floor(np.vstack((seen, heard)) / side).astype(np.int64)
-        squares -= squares.min(axis=0) - 1
-        span = squares.max(axis=0) + 2
-        keys = (np.concatenate((seen_rows, heard_rows)) * span[0] + squares[:, 0]) * span[1] + squares[:, 1]
-        mine, theirs = keys[: len(seen)], keys[len(seen) :]
-        order = np.argsort(theirs, kind="stable")
-        ordered = theirs[order]
-        for shift in (dx * span[1] + dy for dx in (-1, 0, 1) for dy in (-1, 0, 1)):
-            starts = np.searchsorted(ordered, mine + shift, side="left")
-            counts = np.searchsorted(ordered, mine + shift, side="right") - starts
-            pairs = np.repeat(np.arange(len(seen)), counts)
-            others = order[spans(starts, counts)]
-            gaps = np.hypot(seen[pairs, 0] - heard[others, 0], seen[pairs, 1] - heard[others, 1])
-            np.minimum.at(nearest, pairs, gaps)
-    return nearest > same

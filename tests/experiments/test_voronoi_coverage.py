@@ -136,38 +136,47 @@ def test_voronoi_coverage_thousand_robots_spread_without_collision():
     assert result.measures["cost_end"] < result.measures["cost_start"]
 
 
+def offsets_of(rows, count):
+    """CSR offsets of the entries of rows ``rows`` (sorted) among ``count`` rows."""
+    return np.concatenate(([0], np.cumsum(np.bincount(rows, minlength=count))))
+
+
 @pytest.mark.parametrize("seed", range(20))
-def test_unheard_matches_every_pair_compared(seed):
+def test_far_from_by_rows_matches_every_pair_compared(seed):
+    # The swarm's call: each robot's detections against the positions its own radio heard.
     rng = np.random.default_rng(seed)
     k, m, robots = rng.integers(0, 30), rng.integers(0, 60), rng.integers(1, 5)
     seen, heard = rng.uniform(-1, 1, (k, 2)), rng.uniform(-1, 1, (m, 2))
     close = min(k, m)
     heard[:close] = seen[:close] + rng.normal(scale=0.05, size=(close, 2))  # some within reach
-    seen_rows, heard_rows = rng.integers(0, robots, k), rng.integers(0, robots, m)
+    seen_rows, heard_rows = np.sort(rng.integers(0, robots, k)), rng.integers(0, robots, m)
+    order = np.argsort(heard_rows, kind="stable")
+    heard, heard_rows = heard[order], heard_rows[order]
     want = [
         not np.any((heard_rows == row) & (np.hypot(*(point - heard).T) <= vc.SAME_ROBOT))
         for point, row in zip(seen, seen_rows, strict=True)
     ]
-    np.testing.assert_array_equal(rules.unheard(seen, seen_rows, heard, heard_rows, vc.SAME_ROBOT), want)
+    offsets = (offsets_of(seen_rows, robots), offsets_of(heard_rows, robots))
+    np.testing.assert_array_equal(rules.far_from(seen, heard, vc.SAME_ROBOT, offsets=offsets), want)
 
 
-def test_unheard_counts_a_robot_heard_at_exactly_the_distance():
+def test_far_from_counts_a_robot_heard_at_exactly_the_distance():
     # Heard straight out along each axis at the tolerance, a hair inside and outside it, and a
     # crowd heard far away (filtered out before the pairs are measured).
     same = vc.SAME_ROBOT
     seen = np.array([[0.3, -0.2], [1.0, 1.0], [-2.0, 0.5], [5.0, 5.0]])
     offsets = np.array([[same, 0.0], [0.0, -same], [same * (1 - 1e-12), 0.0], [same * (1 + 1e-9), 0.0]])
     crowd = np.random.default_rng(0).uniform(-3, 3, (300, 2))
-    heard = np.vstack((seen + offsets, crowd))
-    heard_rows = np.concatenate((np.arange(4), np.zeros(300, dtype=np.int64)))
+    heard = np.vstack((crowd, seen + offsets))
+    heard_rows = np.concatenate((np.zeros(300, dtype=np.int64), np.arange(4)))
     want = [not np.any((heard_rows == row) & (np.hypot(*(point - heard).T) <= same)) for row, point in enumerate(seen)]
     assert want[3] and not all(want[:3])  # (the sums round either way at the tolerance)
-    np.testing.assert_array_equal(rules.unheard(seen, np.arange(4), heard, heard_rows, same), want)
+    rows = (np.arange(5), offsets_of(heard_rows, 4))
+    np.testing.assert_array_equal(rules.far_from(seen, heard, same, offsets=rows), want)
 
 
 @pytest.mark.parametrize("seed", range(10))
-def test_far_from_measures_all_pairs_or_sorts_them_alike(seed):
-    # One robot's call (few pairs) measures every pair; a large one sorts them (rules.unheard).
+def test_far_from_one_robot_measures_every_pair(seed):
     rng = np.random.default_rng(seed)
     for k, m in ((rng.integers(0, 40), rng.integers(0, 200)), (150, 100)):
         points, others = rng.uniform(-1, 1, (k, 2)), rng.uniform(-1, 1, (m, 2))

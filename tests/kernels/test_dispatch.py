@@ -54,6 +54,7 @@ def test_every_public_kernel_goes_through_the_dispatch(monkeypatch):
     kernels.dxi_to_dxu(commands, poses)
     kernels.actuator_limit(commands)
     kernels.neighbours(points, 1.0)
+    kernels.far_from(points, points, 0.1)
     kernels.hrvo(points, points, points)
     kernels.HrvoPlanner().velocity(np.zeros((0, 4)), np.zeros(2), np.zeros(2), np.zeros(2))
     kernels.voronoi_cells(points)

@@ -250,6 +250,17 @@ def test_neighbours_property_on_a_coarse_lattice(points, radius):
         (lambda: kernels.neighbours(np.zeros((3, 2)), 1.0, rows=np.ones(2, bool)), r"`rows` must have shape \(3,\)"),
         (lambda: kernels.neighbours(np.zeros((3, 2)), 1.0, rows=np.ones(3)), r"`rows` must be a bool array"),
         (lambda: kernels.neighbours_of(np.zeros((3, 3)), 0, 1.0), r"`positions` must have shape \(n, 2\)"),
+        (lambda: kernels.far_from(np.zeros((3, 3)), np.zeros((1, 2)), 0.1), r"`points` must have shape \(n, 2\)"),
+        (lambda: kernels.far_from(np.zeros((3, 2)), [[np.nan, 0.0]], 0.1), r"`others`.*non-finite"),
+        (lambda: kernels.far_from(np.zeros((3, 2)), np.zeros((1, 2)), -0.1), r"`distance`"),
+        (
+            lambda: kernels.far_from(np.zeros((3, 2)), np.zeros((1, 2)), 0.1, offsets=([0, 2], [0, 1])),
+            r"`points_offsets` must rise from 0 to 3",
+        ),
+        (
+            lambda: kernels.far_from(np.zeros((3, 2)), np.zeros((1, 2)), 0.1, offsets=([0, 1, 3], [0, 1])),
+            r"`offsets` must cut points and others into as many rows",
+        ),
         (lambda: kernels.neighbours_of(np.zeros((3, 2)), 0, -1.0), r"`radius`"),
     ],
 )

@@ -170,6 +170,29 @@ def test_neighbours_of_some_rows_match_reference(rng, n, share, with_view):
         assert counts.sum() > 0  # the comparison is not vacuous
 
 
+@pytest.mark.parametrize("rows", [1, 7, 2000])  # 2000 rows of ~300 others run on rayon
+@pytest.mark.parametrize("distance", [0.0, 0.08, 0.5])
+def test_far_from_matches_reference(rng, rows, distance):
+    # Robots that each see a few and hear many: some heard positions close to those seen, some
+    # at exactly the distance along an axis, the rest a crowd.
+    seen_counts, heard_counts = rng.integers(0, 20, rows), rng.integers(0, 300 if rows > 1000 else 60, rows)
+    points = rng.uniform(-3.0, 3.0, (seen_counts.sum(), 2))
+    others = rng.uniform(-3.0, 3.0, (heard_counts.sum(), 2))
+    owners = np.repeat(np.arange(rows), seen_counts)
+    firsts = np.concatenate(([0], np.cumsum(heard_counts)))[:-1]
+    for k in range(len(points))[::3]:
+        row = owners[k]
+        if heard_counts[row]:
+            others[firsts[row]] = points[k] + (distance if k % 2 else rng.normal(scale=0.03), 0.0)
+    offsets = [np.concatenate(([0], np.cumsum(c))) for c in (seen_counts, heard_counts)]
+    got = _core.far_from(points, others, distance, *offsets)
+    assert_array_equal(got, _reference.far_from(points, others, distance, *offsets))
+    if len(points) > 30:
+        assert 0 < got.sum() < len(got)  # both answers occur: the comparison is not vacuous
+    if rows < 100:  # one row: every point against every other
+        assert_array_equal(_core.far_from(points, others, distance), _reference.far_from(points, others, distance))
+
+
 @pytest.mark.parametrize("n", [2, 50, 3000])
 @pytest.mark.parametrize("radius", [0.3, 2.0])
 @pytest.mark.parametrize("max_neighbours", [None, 0, 1, 5])
@@ -807,6 +830,10 @@ def test_core_rejects_wrong_shape_or_dtype_naming_the_argument(make, name, bad):
         (call_cells(virtual_indptr=np.array([0.0, 0, 0, 0]), virtual_points=np.zeros((0, 2))), "virtual_indptr"),
         (call_agents(offsets=np.array([0.0, 4.0])), "offsets"),
         (call_neighbours(rows=np.ones(2, dtype=bool)), "rows"),
+        (lambda: _core.far_from(P, P, 0.1, np.array([0, 3]), np.array([0, 1, 3])), "others_offsets"),
+        (lambda: _core.far_from(P, P, 0.1, np.array([0, 2]), np.array([0, 3])), "points_offsets"),
+        (lambda: _core.far_from(P, P, 0.1, np.array([0.0, 3.0])), "points_offsets"),
+        (lambda: _core.far_from(P.T.copy(), P, 0.1), "points"),
         (call_neighbours(rows=np.ones(3)), "rows"),
         (call_planner(detections=np.zeros((2, 3))), "detections"),
         (call_planner(detections=np.zeros(4)), "detections"),
@@ -827,6 +854,8 @@ def test_core_rejects_bad_auxiliary_arrays_naming_the_argument(call, name):
     [
         (lambda bad: call_neighbours(positions=with_value(P, bad)), "positions"),
         (lambda bad: call_neighbours(headings=with_value(np.zeros(3), bad, 2)), "headings"),
+        (lambda bad: lambda: _core.far_from(with_value(P, bad), P, 0.1), "points"),
+        (lambda bad: lambda: _core.far_from(P, with_value(P, bad), 0.1), "others"),
         (lambda bad: call_hrvo(positions=with_value(P, bad)), "positions"),
         (lambda bad: call_hrvo(positions=with_value(P, bad), indptr=CSR[0], indices=CSR[1]), "positions"),
         (lambda bad: call_hrvo(velocities=with_value(P, bad, (2, 1))), "velocities"),
@@ -872,6 +901,8 @@ def test_core_rejects_non_finite_values_naming_the_argument(make, name, bad):
         (call_cells(resolution=2), "resolution"),
         (call_cells(resolution=0), "resolution"),
         (call_agents(range=-1.0), "range"),
+        (lambda: _core.far_from(P, P, -0.1), "distance"),
+        (lambda: _core.far_from(P, P, np.nan), "distance"),
         (call_agents(range=np.nan), "range"),
         (call_agents(offset=-0.05), "offset"),
         (lambda: _core.HrvoPlanner(GRID, safety=-1.0, v_max=V_MAX, bounds=None, include_preferred=True), "safety"),

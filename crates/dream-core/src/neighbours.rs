@@ -10,7 +10,7 @@ use std::f64::consts::{PI, TAU};
 
 use rayon::prelude::*;
 
-use crate::error::{check_finite, check_len, GeomError, Result};
+use crate::error::{check_finite, check_len, check_offsets, GeomError, Result};
 use crate::grid::Grid;
 
 /// Rows below this count run on one thread: spawning costs more than it saves.
@@ -233,6 +233,73 @@ fn length(squared: f64, dx: f64, dy: f64) -> f64 {
     }
 }
 
+/// Rows of `points` and `others`: row r is `points[points_offsets[r]..points_offsets[r + 1]]`
+/// with `others[others_offsets[r]..others_offsets[r + 1]]`.
+#[derive(Debug, Clone, Copy)]
+pub struct RowsOf<'a> {
+    pub points: &'a [[f64; 2]],
+    pub points_offsets: &'a [i64],
+    pub others: &'a [[f64; 2]],
+    pub others_offsets: &'a [i64],
+}
+
+/// Which `points` lie farther than `distance` from every one of `others` in the same row (all
+/// of them in a row with no others): each robot's detections that no message accounts for, say.
+/// Distances are `hypot(p - q)`, as in the NumPy reference.
+///
+/// # Errors
+/// Non-finite points, offsets that do not cut both arrays into as many rows, or a negative or
+/// non-finite distance.
+pub fn far_from(rows: RowsOf<'_>, distance: f64) -> Result<Vec<bool>> {
+    let RowsOf {
+        points,
+        points_offsets,
+        others,
+        others_offsets,
+    } = rows;
+    check_finite("points", points.as_flattened())?;
+    check_finite("others", others.as_flattened())?;
+    check_offsets("points_offsets", points_offsets, points.len(), "points")?;
+    check_offsets("others_offsets", others_offsets, others.len(), "others")?;
+    check_len("others_offsets", points_offsets.len(), others_offsets.len())?;
+    if !(distance.is_finite() && distance >= 0.0) {
+        return Err(GeomError::InvalidParameter {
+            arg: "distance",
+            rule: ">= 0",
+            got: distance,
+        });
+    }
+    // A hair wider than `distance`: rounding cannot drop a match from the box.
+    let margin = distance * (1.0 + 1e-9);
+    let row = |r: usize| -> Vec<bool> {
+        let mine = &points[points_offsets[r] as usize..points_offsets[r + 1] as usize];
+        let theirs = &others[others_offsets[r] as usize..others_offsets[r + 1] as usize];
+        // Only the others near the box around this row's points can match: a robot in a crowd
+        // hears hundreds of robots and sees a few.
+        let (mut low, mut high) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in mine {
+            for axis in 0..2 {
+                low[axis] = low[axis].min(p[axis]);
+                high[axis] = high[axis].max(p[axis]);
+            }
+        }
+        let near: Vec<[f64; 2]> = theirs
+            .iter()
+            .filter(|q| (0..2).all(|axis| q[axis] >= low[axis] - margin && q[axis] <= high[axis] + margin))
+            .copied()
+            .collect();
+        mine.iter()
+            .map(|p| !near.iter().any(|q| (p[0] - q[0]).hypot(p[1] - q[1]) <= distance))
+            .collect()
+    };
+    let count = points_offsets.len() - 1;
+    Ok(if points.len() + others.len() >= PARALLEL_ROWS * 16 {
+        (0..count).into_par_iter().flat_map_iter(row).collect()
+    } else {
+        (0..count).flat_map(row).collect()
+    })
+}
+
 /// Robots per parallel task (whole cells at a time).
 const BLOCK_ROWS: usize = 1024;
 
@@ -424,6 +491,36 @@ mod tests {
             assert_eq!(some[i], if asked[i] { all[i].clone() } else { vec![] });
         }
         assert!(within(&xs, &ys, 0.7, None, None, Some(&asked[1..])).is_err());
+    }
+
+    #[test]
+    fn far_from_matches_within_rows_only() {
+        let points = [[0.0, 0.0], [1.0, 0.0], [5.0, 5.0]];
+        let others = [[0.05, 0.0], [5.0, 5.05], [1.0, 0.1]];
+        let rows = RowsOf {
+            points: &points,
+            points_offsets: &[0, 2, 3],
+            others: &others,
+            others_offsets: &[0, 2, 3],
+        };
+        // Row 0 hears (0.05, 0) and (5, 5.05): robot 0 matched, robot 1 not (its match is in row 1).
+        assert_eq!(far_from(rows, 0.08).unwrap(), vec![false, true, true]);
+        assert_eq!(far_from(rows, 0.1).unwrap(), vec![false, true, true]);
+        let inclusive = RowsOf {
+            points_offsets: &[0, 3],
+            others_offsets: &[0, 3],
+            ..rows
+        };
+        assert_eq!(far_from(inclusive, 0.1).unwrap(), vec![false, false, false]);
+        assert!(far_from(
+            RowsOf {
+                points_offsets: &[0, 3],
+                ..rows
+            },
+            0.1
+        )
+        .is_err());
+        assert!(far_from(rows, -1.0).is_err());
     }
 
     #[test]

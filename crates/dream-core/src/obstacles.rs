@@ -14,7 +14,7 @@ use parry2d_f64::math::Vector;
 use parry2d_f64::query::PointQuery;
 use parry2d_f64::shape::ConvexPolygon;
 
-use crate::error::{check_finite, GeomError, Result};
+use crate::error::{check_finite, check_offsets, GeomError, Result};
 use crate::hrvo::Vec2;
 
 /// Least distance (m) from a robot to the bisector of its virtual agent.
@@ -70,16 +70,7 @@ impl Obstacles {
     /// [`MIN_AREA`] ([`GeomError::DegenerateObstacle`]).
     pub fn new(vertices: &[Vec2], offsets: &[i64]) -> Result<Self> {
         check_finite("obstacle vertices", vertices.as_flattened())?;
-        let rising = offsets.first() == Some(&0)
-            && offsets.last() == Some(&(vertices.len() as i64))
-            && offsets.windows(2).all(|w| w[0] <= w[1]);
-        if !rising {
-            return Err(GeomError::InvalidCsr {
-                arg: "obstacles",
-                rows: offsets.len().saturating_sub(1),
-                reason: "its offsets must rise from 0 to the number of vertices".into(),
-            });
-        }
+        check_offsets("obstacles", offsets, vertices.len(), "vertices")?;
         let polygons = offsets
             .windows(2)
             .enumerate()

@@ -16,7 +16,7 @@ use std::f64::consts::TAU;
 use rayon::prelude::*;
 
 use crate::dynamics::Arena;
-use crate::error::{check_finite, check_len, GeomError, Result};
+use crate::error::{check_finite, check_len, check_offsets, GeomError, Result};
 use crate::hrvo::Vec2;
 use crate::neighbours;
 
@@ -273,15 +273,7 @@ pub fn voronoi_cells(
     if let Some((indptr, points)) = virtual_agents {
         check_len("virtual indptr", n + 1, indptr.len())?;
         check_coordinates("virtual", points.as_flattened())?;
-        let ok = indptr[0] == 0 && indptr[n] == points.len() as i64 && indptr.windows(2).all(|w| w[0] <= w[1]);
-        if !ok {
-            let reason = "its offsets must rise from 0 to the number of points".into();
-            return Err(GeomError::InvalidCsr {
-                arg: "virtual",
-                rows: n,
-                reason,
-            });
-        }
+        check_offsets("virtual", indptr, points.len(), "points")?;
     }
     let (xs, ys): (Vec<f64>, Vec<f64>) = positions.iter().map(|p| (p[0], p[1])).unzip();
     // Robots beyond twice a robot's (shrunk) disc radius cannot clip its cell.

@@ -1,10 +1,10 @@
 //! Bindings of `dream_core::neighbours`: range and field-of-view queries as CSR arrays.
 
-use dream_core::neighbours::{self as core, FieldOfView};
+use dream_core::neighbours::{self as core, FieldOfView, RowsOf};
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 
-use crate::arrays::{count_of, flags_of, points_of, vector_of};
+use crate::arrays::{count_of, flags_of, indices_of, points_of, vector_of};
 use crate::errors::PyDreamResult;
 
 type CsrArrays<'py> = (
@@ -48,4 +48,36 @@ pub fn neighbours<'py>(
         csr.indices.into_pyarray(py),
         csr.distances.into_pyarray(py),
     ))
+}
+
+/// Which `points` `(k, 2)` lie farther than `distance` from every one of `others` `(m, 2)` in the
+/// same row (rows cut by the offsets; one row without them), as a bool array `(k,)`.
+#[pyfunction]
+#[pyo3(signature = (points, others, distance, points_offsets=None, others_offsets=None))]
+pub fn far_from<'py>(
+    py: Python<'py>,
+    points: Bound<'py, PyAny>,
+    others: Bound<'py, PyAny>,
+    distance: f64,
+    points_offsets: Option<Bound<'py, PyAny>>,
+    others_offsets: Option<Bound<'py, PyAny>>,
+) -> PyDreamResult<Bound<'py, PyArray1<bool>>> {
+    let points = points_of::<2>("points", &points)?;
+    let others = points_of::<2>("others", &others)?;
+    let offsets = |arg: &str, given: Option<Bound<'py, PyAny>>, len: usize| match given {
+        Some(offsets) => indices_of(arg, &offsets),
+        None => Ok(vec![0, len as i64]),
+    };
+    let points_offsets = offsets("points_offsets", points_offsets, points.len())?;
+    let others_offsets = offsets("others_offsets", others_offsets, others.len())?;
+    let far = py.detach(|| {
+        let rows = RowsOf {
+            points: &points,
+            points_offsets: &points_offsets,
+            others: &others,
+            others_offsets: &others_offsets,
+        };
+        core::far_from(rows, distance)
+    })?;
+    Ok(far.into_pyarray(py))
 }

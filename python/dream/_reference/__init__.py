@@ -24,7 +24,7 @@ from dream._reference.hrvo import (
     hrvo_velocity,
     unit_directions,
 )
-from dream._reference.neighbours import neighbours, neighbours_of
+from dream._reference.neighbours import far_from, neighbours, neighbours_of
 from dream._reference.obstacles import agents_from_closest, mirrored, virtual_agents
 from dream._reference.raycast import distance_rays
 from dream._reference.voronoi import voronoi_cell, voronoi_cells
@@ -38,6 +38,7 @@ __all__ = [
     "detection_directions",
     "distance_rays",
     "dxi_to_dxu",
+    "far_from",
     "hrvo",
     "hrvo_velocity",
     "neighbours",

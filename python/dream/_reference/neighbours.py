@@ -75,3 +75,24 @@ def neighbours(
     indices = np.concatenate([js for js, _ in found]) if found else np.zeros(0, dtype=np.int64)
     distances = np.concatenate([d for _, d in found]) if found else np.zeros(0)
     return indptr, indices.astype(np.int64), distances
+
+
+def far_from(
+    points: FloatArray,
+    others: FloatArray,
+    distance: float,
+    points_offsets: np.ndarray | None = None,
+    others_offsets: np.ndarray | None = None,
+) -> np.ndarray:
+    """``(k,)`` bool: which of ``points`` ``(k, 2)`` lie farther than ``distance`` (``hypot``) from
+    every one of ``others`` ``(m, 2)`` in the same row; the offsets ``(rows + 1,)`` cut both into
+    rows (one row without them)."""
+    points_offsets = np.array([0, len(points)]) if points_offsets is None else points_offsets
+    others_offsets = np.array([0, len(others)]) if others_offsets is None else others_offsets
+    far = np.ones(len(points), dtype=bool)
+    for row in range(len(points_offsets) - 1):
+        start, stop = points_offsets[row], points_offsets[row + 1]
+        mine, theirs = points[start:stop], others[others_offsets[row] : others_offsets[row + 1]]
+        gaps = np.hypot(mine[:, None, 0] - theirs[None, :, 0], mine[:, None, 1] - theirs[None, :, 1])
+        far[start:stop] = np.all(gaps > distance, axis=1)
+    return far

@@ -11,7 +11,7 @@ stops within 0.05 m of it. No HRVO: the cells themselves keep the robots apart.
 Swarm mode (``swarm=True``, :meth:`VoronoiCoverage.swarm_step`) runs the same robots on arrays:
 each robot at its own timer's steps (:func:`dream.timers.due`), with what its sensors and radio
 gave it (a radio hears the position a robot of lower id sent in the same step, as the per-robot
-timers, which run by id, imply), the shared rules (:func:`dream.rules.unheard`,
+timers, which run by id, imply), the shared rules (:func:`dream.rules.far_from`,
 :func:`dream.rules.approach`, the motion guard of :func:`dream.robot.stopping`) and each robot's
 cell clipped by what it knows alone (one :func:`dream.kernels.voronoi_cells` call, each cell
 clipped by its own points). The trajectories equal the per-robot mode's to rounding.
@@ -425,7 +425,11 @@ class VoronoiCoverage(Experiment):
         team, k = self.team, len(who)
         here = team.pose[:2, who].T
         seen, looked = Seen.last(self.seen, step, who, team.delays[who])
-        silent = rules.unheard(seen, looked, others, heard, SAME_ROBOT)
+        heard_counts = np.bincount(heard, minlength=k)
+        seen_offsets, heard_offsets = (
+            np.concatenate(([0], np.cumsum(c))) for c in (np.bincount(looked, minlength=k), heard_counts)
+        )
+        silent = rules.far_from(seen, others, SAME_ROBOT, offsets=(seen_offsets, heard_offsets))
         points = team.points[who].reshape(-1, 2)
         owners = np.repeat(np.arange(k), team.points.shape[1])
         agents = kernels.obstacle_agents(here[owners], points, robot_radius=GRITSBOT.radius, margin=MARGIN)
@@ -435,7 +439,7 @@ class VoronoiCoverage(Experiment):
         extra_rows = np.concatenate((looked[silent], owners[sensed_agent]))
         order = np.argsort(extra_rows, kind="stable")
         extras = np.vstack((seen[silent], agents[sensed_agent]))[order]
-        heard_counts, extra_counts = np.bincount(heard, minlength=k), np.bincount(extra_rows, minlength=k)
+        extra_counts = np.bincount(extra_rows, minlength=k)
         indptr = np.concatenate(([0], np.cumsum(heard_counts + extra_counts)))
         extras_before = np.cumsum(extra_counts) - extra_counts
         clips = np.empty((indptr[-1], 2))

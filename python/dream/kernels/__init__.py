@@ -27,7 +27,7 @@ from dream.kernels._dynamics import (
     wheel_speeds,
 )
 from dream.kernels._hrvo import HrvoPlanner, hrvo
-from dream.kernels._neighbours import neighbours, neighbours_of
+from dream.kernels._neighbours import far_from, neighbours, neighbours_of
 from dream.kernels._obstacles import obstacle_agents, virtual_agents
 from dream.kernels._raycast import distance_rays
 from dream.kernels._voronoi import VoronoiCells, voronoi_cell, voronoi_cells
@@ -48,6 +48,7 @@ __all__ = [
     "actuator_limit",
     "neighbours",
     "neighbours_of",
+    "far_from",
     "HrvoPlanner",
     "hrvo",
     "VoronoiCells",

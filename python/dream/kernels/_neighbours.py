@@ -76,3 +76,45 @@ def neighbours_of(
     check_robot_id(robot_id, p.shape[0], "positions")
     check_nonnegative(radius, "radius")
     return _reference.neighbours_of(p, robot_id, radius, heading=heading, direction=direction, fov=fov)
+
+
+def far_from(points: Any, others: Any, distance: float, *, offsets: tuple[Any, Any] | None = None) -> np.ndarray:
+    """Which ``points`` lie farther than ``distance`` from every one of ``others``: robots seen that
+    no message accounts for, or claims that match no robot seen.
+
+    Parameters
+    ----------
+    points : (k, 2)
+    others : (m, 2)
+    distance : float
+        Inclusive matching distance (m): a point at exactly ``distance`` from another is matched.
+    offsets : (points_offsets (rows + 1,), others_offsets (rows + 1,)), optional
+        Several robots at once: row r's points ``points[points_offsets[r]:points_offsets[r + 1]]``
+        are matched against its others alone. Without, all are one row.
+
+    Returns
+    -------
+    far : (k,) bool
+    """
+    p = as_array(points, "points", (None, 2))
+    q = as_array(others, "others", (None, 2))
+    check_nonnegative(distance, "distance")
+    if offsets is None:
+        return implementation("far_from")(p, q, distance)
+    cuts = [_offsets(given, name, len(array)) for given, name, array in zip(offsets, OFFSET_NAMES, (p, q), strict=True)]
+    if len(cuts[0]) != len(cuts[1]):
+        raise ValueError(
+            f"`offsets` must cut points and others into as many rows, got {len(cuts[0]) - 1} and {len(cuts[1]) - 1}"
+        )
+    return implementation("far_from")(p, q, distance, *cuts)
+
+
+OFFSET_NAMES = ("points_offsets", "others_offsets")
+
+
+def _offsets(given: Any, name: str, length: int) -> np.ndarray:
+    """``given`` as int64 offsets ``(rows + 1,)`` rising from 0 to ``length``."""
+    cuts = np.ascontiguousarray(given, dtype=np.int64)
+    if cuts.ndim != 1 or len(cuts) == 0 or cuts[0] != 0 or cuts[-1] != length or np.any(np.diff(cuts) < 0):
+        raise ValueError(f"`{name}` must rise from 0 to {length} (the number of its points), got {cuts}")
+    return cuts
