@@ -13,3 +13,9 @@ def spans(starts: Any, counts: Any) -> np.ndarray:
     counts = np.asarray(counts, dtype=np.int64)
     first = np.asarray(starts, dtype=np.int64) - np.cumsum(counts) + counts
     return np.repeat(first, counts) + np.arange(counts.sum())
+
+
+def offsets_of(rows: Any, count: int) -> np.ndarray:
+    """The offsets ``(count + 1,)`` of CSR rows from the row ``rows`` ``(m,)`` (sorted ints below
+    ``count``) of each entry: row r's entries are ``offsets[r]:offsets[r + 1]``."""
+    return np.concatenate(([0], np.cumsum(np.bincount(rows, minlength=count))))

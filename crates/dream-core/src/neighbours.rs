@@ -271,6 +271,18 @@ pub fn far_from(rows: RowsOf<'_>, distance: f64) -> Result<Vec<bool>> {
     }
     // A hair wider than `distance`: rounding cannot drop a match from the box.
     let margin = distance * (1.0 + 1e-9);
+    // `hypot` decides only where the squared distance is too close to call: it is the slow part.
+    let squared = distance * distance;
+    let (surely_in, surely_out) = if squared > 1e-300 {
+        (squared * (1.0 - 1e-9), squared * (1.0 + 1e-9))
+    } else {
+        (f64::NEG_INFINITY, f64::INFINITY) // squares of tiny distances lose their precision
+    };
+    let within_distance = |p: &[f64; 2], q: &[f64; 2]| {
+        let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
+        let square = dx * dx + dy * dy;
+        square < surely_in || (square <= surely_out && dx.hypot(dy) <= distance)
+    };
     let row = |r: usize| -> Vec<bool> {
         let mine = &points[points_offsets[r] as usize..points_offsets[r + 1] as usize];
         let theirs = &others[others_offsets[r] as usize..others_offsets[r + 1] as usize];
@@ -289,7 +301,7 @@ pub fn far_from(rows: RowsOf<'_>, distance: f64) -> Result<Vec<bool>> {
             .copied()
             .collect();
         mine.iter()
-            .map(|p| !near.iter().any(|q| (p[0] - q[0]).hypot(p[1] - q[1]) <= distance))
+            .map(|p| !near.iter().any(|q| within_distance(p, q)))
             .collect()
     };
     let count = points_offsets.len() - 1;

@@ -40,7 +40,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from dream import kernels, rules, timers
-from dream._csr import spans
+from dream._csr import offsets_of, spans
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
 from dream.obstacles import Obstacle, sensed, touching
@@ -425,11 +425,8 @@ class VoronoiCoverage(Experiment):
         team, k = self.team, len(who)
         here = team.pose[:2, who].T
         seen, looked = Seen.last(self.seen, step, who, team.delays[who])
-        heard_counts = np.bincount(heard, minlength=k)
-        seen_offsets, heard_offsets = (
-            np.concatenate(([0], np.cumsum(c))) for c in (np.bincount(looked, minlength=k), heard_counts)
-        )
-        silent = rules.far_from(seen, others, SAME_ROBOT, offsets=(seen_offsets, heard_offsets))
+        heard_offsets = offsets_of(heard, k)
+        silent = rules.far_from(seen, others, SAME_ROBOT, offsets=(offsets_of(looked, k), heard_offsets))
         points = team.points[who].reshape(-1, 2)
         owners = np.repeat(np.arange(k), team.points.shape[1])
         agents = kernels.obstacle_agents(here[owners], points, robot_radius=GRITSBOT.radius, margin=MARGIN)
@@ -439,12 +436,8 @@ class VoronoiCoverage(Experiment):
         extra_rows = np.concatenate((looked[silent], owners[sensed_agent]))
         order = np.argsort(extra_rows, kind="stable")
         extras = np.vstack((seen[silent], agents[sensed_agent]))[order]
-        extra_counts = np.bincount(extra_rows, minlength=k)
-        indptr = np.concatenate(([0], np.cumsum(heard_counts + extra_counts)))
-        extras_before = np.cumsum(extra_counts) - extra_counts
-        clips = np.empty((indptr[-1], 2))
-        clips[np.arange(len(heard)) + extras_before[heard]] = others
-        clips[np.arange(len(extras)) + (indptr[:-1] + heard_counts - extras_before)[extra_rows[order]]] = extras
+        indptr = heard_offsets + offsets_of(extra_rows, k)
+        clips = np.insert(others, heard_offsets[1:][extra_rows[order]], extras, axis=0)
         team.centroid[who] = self._cells(who, here, indptr, clips)
         dxi = rules.approach(here, team.centroid[who], GAIN, GRITSBOT.v_max, arrival_for(self.n))
         new = kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, team.pose[:, who]), GRITSBOT.within(self.sim.spec))
