@@ -14,7 +14,7 @@ use crate::error::{check_finite, check_len, check_offsets, GeomError, Result};
 use crate::grid::Grid;
 
 /// Rows below this count run on one thread: spawning costs more than it saves.
-const PARALLEL_ROWS: usize = 2048;
+const PARALLEL_ROWS: usize = 512;
 
 /// A sensor's field of view: robot i looks along `headings[i] + direction` with full aperture `fov`.
 #[derive(Debug, Clone, Copy)]
@@ -313,7 +313,7 @@ pub fn far_from(rows: RowsOf<'_>, distance: f64) -> Result<Vec<bool>> {
 }
 
 /// Robots per parallel task (whole cells at a time).
-const BLOCK_ROWS: usize = 1024;
+const BLOCK_ROWS: usize = 256;
 
 /// The rows of some robots, flat: row k belongs to robot `robots[k]`.
 #[derive(Debug, Default)]

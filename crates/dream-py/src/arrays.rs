@@ -8,23 +8,33 @@ use pyo3::prelude::*;
 
 use crate::errors::{shape_error, value_error, PyDreamResult};
 
-/// The float64 (or int64, via `T`) values of `object` in row-major order, with its shape.
-fn values_of<T: numpy::Element + Copy>(
+/// `read(values, shape)` on the float64 (or int64, via `T`) values of `object` in row-major
+/// order: borrowed from a C-ordered array (no copy), copied from any other.
+fn with_values<T: numpy::Element + Copy, R>(
     arg: &str,
     object: &Bound<'_, PyAny>,
     kind: &str,
-) -> PyDreamResult<(Vec<T>, Vec<usize>)> {
+    read: impl FnOnce(&[T], &[usize]) -> PyDreamResult<R>,
+) -> PyDreamResult<R> {
     let array = object
         .cast::<PyArrayDyn<T>>()
         .map_err(|_| value_error(format!("`{arg}` must be a NumPy array of {kind}")))?;
     let readonly = array.try_readonly().map_err(|e| value_error(format!("`{arg}`: {e}")))?;
     let shape = readonly.shape().to_vec();
     // `as_slice` also accepts Fortran order, whose memory is not row-major: only trust C order.
-    let values = match readonly.as_slice() {
-        Ok(slice) if readonly.is_c_contiguous() => slice.to_vec(),
-        _ => readonly.as_array().iter().copied().collect(),
-    };
-    Ok((values, shape))
+    match readonly.as_slice() {
+        Ok(slice) if readonly.is_c_contiguous() => read(slice, &shape),
+        _ => read(&readonly.as_array().iter().copied().collect::<Vec<T>>(), &shape),
+    }
+}
+
+/// The values of `object` in row-major order, with its shape.
+fn values_of<T: numpy::Element + Copy>(
+    arg: &str,
+    object: &Bound<'_, PyAny>,
+    kind: &str,
+) -> PyDreamResult<(Vec<T>, Vec<usize>)> {
+    with_values(arg, object, kind, |values, shape| Ok((values.to_vec(), shape.to_vec())))
 }
 
 fn float_values(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<(Vec<f64>, Vec<usize>)> {
@@ -42,11 +52,12 @@ pub fn rows_of(arg: &str, object: &Bound<'_, PyAny>, rows: usize) -> PyDreamResu
 
 /// Copies an `(n, W)` float64 array into `n` fixed-size rows.
 pub fn points_of<const W: usize>(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<Vec<[f64; W]>> {
-    let (values, shape) = float_values(arg, object)?;
-    if shape.len() != 2 || shape[1] != W {
-        return Err(shape_error(arg, &format!("(n, {W})"), &shape));
-    }
-    Ok(values.chunks_exact(W).map(|c| std::array::from_fn(|k| c[k])).collect())
+    with_values(arg, object, "float64", |values: &[f64], shape| {
+        if shape.len() != 2 || shape[1] != W {
+            return Err(shape_error(arg, &format!("(n, {W})"), shape));
+        }
+        Ok(values.chunks_exact(W).map(|c| std::array::from_fn(|k| c[k])).collect())
+    })
 }
 
 /// Copies a 1-D float64 array, checking its length when `len` is given.

@@ -37,7 +37,6 @@ from dataclasses import dataclass
 from typing import Any, NamedTuple
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from dream import kernels, rules, timers
 from dream._csr import offsets_of, spans
@@ -152,6 +151,9 @@ def coverage_cost(positions: np.ndarray, arena: ArenaSpec, obstacles: list[Obsta
     k-d tree of the robots finds each point's nearest robot: at 10,000 robots, 100 times faster
     than measuring every point-robot pair.
     """
+    # Imported here: scipy.spatial takes ~0.2 s to load, more than all the rest of `import dream`.
+    from scipy.spatial import cKDTree
+
     distances, _ = cKDTree(positions.T).query(free_points(arena, obstacles, step))
     return float(np.sum(distances * distances)) * step * step
 
@@ -287,8 +289,11 @@ class CoverageSwarm:
         The closest point of each obstacle at each robot's last obstacle reading (NaN: not sensed).
     centroid : (n, 2) ndarray
         Each robot's last centroid (NaN before its first decision).
-    cells : list of (m, 2) ndarrays
-        Each robot's last cell, for drawing.
+    drawn : (n, 2) int ndarray
+        Where each robot's last cell is, for drawing: the decision (a key of ``polygons``) and
+        the robot's row in it (-1 before its first decision).
+    polygons : dict
+        The cells of the decisions that hold some robot's last cell: CSR ``(vertices, offsets)``.
     """
 
     delays: np.ndarray
@@ -296,7 +301,8 @@ class CoverageSwarm:
     board: np.ndarray
     points: np.ndarray
     centroid: np.ndarray
-    cells: list[np.ndarray]
+    drawn: np.ndarray
+    polygons: dict[int, tuple[np.ndarray, np.ndarray]]
 
     @classmethod
     def start(cls, n: int, obstacles: int) -> CoverageSwarm:
@@ -307,8 +313,17 @@ class CoverageSwarm:
             board=np.full((n, 2), np.nan),
             points=np.full((n, obstacles, 2), np.nan),
             centroid=np.full((n, 2), np.nan),
-            cells=[np.zeros((0, 2)) for _ in range(n)],
+            drawn=np.full((n, 2), -1),
+            polygons={},
         )
+
+    def cells(self) -> list[np.ndarray]:
+        """Each robot's last cell ``(m, 2)`` (empty before its first decision)."""
+        out = []
+        for step, row in self.drawn:
+            vertices, offsets = self.polygons.get(step, (np.zeros((0, 2)), np.zeros(1, dtype=np.int64)))
+            out.append(vertices[offsets[row] : offsets[row + 1]] if row >= 0 else np.zeros((0, 2)))
+        return out
 
 
 def start_delays(n: int) -> np.ndarray:
@@ -438,18 +453,19 @@ class VoronoiCoverage(Experiment):
         extras = np.vstack((seen[silent], agents[sensed_agent]))[order]
         indptr = heard_offsets + offsets_of(extra_rows, k)
         clips = np.insert(others, heard_offsets[1:][extra_rows[order]], extras, axis=0)
-        team.centroid[who] = self._cells(who, here, indptr, clips)
+        team.centroid[who] = self._cells(step, who, here, indptr, clips)
         dxi = rules.approach(here, team.centroid[who], GAIN, GRITSBOT.v_max, arrival_for(self.n))
         new = kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, team.pose[:, who]), GRITSBOT.within(self.sim.spec))
         near = guard_distance(self.rules)
         new[0, stopping(new[0], team.pose[2, who], looked, here[looked] - seen, near)] = 0.0
         commands[:, who] = new
 
-    def _cells(self, who: np.ndarray, here: np.ndarray, indptr: np.ndarray, clips: np.ndarray) -> np.ndarray:
+    def _cells(self, step: int, who: np.ndarray, here: np.ndarray, indptr: np.ndarray, clips: np.ndarray) -> np.ndarray:
         """Centroids ``(k, 2)`` of the cells of robots ``who`` at ``here`` ``(k, 2)``, each clipped by
         its points ``clips`` ``(m, 2)`` (CSR rows ``indptr``) alone, as :func:`dream.kernels.voronoi_cell`
         clips it: one :func:`dream.kernels.voronoi_cells` call, with the clipping points as each
-        robot's virtual agents and no clipping by the other robots."""
+        robot's virtual agents and no clipping by the other robots. The polygons are kept, by
+        ``step``, for drawing."""
         cells = kernels.voronoi_cells(
             here,
             radius=CELL_RADIUS,
@@ -459,8 +475,11 @@ class VoronoiCoverage(Experiment):
             neighbours=False,
         )
         assert cells.vertices is not None and cells.offsets is not None  # polygons=True
-        for i, polygon in zip(who, np.split(cells.vertices, cells.offsets[1:-1]), strict=True):
-            self.team.cells[i] = polygon
+        team = self.team
+        team.drawn[who] = np.column_stack((np.full(len(who), step), np.arange(len(who))))
+        team.polygons[step] = (cells.vertices, cells.offsets)
+        for gone in set(team.polygons) - set(np.unique(team.drawn[:, 0]).tolist()):
+            del team.polygons[gone]
         return cells.centroids
 
     def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -522,7 +541,7 @@ class VoronoiCoverage(Experiment):
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
         if self.swarm:
-            goals, cells = self.team.centroid, self.team.cells
+            goals, cells = self.team.centroid, self.team.cells()
         else:
             goals = np.array([np.full(2, np.nan) if r.centroid is None else r.centroid for r in self.robots])
             cells = [r.cell for r in self.robots]
