@@ -35,33 +35,31 @@ pub struct Csr {
 impl Csr {
     /// Puts the blocks' rows in robot order.
     fn from_blocks(blocks: Vec<Block>, n: usize) -> Self {
-        let mut lengths = vec![0_usize; n];
-        for block in &blocks {
-            for (&i, &length) in block.robots.iter().zip(&block.lengths) {
-                lengths[i] = length;
-            }
-        }
-        let mut indptr = Vec::with_capacity(n + 1);
-        indptr.push(0_i64);
-        for &length in &lengths {
-            indptr.push(indptr[indptr.len() - 1] + length as i64);
-        }
-        let total = indptr[n] as usize;
-        let (mut indices, mut distances) = (vec![0_i64; total], vec![0.0; total]);
-        for block in &blocks {
+        // Where each robot's row is: (block, start, length); robots not asked have none.
+        let mut rows = vec![(0_usize, 0_usize, 0_usize); n];
+        for (b, block) in blocks.iter().enumerate() {
             let mut from = 0;
             for (&i, &length) in block.robots.iter().zip(&block.lengths) {
-                let to = indptr[i] as usize;
-                indices[to..to + length].copy_from_slice(&block.indices[from..from + length]);
-                distances[to..to + length].copy_from_slice(&block.distances[from..from + length]);
+                rows[i] = (b, from, length);
                 from += length;
             }
         }
-        Csr {
-            indptr,
-            indices,
-            distances,
+        let total = blocks.iter().map(|block| block.indices.len()).sum();
+        let mut csr = Csr {
+            indptr: Vec::with_capacity(n + 1),
+            indices: Vec::with_capacity(total),
+            distances: Vec::with_capacity(total),
+        };
+        csr.indptr.push(0);
+        for (b, from, length) in rows {
+            if length > 0 {
+                let block = &blocks[b];
+                csr.indices.extend_from_slice(&block.indices[from..from + length]);
+                csr.distances.extend_from_slice(&block.distances[from..from + length]);
+            }
+            csr.indptr.push(csr.indices.len() as i64);
         }
+        csr
     }
 }
 
