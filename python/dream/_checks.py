@@ -45,6 +45,22 @@ def as_flags(value: Any, name: str, n: int) -> NDArray[np.bool_]:
     return array
 
 
+def as_offsets(value: Any, name: str, length: int, rows: int | None = None, part: str = "") -> NDArray[np.int64]:
+    """``value`` as int64 CSR offsets ``(rows + 1,)`` rising from 0 to ``length``, the number of
+    entries they cut into rows (any number of rows when ``rows`` is ``None``); errors name
+    ``name`` and the ``part`` of it that the offsets are (``"indptr"``, say)."""
+    what = f"`{name}`" + (f" {part}" if part else "")
+    array = np.asarray(value)
+    if array.size and array.dtype.kind not in "iu":
+        raise ValueError(f"{what} must hold integer offsets, got dtype {array.dtype}")
+    cuts = np.ascontiguousarray(array, dtype=np.int64)
+    fits = cuts.ndim == 1 and len(cuts) >= 1 and (rows is None or len(cuts) == rows + 1)
+    if not fits or cuts[0] != 0 or cuts[-1] != length or np.any(np.diff(cuts) < 0):
+        shape = "(rows + 1,)" if rows is None else f"({rows + 1},)"
+        raise ValueError(f"{what} must be offsets of shape {shape} rising from 0 to {length}, got {cuts.tolist()[:8]}")
+    return cuts
+
+
 def all_finite(array: np.ndarray) -> bool:
     """Whether every value of the float ``array`` is finite; a robot's small arrays through
     :func:`math.isfinite` (several times faster there than NumPy's per-call cost)."""

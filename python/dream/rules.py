@@ -361,7 +361,7 @@ def seen_positions(position: Any, detections: Any) -> FloatArray:
     return np.column_stack((position[0] - d * np.cos(angle), position[1] - d * np.sin(angle)))
 
 
-def far_from(points: Any, others: Any, distance: float, offsets: tuple[Any, Any] | None = None) -> np.ndarray:
+def far_from(points: Any, others: Any, distance: float, *, offsets: tuple[Any, Any] | None = None) -> np.ndarray:
     """``(k,)`` bool: which of ``points`` ``(k, 2)`` lie farther than ``distance`` (m) from every one
     of ``others`` ``(m, 2)`` (all of them when there are none): robots seen that no claimed
     position accounts for, or claims that match no robot seen. Several robots at once: their

@@ -7,6 +7,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from dream import Obstacle, ObstacleSensor, rules
+from dream._csr import offsets_of
 from dream.experiments import voronoi_coverage as vc
 from dream.obstacles import sensed
 from dream.specs import ROBOTARIUM, ArenaSpec
@@ -134,11 +135,6 @@ def test_voronoi_coverage_thousand_robots_spread_without_collision():
     assert result.n == 1000 and result.collisions == 0
     assert result.measures["static_contacts"] == 0
     assert result.measures["cost_end"] < result.measures["cost_start"]
-
-
-def offsets_of(rows, count):
-    """CSR offsets of the entries of rows ``rows`` (sorted) among ``count`` rows."""
-    return np.concatenate(([0], np.cumsum(np.bincount(rows, minlength=count))))
 
 
 @pytest.mark.parametrize("seed", range(20))

@@ -255,11 +255,23 @@ def test_neighbours_property_on_a_coarse_lattice(points, radius):
         (lambda: kernels.far_from(np.zeros((3, 2)), np.zeros((1, 2)), -0.1), r"`distance`"),
         (
             lambda: kernels.far_from(np.zeros((3, 2)), np.zeros((1, 2)), 0.1, offsets=([0, 2], [0, 1])),
-            r"`points_offsets` must rise from 0 to 3",
+            r"`offsets` \[0\] \(of the points\) must be offsets of shape \(rows \+ 1,\) rising from 0 to 3",
         ),
         (
             lambda: kernels.far_from(np.zeros((3, 2)), np.zeros((1, 2)), 0.1, offsets=([0, 1, 3], [0, 1])),
-            r"`offsets` must cut points and others into as many rows",
+            r"`offsets` \[1\] \(of the others\) must be offsets of shape \(3,\)",
+        ),
+        (
+            lambda: kernels.far_from(np.zeros((3, 2)), np.zeros((2, 2)), 0.1, offsets=([0, 1.5, 3], [0, 1, 2])),
+            r"`offsets` \[0\] \(of the points\) must hold integer offsets",
+        ),
+        (
+            lambda: kernels.far_from(np.zeros((3, 2)), np.zeros((1, 2)), 0.1, offsets=([0, 3],)),
+            r"`offsets` must be a pair",
+        ),
+        (
+            lambda: kernels.voronoi_cells(np.zeros((2, 2)), virtual=(np.array([0.0, 1.0, 1.0]), np.zeros((1, 2)))),
+            r"`virtual` indptr must hold integer offsets",
         ),
         (lambda: kernels.neighbours_of(np.zeros((3, 2)), 0, -1.0), r"`radius`"),
     ],

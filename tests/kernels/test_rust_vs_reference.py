@@ -152,6 +152,29 @@ def test_neighbours_matches_reference_on_random_swarms(rng, n, radius, view):
         assert len(got[1]) > 0  # the comparison is not vacuous
 
 
+@pytest.mark.parametrize(("offset", "scale"), [(0.0, 1e-155), (0.0, 1e-120), (1e8, 1.0), (0.0, 1e150), (-3e9, 1e3)])
+def test_far_from_matches_reference_at_extreme_scales(rng, offset, scale):
+    # Tiny distances (squares below 1e-300: hypot decides alone), squares that overflow, and
+    # points far from the origin (the box margin against rounding), with others placed at the
+    # distance and a hair either side of it.
+    rows, distance = 30, 0.08 * scale
+    seen_counts, heard_counts = rng.integers(1, 6, rows), rng.integers(1, 12, rows)
+    points = offset + scale * rng.uniform(-1.0, 1.0, (seen_counts.sum(), 2))
+    others = offset + scale * rng.uniform(-1.0, 1.0, (heard_counts.sum(), 2))
+    firsts = np.concatenate(([0], np.cumsum(heard_counts)))[:-1]
+    owners = np.repeat(np.arange(rows), seen_counts)
+    for k, row in enumerate(owners[: 3 * rows : 3]):
+        step = distance * (1.0, 1 + 1e-15, 1 - 1e-15, 1 + 1e-9)[k % 4]
+        others[firsts[row]] = points[3 * k] + (step, 0.0)
+    offsets = [np.concatenate(([0], np.cumsum(c))) for c in (seen_counts, heard_counts)]
+    got = _core.far_from(points, others, distance, *offsets)
+    assert_array_equal(got, _reference.far_from(points, others, distance, *offsets))
+    assert_array_equal(_core.far_from(points, others, distance), _reference.far_from(points, others, distance))
+    if scale == 1e150:  # squares overflow: every pair is far apart or decided by hypot
+        wide = _core.far_from(points, others, 3.0 * scale)
+        assert_array_equal(wide, _reference.far_from(points, others, 3.0 * scale))
+
+
 @pytest.mark.parametrize("n", [1, 50, 3000])
 @pytest.mark.parametrize("share", [0.0, 0.2, 1.0])
 @pytest.mark.parametrize("with_view", [False, True])
@@ -1061,6 +1084,23 @@ def test_neighbours_is_deterministic_across_calls(rng):
         for _ in range(2):
             assert_csr_equal(core_neighbours(p, 0.5, **kw), first)
     assert_csr_equal(core_neighbours(p, 0.5), ref_neighbours(p, 0.5))
+
+
+@pytest.mark.parametrize("shift", [0.0, 0.5, 1024.0])
+def test_voronoi_cells_break_distance_ties_in_the_given_order_as_the_reference(rng, shift):
+    # Points on a lattice around each robot, all coordinates dyadic so that the squared distances
+    # tie exactly: rings of 4 or 8 equal distances (12 at 3-4-5), over more than the 32 agents
+    # sorted at a time, in a shuffled order.
+    k = np.arange(-6, 7)
+    lattice = np.column_stack([g.ravel() for g in np.meshgrid(k, k)]).astype(float) / 16
+    lattice = lattice[np.any(lattice != 0.0, axis=1)]
+    p = shift + rng.integers(-32, 32, (3, 2)) / 64
+    points = np.vstack([centre + rng.permutation(lattice) for centre in p])
+    indptr = np.arange(4) * len(lattice)
+    bounds = (shift - 1.6, shift + 1.6, shift - 1.0, shift + 1.0)
+    kw = dict(radius=1.0, bounds=bounds, virtual_indptr=indptr, virtual_points=points, neighbours=False)
+    for a, b in zip(_core.voronoi_cells(p, **kw), _reference.voronoi_cells(p, **kw), strict=True):
+        assert_array_equal(a, b)
 
 
 def test_voronoi_cells_are_deterministic_across_calls(rng):

@@ -303,12 +303,15 @@ pub fn far_from(rows: RowsOf<'_>, distance: f64) -> Result<Vec<bool>> {
             .collect()
     };
     let count = points_offsets.len() - 1;
-    Ok(if points.len() + others.len() >= PARALLEL_ROWS * 16 {
+    Ok(if points.len() + others.len() >= PARALLEL_POINTS {
         (0..count).into_par_iter().flat_map_iter(row).collect()
     } else {
         (0..count).flat_map(row).collect()
     })
 }
+
+/// Points and others below this count are matched on one thread (a few microseconds of work).
+const PARALLEL_POINTS: usize = 32_768;
 
 /// Robots per parallel task (whole cells at a time).
 const BLOCK_ROWS: usize = 256;

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 import dream._reference as _reference
-from dream._checks import Bounds, FloatArray, as_array, check_nonnegative, checked_bounds
+from dream._checks import Bounds, FloatArray, as_array, as_offsets, check_nonnegative, checked_bounds
 from dream.kernels._dispatch import implementation
 
 #: Preferred speeds above this (m/s) are scaled down to it, keeping their direction: the choice
@@ -45,10 +45,8 @@ def _grid(v_max: float, n_angles: int, n_speeds: int) -> FloatArray:
 
 
 def _checked_csr(csr: tuple[Any, Any], n: int) -> tuple[np.ndarray, np.ndarray]:
-    indptr = np.ascontiguousarray(csr[0], dtype=np.int64)
     indices = np.ascontiguousarray(csr[1], dtype=np.int64)
-    if indptr.shape != (n + 1,) or indptr[0] != 0 or np.any(np.diff(indptr) < 0) or indptr[-1] != len(indices):
-        raise ValueError(f"`neighbours` indptr must be non-decreasing of shape ({n + 1},) from 0 to len(indices)")
+    indptr = as_offsets(csr[0], "neighbours", len(indices), n, part="indptr")
     if len(indices) and (indices.min() < 0 or indices.max() >= n):
         raise ValueError(f"`neighbours` indices must be robot ids in [0, {n})")
     return indptr, indices

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 import dream._reference as _reference
-from dream._checks import FloatArray, as_array, as_flags, check_nonnegative, check_robot_id
+from dream._checks import FloatArray, as_array, as_flags, as_offsets, check_nonnegative, check_robot_id
 from dream.kernels._dispatch import implementation
 
 
@@ -101,20 +101,8 @@ def far_from(points: Any, others: Any, distance: float, *, offsets: tuple[Any, A
     check_nonnegative(distance, "distance")
     if offsets is None:
         return implementation("far_from")(p, q, distance)
-    cuts = [_offsets(given, name, len(array)) for given, name, array in zip(offsets, OFFSET_NAMES, (p, q), strict=True)]
-    if len(cuts[0]) != len(cuts[1]):
-        raise ValueError(
-            f"`offsets` must cut points and others into as many rows, got {len(cuts[0]) - 1} and {len(cuts[1]) - 1}"
-        )
-    return implementation("far_from")(p, q, distance, *cuts)
-
-
-OFFSET_NAMES = ("points_offsets", "others_offsets")
-
-
-def _offsets(given: Any, name: str, length: int) -> np.ndarray:
-    """``given`` as int64 offsets ``(rows + 1,)`` rising from 0 to ``length``."""
-    cuts = np.ascontiguousarray(given, dtype=np.int64)
-    if cuts.ndim != 1 or len(cuts) == 0 or cuts[0] != 0 or cuts[-1] != length or np.any(np.diff(cuts) < 0):
-        raise ValueError(f"`{name}` must rise from 0 to {length} (the number of its points), got {cuts}")
-    return cuts
+    if len(offsets) != 2:
+        raise ValueError(f"`offsets` must be a pair (points_offsets, others_offsets), got {len(offsets)} arrays")
+    cuts = as_offsets(offsets[0], "offsets", len(p), part="[0] (of the points)")
+    theirs = as_offsets(offsets[1], "offsets", len(q), len(cuts) - 1, part="[1] (of the others)")
+    return implementation("far_from")(p, q, distance, cuts, theirs)

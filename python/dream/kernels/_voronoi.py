@@ -6,7 +6,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from dream._checks import Bounds, FloatArray, as_array, checked_bounds
+from dream._checks import Bounds, FloatArray, as_array, as_offsets, checked_bounds
 from dream._reference.voronoi import MAX_COORDINATE
 from dream.kernels._dispatch import implementation
 from dream.specs import ROBOTARIUM
@@ -77,10 +77,8 @@ def voronoi_cells(
     box = _checked_box(bounds)
     indptr, points = None, None
     if virtual is not None:
-        indptr = np.ascontiguousarray(virtual[0], dtype=np.int64)
         points = _within_reach(as_array(virtual[1], "virtual points", (None, 2)), "virtual points")
-        if indptr.shape != (n + 1,) or indptr[0] != 0 or np.any(np.diff(indptr) < 0) or indptr[-1] != len(points):
-            raise ValueError(f"`virtual` indptr must be non-decreasing of shape ({n + 1},) from 0 to len(points)")
+        indptr = as_offsets(virtual[0], "virtual", len(points), n, part="indptr")
     centroids, areas, vertices, offsets = implementation("voronoi_cells")(
         p,
         radius=radius,
