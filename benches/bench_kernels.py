@@ -171,7 +171,52 @@ def voronoi_rows(sizes) -> list[list[object]]:
         )
         return lambda: cells(p, radius=0.5, bounds=box)
 
-    return [row(f"voronoi/lattice/n={n}", n, build, lambda m: build(m, _reference.voronoi_cells), 1_000) for n in sizes]
+    rows = [row(f"voronoi/lattice/n={n}", n, build, lambda m: build(m, _reference.voronoi_cells), 1_000) for n in sizes]
+
+    def heard(m: int, cells: Callable = kernels.voronoi_cells) -> Callable[[], object]:
+        p, (indptr, points), _ = crowd(m)
+        return lambda: cells(p, radius=1.0, bounds=BIG, virtual=(indptr, points), neighbours=False)
+
+    return rows + [
+        row(f"voronoi/crowd heard/n={n}", n, heard, lambda m: heard(m, _reference_cells), 100) for n in sizes
+    ]
+
+
+#: Bounds that clip nothing in the crowd scene.
+BIG = (-1e3, 1e3, -1e3, 1e3)
+
+
+def _reference_cells(p, *, radius, bounds, virtual, neighbours):  # type: ignore[no-untyped-def]
+    """The NumPy reference of ``voronoi_cells``, called as the public API is."""
+    return _reference.voronoi_cells(
+        p, radius=radius, bounds=bounds, virtual_indptr=virtual[0], virtual_points=virtual[1], neighbours=neighbours
+    )
+
+
+def crowd(m: int) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+    """The voronoi-coverage start: ``m`` robots 0.2 m apart, each having heard the ~300 within 2 m
+    and seen the ~20 within 0.5 m (CSR ``(offsets, points)`` of each, by robot)."""
+    side = math.ceil(math.sqrt(m))
+    p = 0.2 * np.column_stack(np.divmod(np.arange(m), side)).astype(np.float64)
+    p += np.random.default_rng(0).uniform(-0.02, 0.02, p.shape)
+    out = []
+    for reach in (2.0, 0.5):
+        indptr, indices, _ = kernels.neighbours(p, reach)
+        out.append((indptr, p[indices]))
+    return p, out[0], out[1]
+
+
+def far_from_rows(sizes) -> list[list[object]]:
+    """Robots seen but not heard in the crowd scene: each robot's ~20 detections against the ~300
+    positions it heard (``far_from``, row by row)."""
+
+    def build(m: int, far: Callable | None = None) -> Callable[[], object]:
+        _, (heard, said), (seen, where) = crowd(m)
+        if far is None:
+            return lambda: kernels.far_from(where, said, 0.08, offsets=(seen, heard))
+        return lambda: far(where, said, 0.08, seen, heard)
+
+    return [row(f"far_from/crowd/n={n}", n, build, lambda m: build(m, _reference.far_from), 1_000) for n in sizes]
 
 
 def per_robot_rows() -> list[list[object]]:
@@ -191,7 +236,9 @@ def per_robot_rows() -> list[list[object]]:
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small sizes only")
-    parser.add_argument("--only", choices=("dynamics", "neighbours", "hrvo", "voronoi", "per-robot"), help="one table")
+    parser.add_argument(
+        "--only", choices=("dynamics", "neighbours", "hrvo", "voronoi", "far_from", "per-robot"), help="one table"
+    )
     parser.add_argument("--baseline", metavar="SO", help="another build of dream._core to time beside this one")
     args = parser.parse_args()
     if args.baseline:
@@ -204,6 +251,7 @@ if __name__ == "__main__":
         "neighbours": lambda: neighbour_rows((1_000,) if quick else (1_000, 10_000, 100_000)),
         "hrvo": lambda: hrvo_rows((100,) if quick else (100, 1_000, 10_000)),
         "voronoi": lambda: voronoi_rows((100,) if quick else (100, 1_000, 10_000)),
+        "far_from": lambda: far_from_rows((100,) if quick else (1_000, 10_000)),
     }
     for name, rows in tables.items():
         if args.only in (None, name):
