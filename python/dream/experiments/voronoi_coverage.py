@@ -289,11 +289,8 @@ class CoverageSwarm:
         The closest point of each obstacle at each robot's last obstacle reading (NaN: not sensed).
     centroid : (n, 2) ndarray
         Each robot's last centroid (NaN before its first decision).
-    drawn : (n, 2) int ndarray
-        Where each robot's last cell is, for drawing: the decision (a key of ``polygons``) and
-        the robot's row in it (-1 before its first decision).
-    polygons : dict
-        The cells of the decisions that hold some robot's last cell: CSR ``(vertices, offsets)``.
+    cells : list of (m, 2) ndarrays
+        Each robot's last cell, for drawing.
     """
 
     delays: np.ndarray
@@ -301,8 +298,7 @@ class CoverageSwarm:
     board: np.ndarray
     points: np.ndarray
     centroid: np.ndarray
-    drawn: np.ndarray
-    polygons: dict[int, tuple[np.ndarray, np.ndarray]]
+    cells: list[np.ndarray]
 
     @classmethod
     def start(cls, n: int, obstacles: int) -> CoverageSwarm:
@@ -313,20 +309,8 @@ class CoverageSwarm:
             board=np.full((n, 2), np.nan),
             points=np.full((n, obstacles, 2), np.nan),
             centroid=np.full((n, 2), np.nan),
-            drawn=np.full((n, 2), -1),
-            polygons={},
+            cells=[np.zeros((0, 2)) for _ in range(n)],
         )
-
-    def cells(self) -> list[np.ndarray]:
-        """Each robot's last cell ``(m, 2)`` (empty before its first decision)."""
-        out = []
-        for step, row in self.drawn:
-            if row < 0:
-                out.append(np.zeros((0, 2)))
-            else:
-                vertices, offsets = self.polygons[step]
-                out.append(vertices[offsets[row] : offsets[row + 1]])
-        return out
 
 
 def start_delays(n: int) -> np.ndarray:
@@ -459,19 +443,18 @@ class VoronoiCoverage(Experiment):
         extras = np.vstack((seen[silent], agents[sensed_agent]))[order]
         indptr = heard_offsets + offsets_of(extra_rows, k)
         clips = np.insert(others, heard_offsets[1:][extra_rows[order]], extras, axis=0)
-        team.centroid[who] = self._cells(step, who, here, indptr, clips)
+        team.centroid[who] = self._cells(who, here, indptr, clips)
         dxi = rules.approach(here, team.centroid[who], GAIN, GRITSBOT.v_max, arrival_for(self.n))
         new = kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, team.pose[:, who]), GRITSBOT.within(self.sim.spec))
         near = guard_distance(self.rules)
         new[0, stopping(new[0], team.pose[2, who], looked, here[looked] - seen, near)] = 0.0
         commands[:, who] = new
 
-    def _cells(self, step: int, who: np.ndarray, here: np.ndarray, indptr: np.ndarray, clips: np.ndarray) -> np.ndarray:
+    def _cells(self, who: np.ndarray, here: np.ndarray, indptr: np.ndarray, clips: np.ndarray) -> np.ndarray:
         """Centroids ``(k, 2)`` of the cells of robots ``who`` at ``here`` ``(k, 2)``, each clipped by
         its points ``clips`` ``(m, 2)`` (CSR rows ``indptr``) alone, as :func:`dream.kernels.voronoi_cell`
         clips it: one :func:`dream.kernels.voronoi_cells` call, with the clipping points as each
-        robot's virtual agents and no clipping by the other robots. The polygons are kept, by
-        ``step``, for drawing."""
+        robot's virtual agents and no clipping by the other robots."""
         cells = kernels.voronoi_cells(
             here,
             radius=CELL_RADIUS,
@@ -481,11 +464,8 @@ class VoronoiCoverage(Experiment):
             neighbours=False,
         )
         assert cells.vertices is not None and cells.offsets is not None  # polygons=True
-        team = self.team
-        team.drawn[who] = np.column_stack((np.full(len(who), step), np.arange(len(who))))
-        team.polygons[step] = (cells.vertices, cells.offsets)
-        for gone in set(team.polygons) - set(np.unique(team.drawn[:, 0]).tolist()):
-            del team.polygons[gone]
+        for i, polygon in zip(who, np.split(cells.vertices, cells.offsets[1:-1]), strict=True):
+            self.team.cells[i] = polygon
         return cells.centroids
 
     def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -547,7 +527,7 @@ class VoronoiCoverage(Experiment):
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
         if self.swarm:
-            goals, cells = self.team.centroid, self.team.cells()
+            goals, cells = self.team.centroid, self.team.cells
         else:
             goals = np.array([np.full(2, np.nan) if r.centroid is None else r.centroid for r in self.robots])
             cells = [r.cell for r in self.robots]
