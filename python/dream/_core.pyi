@@ -20,6 +20,7 @@ __all__ = [
     "HrvoPlanner",
     "voronoi_cells",
     "voronoi_cell",
+    "heard_cells",
     "virtual_agents",
     "distance_rays",
 ]
@@ -128,6 +129,26 @@ def voronoi_cells(
 ) -> tuple[_Floats, _Floats, _Floats, _Ints]:
     """(centroids (n, 2), areas (n,), vertices (m, 2), offsets (n+1,)) of disc-bounded Voronoi cells
     (without ``neighbours``, each clipped by its virtual points alone)."""
+
+def heard_cells(
+    here: _Floats,
+    hearers: _Ints,
+    positions: _Floats,
+    said: _Floats,
+    said_now: _Floats,
+    *,
+    range: float,
+    seen_indptr: _Ints,
+    seen_points: _Floats,
+    same: float,
+    virtual_indptr: _Ints,
+    virtual_points: _Floats,
+    radius: float,
+    bounds: _Bounds,
+    resolution: int = 64,
+) -> tuple[_Floats, _Floats, _Floats, _Ints]:
+    """(centroids (k, 2), areas (k,), vertices (m, 2), offsets (k+1,)) of the cells of robots that
+    know the others by range radio, by sight and by virtual agents."""
 
 def virtual_agents(
     positions: _Floats, vertices: _Floats, offsets: _Ints, *, range: float, offset: float

@@ -59,6 +59,7 @@ def test_every_public_kernel_goes_through_the_dispatch(monkeypatch):
     kernels.HrvoPlanner().velocity(np.zeros((0, 4)), np.zeros(2), np.zeros(2), np.zeros(2))
     kernels.voronoi_cells(points)
     kernels.voronoi_cell(points[0], points[1:])
+    kernels.heard_cells(points, np.array([0, 1]), points, points, range=1.0)
     square = (np.array([[1.0, 0.5], [1.2, 0.5], [1.2, 0.7], [1.0, 0.7]]), np.array([0, 4]))
     kernels.virtual_agents(points, square)
     kernels.distance_rays(poses)

@@ -14,6 +14,9 @@ pub enum GeomError {
     /// A value that must be finite is NaN or infinite.
     #[error("`{arg}` contains a non-finite value (NaN or inf) at index {index}")]
     NonFinite { arg: &'static str, index: usize },
+    /// A row of a message array with one coordinate NaN: a message is a point, or all NaN (none).
+    #[error("`{arg}` row {index} is half NaN: a message is a finite point, or NaN in both coordinates (nothing said)")]
+    PartlyNaN { arg: &'static str, index: usize },
     /// A length, radius or limit that must be positive (or non-negative) is not.
     #[error("`{arg}` must be finite and {rule}, got {got}")]
     InvalidParameter {

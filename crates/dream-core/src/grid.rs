@@ -151,6 +151,55 @@ impl Grid {
         }
     }
 
+    /// Calls `visit(run)` with ranges of positions in cell order (see [`Grid::members`]) that
+    /// together cover every cell meeting the square of half-side `half` around `(x, y)`, each
+    /// position once: a superset of the points within `half` of it, however far that reaches.
+    pub fn for_each_run_within(&self, x: f64, y: f64, half: f64, mut visit: impl FnMut(Range<usize>)) {
+        // A hair wider than asked: rounding `x - half` cannot drop a point on the square's edge.
+        let pad = half * 1e-9 + (x.abs() + y.abs()) * 1e-12;
+        let (x0_cell, y0_cell) = cell_of(x - half - pad, y - half - pad, self.cell);
+        let (x1_cell, y1_cell) = cell_of(x + half + pad, y + half + pad, self.cell);
+        match &self.table {
+            CellTable::Dense { x0, y0, columns, rows } => {
+                let low = y0_cell.saturating_sub(*y0).max(0);
+                let high = y1_cell.saturating_sub(*y0).min(rows - 1);
+                let first = x0_cell.saturating_sub(*x0).max(0);
+                let last = x1_cell.saturating_sub(*x0).min(columns - 1);
+                if low > high {
+                    return;
+                }
+                for column in first..=last {
+                    let run =
+                        self.starts[(column * rows + low) as usize]..self.starts[(column * rows + high) as usize + 1];
+                    if !run.is_empty() {
+                        visit(run);
+                    }
+                }
+            }
+            CellTable::Sparse(index) => {
+                let width = i128::from(x1_cell) - i128::from(x0_cell) + 1;
+                let height = i128::from(y1_cell) - i128::from(y0_cell) + 1;
+                if width * height > index.len() as i128 {
+                    // Fewer occupied cells than cells in the square: visit them all.
+                    for slot in 0..index.len() {
+                        let run = self.starts[slot]..self.starts[slot + 1];
+                        if !run.is_empty() {
+                            visit(run);
+                        }
+                    }
+                    return;
+                }
+                for ax in x0_cell..=x1_cell {
+                    for ay in y0_cell..=y1_cell {
+                        if let Some(&slot) = index.get(&(ax, ay)) {
+                            visit(self.starts[slot]..self.starts[slot + 1]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// Calls `visit(j)` for every point in the 3x3 block of cells around `(x, y)`: a superset
     /// of the points within `reach` of it.
     pub fn for_each_near(&self, x: f64, y: f64, mut visit: impl FnMut(usize)) {
@@ -274,6 +323,41 @@ mod tests {
                     .chain([(-0.31, 1.0), (9.0, 9.0), (1e12, 1e12)])
             {
                 assert_eq!(near_by_runs(&grid, x, y), near(&grid, x, y));
+            }
+        }
+    }
+
+    #[test]
+    fn runs_within_cover_every_point_in_the_square() {
+        let xs: Vec<f64> = (0..400).map(|i| ((i as f64) * 0.754_877_666).fract() * 4.0).collect();
+        let ys: Vec<f64> = (0..400).map(|i| ((i as f64) * 0.569_840_290).fract() * 3.0).collect();
+        let mut far_xs = xs.clone();
+        far_xs.extend([1e12, -1e12]);
+        let mut far_ys = ys.clone();
+        far_ys.extend([1e12, 0.0]);
+        for (xs, ys) in [(&xs, &ys), (&far_xs, &far_ys)] {
+            let grid = Grid::new(xs, ys, 0.25);
+            for (x, y, half) in [
+                (1.0, 1.0, 0.1),
+                (2.0, 0.5, 0.7),
+                (-3.0, 1.0, 3.5),
+                (1e12, 1e12, 0.3),
+                (0.0, 0.0, 1e13),
+            ] {
+                let mut seen = Vec::new();
+                grid.for_each_run_within(x, y, half, |run| seen.extend(run.map(|k| grid.members()[k])));
+                let before = seen.len();
+                seen.sort_unstable();
+                seen.dedup();
+                assert_eq!(seen.len(), before, "a point visited twice");
+                for j in 0..xs.len() {
+                    if (xs[j] - x).abs() <= half && (ys[j] - y).abs() <= half {
+                        assert!(
+                            seen.binary_search(&j).is_ok(),
+                            "point {j} missed around ({x}, {y}) +- {half}"
+                        );
+                    }
+                }
             }
         }
     }

@@ -8,11 +8,13 @@
 //! - [`dynamics`]: unicycle Euler step, rps velocity thresholding and validation counts,
 //!   single-integrator to unicycle conversion and actuator limiting, for the whole swarm.
 //! - [`grid`]: the uniform grid behind neighbour queries.
+//! - [`heard`]: Voronoi cells of robots that know the others by range radio, in one pass.
 //! - [`raycast`]: the GRITSbot's infrared distance sensors for the whole swarm (rps 2.1's model).
 
 pub mod dynamics;
 pub mod error;
 pub mod grid;
+pub mod heard;
 pub mod hrvo;
 pub mod neighbours;
 pub mod obstacles;

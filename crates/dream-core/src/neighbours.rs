@@ -122,7 +122,7 @@ pub fn within(
         xs,
         ys,
         radius,
-        radius_squared: radius * radius * (1.0 + 4.0 * f64::EPSILON),
+        radius_squared: radius_squared(radius),
         view,
         max_neighbours,
         rows,
@@ -173,7 +173,7 @@ impl<'a> Near<'a> {
             xs,
             ys,
             radius,
-            radius_squared: radius * radius * (1.0 + 4.0 * f64::EPSILON),
+            radius_squared: radius_squared(radius),
         }
     }
 
@@ -219,6 +219,18 @@ impl<'a> Near<'a> {
             }
         });
     }
+}
+
+/// A hair above `radius^2`: beyond it a point is surely out of range; below it `sqrt` decides.
+pub(crate) fn radius_squared(radius: f64) -> f64 {
+    radius * radius * (1.0 + 4.0 * f64::EPSILON)
+}
+
+/// Whether the offset `(dx, dy)` lies within `radius` (inclusive), as every neighbour query
+/// decides it; `radius_squared` is [`radius_squared`]`(radius)`.
+pub(crate) fn in_range(dx: f64, dy: f64, radius: f64, radius_squared: f64) -> bool {
+    let squared = dx * dx + dy * dy;
+    squared <= radius_squared && length(squared, dx, dy) <= radius
 }
 
 /// `sqrt(squared)`, the length of `(dx, dy)` whose `squared` is `dx^2 + dy^2`; `hypot` when the
@@ -269,18 +281,7 @@ pub fn far_from(rows: RowsOf<'_>, distance: f64) -> Result<Vec<bool>> {
     }
     // A hair wider than `distance`: rounding cannot drop a match from the box.
     let margin = distance * (1.0 + 1e-9);
-    // `hypot` decides only where the squared distance is too close to call: it is the slow part.
-    let squared = distance * distance;
-    let (surely_in, surely_out) = if squared > 1e-300 {
-        (squared * (1.0 - 1e-9), squared * (1.0 + 1e-9))
-    } else {
-        (f64::NEG_INFINITY, f64::INFINITY) // squares of tiny distances lose their precision
-    };
-    let within_distance = |p: &[f64; 2], q: &[f64; 2]| {
-        let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
-        let square = dx * dx + dy * dy;
-        square < surely_in || (square <= surely_out && dx.hypot(dy) <= distance)
-    };
+    let close = Closeness::new(distance);
     let row = |r: usize| -> Vec<bool> {
         let mine = &points[points_offsets[r] as usize..points_offsets[r + 1] as usize];
         let theirs = &others[others_offsets[r] as usize..others_offsets[r + 1] as usize];
@@ -299,7 +300,7 @@ pub fn far_from(rows: RowsOf<'_>, distance: f64) -> Result<Vec<bool>> {
             .copied()
             .collect();
         mine.iter()
-            .map(|p| !near.iter().any(|q| within_distance(p, q)))
+            .map(|p| !near.iter().any(|q| close.within(*p, *q)))
             .collect()
     };
     let count = points_offsets.len() - 1;
@@ -308,6 +309,38 @@ pub fn far_from(rows: RowsOf<'_>, distance: f64) -> Result<Vec<bool>> {
     } else {
         (0..count).flat_map(row).collect()
     })
+}
+
+/// The test of [`far_from`]: `hypot(p - q) <= distance`, with `hypot` only where the squared
+/// distance is too close to call (it is the slow part).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Closeness {
+    distance: f64,
+    surely_in: f64,
+    surely_out: f64,
+}
+
+impl Closeness {
+    /// `distance` finite and >= 0 (the callers check).
+    pub(crate) fn new(distance: f64) -> Self {
+        let squared = distance * distance;
+        let (surely_in, surely_out) = if squared > 1e-300 {
+            (squared * (1.0 - 1e-9), squared * (1.0 + 1e-9))
+        } else {
+            (f64::NEG_INFINITY, f64::INFINITY) // squares of tiny distances lose their precision
+        };
+        Self {
+            distance,
+            surely_in,
+            surely_out,
+        }
+    }
+
+    pub(crate) fn within(&self, p: [f64; 2], q: [f64; 2]) -> bool {
+        let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
+        let square = dx * dx + dy * dy;
+        square < self.surely_in || (square <= self.surely_out && dx.hypot(dy) <= self.distance)
+    }
 }
 
 /// Points and others below this count are matched on one thread (a few microseconds of work).

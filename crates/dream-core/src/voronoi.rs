@@ -28,7 +28,7 @@ pub const MAX_RESOLUTION: usize = 1 << 20;
 pub const MAX_COORDINATE: f64 = 1e100;
 
 /// Rows below this count run on one thread.
-const PARALLEL_ROBOTS: usize = 256;
+pub(crate) const PARALLEL_ROBOTS: usize = 256;
 
 /// Every robot's cell: centroid, area and polygon (CSR: robot i's vertices are
 /// `vertices[offsets[i]..offsets[i + 1]]`, counter-clockwise).
@@ -90,7 +90,7 @@ pub fn covering_radius(p: Vec2, arena: &Arena) -> f64 {
 }
 
 /// The directions `(cos, sin)` of a disc polygon's `resolution` vertices, the first at angle 0.
-fn unit_circle(resolution: usize) -> Vec<Vec2> {
+pub(crate) fn unit_circle(resolution: usize) -> Vec<Vec2> {
     (0..resolution)
         .map(|k| {
             let angle = TAU * k as f64 / resolution as f64;
@@ -99,24 +99,76 @@ fn unit_circle(resolution: usize) -> Vec<Vec2> {
         .collect()
 }
 
+/// A cell being clipped: the disc around `p` cut by the arena, then by one bisector after
+/// another (nearest agent first), with the distance `reach` to its farthest vertex.
+pub(crate) struct Clipper {
+    p: Vec2,
+    polygon: Vec<Vec2>,
+    scratch: Vec<Vec2>,
+    reach: f64,
+}
+
+impl Clipper {
+    /// The disc of `radius` around `p` (vertex directions `circle`, [`unit_circle`]) within the arena.
+    pub(crate) fn new(p: Vec2, radius: f64, arena: &Arena, circle: &[Vec2]) -> Self {
+        let radius = radius.min(covering_radius(p, arena));
+        let mut polygon: Vec<Vec2> = circle
+            .iter()
+            .map(|u| [p[0] + radius * u[0], p[1] + radius * u[1]])
+            .collect();
+        let mut scratch = Vec::with_capacity(circle.len() + 8);
+        let walls = [
+            ([arena.xmin, 0.0], [-1.0, 0.0]),
+            ([arena.xmax, 0.0], [1.0, 0.0]),
+            ([0.0, arena.ymin], [0.0, -1.0]),
+            ([0.0, arena.ymax], [0.0, 1.0]),
+        ];
+        for (point, normal) in walls {
+            clip(&polygon, point, normal, &mut scratch);
+            std::mem::swap(&mut polygon, &mut scratch);
+        }
+        let reach = farthest(&polygon, p);
+        Self {
+            p,
+            polygon,
+            scratch,
+            reach,
+        }
+    }
+
+    /// Clips the cell by the bisector of `p` and `q`, unless it surely misses the cell.
+    pub(crate) fn cut(&mut self, q: Vec2) {
+        if beyond(self.p, q, self.reach) {
+            return;
+        }
+        let p = self.p;
+        let middle = [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0];
+        clip(&self.polygon, middle, [q[0] - p[0], q[1] - p[1]], &mut self.scratch);
+        std::mem::swap(&mut self.polygon, &mut self.scratch);
+        self.reach = farthest(&self.polygon, p);
+    }
+
+    /// Whether every agent farther than `sqrt(squared)` from `p` whose `|x| + |y|` is at most
+    /// `widest` surely misses the cell (so do all of them when the cell is empty): clipping
+    /// nearest first may stop there.
+    pub(crate) fn settled(&self, squared: f64, widest: f64) -> bool {
+        let bound = skip_bound(self.p, widest, self.reach);
+        self.polygon.is_empty() || (bound > 1e-100 && squared > bound * bound)
+    }
+
+    pub(crate) fn polygon(self) -> Vec<Vec2> {
+        self.polygon
+    }
+}
+
+/// The largest `|x| + |y|` of `points` (0 for none): with it [`Clipper::settled`] holds for all.
+pub(crate) fn widest(points: impl Iterator<Item = Vec2>) -> f64 {
+    points.map(|q| q[0].abs() + q[1].abs()).fold(0.0, f64::max)
+}
+
 /// The cell around `p` from the disc of `radius` (vertex directions `circle`, [`unit_circle`]).
 fn cell(p: Vec2, radius: f64, arena: &Arena, agents: impl Iterator<Item = Vec2>, circle: &[Vec2]) -> Vec<Vec2> {
-    let radius = radius.min(covering_radius(p, arena));
-    let mut polygon: Vec<Vec2> = circle
-        .iter()
-        .map(|u| [p[0] + radius * u[0], p[1] + radius * u[1]])
-        .collect();
-    let mut scratch = Vec::with_capacity(circle.len() + 8);
-    let walls = [
-        ([arena.xmin, 0.0], [-1.0, 0.0]),
-        ([arena.xmax, 0.0], [1.0, 0.0]),
-        ([0.0, arena.ymin], [0.0, -1.0]),
-        ([0.0, arena.ymax], [0.0, 1.0]),
-    ];
-    for (point, normal) in walls {
-        clip(&polygon, point, normal, &mut scratch);
-        std::mem::swap(&mut polygon, &mut scratch);
-    }
+    let mut cell = Clipper::new(p, radius, arena, circle);
     // Nearest first (ties in the given order): the first few clips shrink the cell and the rest
     // lie beyond it. Only a batch of the nearest is sorted at a time, and once the next agent
     // lies beyond the cell, so do all later ones: a robot in a crowd hears hundreds of robots,
@@ -125,11 +177,7 @@ fn cell(p: Vec2, radius: f64, arena: &Arena, agents: impl Iterator<Item = Vec2>,
         .enumerate()
         .map(|(k, q)| (squared_distance(p, q).to_bits(), k, q))
         .collect();
-    let widest = agents
-        .iter()
-        .map(|&(_, _, q)| q[0].abs() + q[1].abs())
-        .fold(0.0, f64::max);
-    let mut reach = farthest(&polygon, p);
+    let widest = widest(agents.iter().map(|&(_, _, q)| q));
     let mut done = 0;
     while done < agents.len() {
         let rest = &mut agents[done..];
@@ -139,22 +187,15 @@ fn cell(p: Vec2, radius: f64, arena: &Arena, agents: impl Iterator<Item = Vec2>,
         }
         rest[..batch].sort_unstable_by_key(|&(d, k, _)| (d, k));
         for &(squared, _, q) in &rest[..batch] {
-            // Nonnegative floats order as their bits do; `beyond` skips every later agent too.
-            let bound = skip_bound(p, widest, reach);
-            if polygon.is_empty() || (bound > 1e-100 && f64::from_bits(squared) > bound * bound) {
-                return polygon;
+            // Nonnegative floats order as their bits do.
+            if cell.settled(f64::from_bits(squared), widest) {
+                return cell.polygon();
             }
-            if beyond(p, q, reach) {
-                continue;
-            }
-            let middle = [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0];
-            clip(&polygon, middle, [q[0] - p[0], q[1] - p[1]], &mut scratch);
-            std::mem::swap(&mut polygon, &mut scratch);
-            reach = farthest(&polygon, p);
+            cell.cut(q);
         }
         done += batch;
     }
-    polygon
+    cell.polygon()
 }
 
 /// An agent of a cell: `(|q - p|^2 as bits, place in the given order, q)`.
@@ -164,7 +205,7 @@ type Agent = (u64, usize, Vec2);
 const NEAREST_BATCH: usize = 32;
 
 /// `|q - p|^2`, as the NumPy reference computes it.
-fn squared_distance(p: Vec2, q: Vec2) -> f64 {
+pub(crate) fn squared_distance(p: Vec2, q: Vec2) -> f64 {
     let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
     dx * dx + dy * dy
 }
@@ -220,7 +261,7 @@ pub fn voronoi_cell(
 }
 
 /// Finite values of magnitude at most [`MAX_COORDINATE`].
-fn check_coordinates(arg: &'static str, values: &[f64]) -> Result<()> {
+pub(crate) fn check_coordinates(arg: &'static str, values: &[f64]) -> Result<()> {
     check_finite(arg, values)?;
     match values.iter().find(|v| v.abs() > MAX_COORDINATE) {
         Some(&got) => Err(GeomError::InvalidParameter {
@@ -232,7 +273,7 @@ fn check_coordinates(arg: &'static str, values: &[f64]) -> Result<()> {
     }
 }
 
-fn check_cell_parameters(radius: f64, arena: &Arena, resolution: usize) -> Result<()> {
+pub(crate) fn check_cell_parameters(radius: f64, arena: &Arena, resolution: usize) -> Result<()> {
     check_coordinates("bounds", &[arena.xmin, arena.xmax, arena.ymin, arena.ymax])?;
     if !(radius.is_finite() && radius > 0.0) {
         return Err(GeomError::InvalidParameter {

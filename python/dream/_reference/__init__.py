@@ -27,7 +27,7 @@ from dream._reference.hrvo import (
 from dream._reference.neighbours import far_from, neighbours, neighbours_of
 from dream._reference.obstacles import agents_from_closest, mirrored, virtual_agents
 from dream._reference.raycast import distance_rays
-from dream._reference.voronoi import voronoi_cell, voronoi_cells
+from dream._reference.voronoi import heard_cells, voronoi_cell, voronoi_cells
 
 __all__ = [
     "HrvoPlanner",
@@ -50,6 +50,7 @@ __all__ = [
     "validate",
     "virtual_agents",
     "voronoi_cell",
+    "heard_cells",
     "voronoi_cells",
     "wheel_speeds",
 ]

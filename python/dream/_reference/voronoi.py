@@ -16,7 +16,8 @@ from __future__ import annotations
 import numpy as np
 
 from dream._checks import FloatArray
-from dream._reference.neighbours import neighbours_of
+from dream._csr import offsets_of, spans
+from dream._reference.neighbours import far_from, neighbours, neighbours_of
 
 #: Largest coordinate magnitude (m) of robots, agents and bounds (the public API rejects more):
 #: the centroid sums products of three coordinates, which overflow beyond ~1e102.
@@ -155,3 +156,56 @@ def voronoi_cells(
         vertices.extend(polygon)
         offsets[i + 1] = len(vertices)
     return centroids, areas, np.array(vertices, dtype=np.float64).reshape(-1, 2), offsets
+
+
+def heard_cells(
+    here: FloatArray,
+    hearers: np.ndarray,
+    positions: FloatArray,
+    said: FloatArray,
+    said_now: FloatArray,
+    *,
+    range: float,
+    seen_indptr: np.ndarray,
+    seen_points: FloatArray,
+    same: float,
+    virtual_indptr: np.ndarray,
+    virtual_points: FloatArray,
+    radius: float,
+    bounds: tuple[float, float, float, float],
+    resolution: int = 64,
+) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray]:
+    """The cells of robots ``hearers`` ``(k,)`` (increasing) at ``here`` ``(k, 2)``, as
+    :func:`voronoi_cells` without neighbours, each clipped by what it hears, then the robots it
+    sees that nothing it hears accounts for (:func:`far_from`), then its virtual agents.
+
+    Robot i hears robot j within ``range`` (:func:`neighbours`, of the true ``positions``
+    ``(n, 2)``): ``said_now[j]`` when j < i (robots of lower index took their turn first), else
+    ``said[j]``; a NaN message is nothing said.
+    """
+    k, n = len(hearers), len(positions)
+    rows = np.zeros(n, dtype=bool)
+    rows[hearers] = True
+    indptr, indices, _ = neighbours(positions, range, rows=rows)
+    counts = np.diff(indptr)[hearers]
+    owners = np.repeat(np.arange(k), counts)
+    senders = indices[spans(indptr[hearers], counts)]
+    heard = np.where((senders < hearers[owners])[:, None], said_now[senders], said[senders])
+    spoken = ~np.isnan(heard[:, 0])
+    heard, owners = heard[spoken], owners[spoken]
+    silent = far_from(seen_points, heard, same, seen_indptr, offsets_of(owners, k))
+    seen_owners = np.repeat(np.arange(k), np.diff(seen_indptr))
+    agent_owners = np.repeat(np.arange(k), np.diff(virtual_indptr))
+    # Each row's points in clipping order: messages, robots seen but not heard, virtual agents.
+    owners_all = np.concatenate((owners, seen_owners[silent], agent_owners))
+    order = np.argsort(owners_all, kind="stable")
+    points = np.vstack((heard, seen_points[silent], virtual_points))[order]
+    return voronoi_cells(
+        here,
+        radius=radius,
+        bounds=bounds,
+        virtual_indptr=offsets_of(owners_all[order], k),
+        virtual_points=points,
+        resolution=resolution,
+        neighbours=False,
+    )

@@ -11,10 +11,11 @@ stops within 0.05 m of it. No HRVO: the cells themselves keep the robots apart.
 Swarm mode (``swarm=True``, :meth:`VoronoiCoverage.swarm_step`) runs the same robots on arrays:
 each robot at its own timer's steps (:func:`dream.timers.due`), with what its sensors and radio
 gave it (a radio hears the position a robot of lower id sent in the same step, as the per-robot
-timers, which run by id, imply), the shared rules (:func:`dream.rules.far_from`,
-:func:`dream.rules.approach`, the motion guard of :func:`dream.robot.stopping`) and each robot's
-cell clipped by what it knows alone (one :func:`dream.kernels.voronoi_cells` call, each cell
-clipped by its own points). The trajectories equal the per-robot mode's to rounding.
+timers, which run by id, imply), the shared rules (:func:`dream.rules.approach`, the motion
+guard of :func:`dream.robot.stopping`) and each robot's cell clipped by what it knows alone: one
+:func:`dream.kernels.heard_cells` call, which gives what :func:`dream.kernels.voronoi_cell` gives
+each robot from its messages, the robots it sees but does not hear (:func:`dream.rules.far_from`)
+and its virtual agents. The trajectories equal the per-robot mode's to the bit (tested).
 
 Success: no robot-robot collision, no contact with the static obstacles, and the team covers
 the arena: its locational coverage cost falls below ``COVERED`` (0.2) of its start and within
@@ -387,86 +388,60 @@ class VoronoiCoverage(Experiment):
         team.pose[:, reading] = x[:, reading]
         sensing = timers.due(step, team.delays, SENSING_GAP)
         team.points[sensing] = sensed(self.obstacles, x[:2, sensing].T, CELL_RADIUS)
-        # Neighbour rows of the robots whose movement sensors read, then of those whose radios talk:
-        # two queries of the robots due, not one index of everyone (each robot hears ~300 others
-        # in the packed start, and only a fifth of the team talks at a step).
+        # Neighbour rows of the robots whose movement sensors read (a third of the team at a step);
+        # who hears whom is found inside `heard_cells`, near each cell only.
         positions = x[:2].T
         self.seen[step] = Seen.read(x, team.pose, *kernels.neighbours(positions, SEEN, rows=sensing))
         self.seen.pop(step - SENSING_GAP, None)
         talking = timers.due(step, team.delays, CONTROL_GAP)
         commands = self.dxu.copy()
         if talking.any():
-            deciding = np.flatnonzero(talking)
-            others, heard = self._talk(talking, *kernels.neighbours(positions, RADIO_RANGE, rows=talking)[:2])
-            self._decide(step, deciding, others, heard, commands)
+            who = np.flatnonzero(talking)
+            said = team.board.copy()
+            team.board[who] = team.pose[:2, who].T  # the radio round: each sends where it believes itself
+            self._decide(step, who, positions, said, commands)
         return commands
 
-    def _talk(self, talking: np.ndarray, indptr: np.ndarray, senders: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The radio round of the robots ``talking`` ``(n,)`` bool: the positions ``(m, 2)`` they hear
-        from the robots within :data:`RADIO_RANGE` (their neighbour rows, CSR), by increasing id,
-        and whose row of the talking robots hears each ``(m,)``; then they send their own. The
-        per-robot radios talk one after the other by id, so a robot of lower id talking in the
-        same step has already sent its position of now."""
-        team = self.team
-        who = np.flatnonzero(talking)
-        counts = np.diff(indptr)[who]
-        rows = np.repeat(np.arange(len(who)), counts)
-        before = team.board.copy()
-        team.board[who] = team.pose[:2, who].T
-        # Rows 0..n-1: the board before this round; n..2n-1: after it (a robot hears the latter
-        # from lower ids, which have talked already; the same unless the sender talks now).
-        table = np.vstack((before, team.board))
-        said = table[senders + self.n * (senders < np.repeat(who, counts))]
-        if not np.isnan(table).any():  # (after the first rounds) every robot has spoken
-            return said, rows
-        heard = ~np.isnan(said[:, 0])  # robots that have not spoken yet send nothing
-        return said[heard], rows[heard]
-
-    def _decide(self, step: int, who: np.ndarray, others: np.ndarray, heard: np.ndarray, commands: np.ndarray) -> None:
-        """The decisions of robots ``who`` ``(k,)``, as :meth:`CoverageRobot.update` takes them, from
-        the positions ``others`` ``(m, 2)`` each heard (``heard``: its row): their cells, bounded by
-        the robots heard, the robots seen but not heard and the obstacles sensed (virtual agents),
-        their centroids and their limited, guarded commands, written into ``commands`` ``(2, n)``."""
+    def _decide(
+        self, step: int, who: np.ndarray, positions: np.ndarray, said: np.ndarray, commands: np.ndarray
+    ) -> None:
+        """The decisions of robots ``who`` ``(k,)``, as :meth:`CoverageRobot.update` takes them, right
+        after the radio round in which the board went from ``said`` to ``team.board`` (robots at
+        ``positions`` ``(n, 2)``): their cells, bounded by the robots heard, the robots seen but not
+        heard and the obstacles sensed (virtual agents), in one :func:`dream.kernels.heard_cells`
+        call (a robot hears the position a robot of lower id sent in this same round, as the
+        per-robot radios, which talk by id, imply), their centroids and their limited, guarded
+        commands, written into ``commands`` ``(2, n)``."""
         team, k = self.team, len(who)
         here = team.pose[:2, who].T
         seen, looked = Seen.last(self.seen, step, who, team.delays[who])
-        heard_offsets = offsets_of(heard, k)
-        silent = rules.far_from(seen, others, SAME_ROBOT, offsets=(offsets_of(looked, k), heard_offsets))
         points = team.points[who].reshape(-1, 2)
         owners = np.repeat(np.arange(k), team.points.shape[1])
         agents = kernels.obstacle_agents(here[owners], points, robot_radius=GRITSBOT.radius, margin=MARGIN)
         sensed_agent = ~np.isnan(agents[:, 0])
-        # Each cell is clipped by what its robot knows, in its order: robots heard, then robots
-        # seen but not heard and obstacles (the extras), each row's after its robots heard.
-        extra_rows = np.concatenate((looked[silent], owners[sensed_agent]))
-        order = np.argsort(extra_rows, kind="stable")
-        extras = np.vstack((seen[silent], agents[sensed_agent]))[order]
-        indptr = heard_offsets + offsets_of(extra_rows, k)
-        clips = np.insert(others, heard_offsets[1:][extra_rows[order]], extras, axis=0)
-        team.centroid[who] = self._cells(who, here, indptr, clips)
+        cells = kernels.heard_cells(
+            here,
+            who,
+            positions,
+            said,
+            team.board,
+            range=RADIO_RANGE,
+            seen=(offsets_of(looked, k), seen),
+            same=SAME_ROBOT,
+            virtual=(offsets_of(owners[sensed_agent], k), agents[sensed_agent]),
+            radius=CELL_RADIUS,
+            bounds=cell_bounds(self.arena),
+            polygons=True,
+        )
+        assert cells.vertices is not None and cells.offsets is not None  # polygons=True
+        for i, polygon in zip(who, np.split(cells.vertices, cells.offsets[1:-1]), strict=True):
+            team.cells[i] = polygon
+        team.centroid[who] = cells.centroids
         dxi = rules.approach(here, team.centroid[who], GAIN, GRITSBOT.v_max, arrival_for(self.n))
         new = kernels.actuator_limit(kernels.dxi_to_dxu(dxi.T, team.pose[:, who]), GRITSBOT.within(self.sim.spec))
         near = guard_distance(self.rules)
         new[0, stopping(new[0], team.pose[2, who], looked, here[looked] - seen, near)] = 0.0
         commands[:, who] = new
-
-    def _cells(self, who: np.ndarray, here: np.ndarray, indptr: np.ndarray, clips: np.ndarray) -> np.ndarray:
-        """Centroids ``(k, 2)`` of the cells of robots ``who`` at ``here`` ``(k, 2)``, each clipped by
-        its points ``clips`` ``(m, 2)`` (CSR rows ``indptr``) alone, as :func:`dream.kernels.voronoi_cell`
-        clips it: one :func:`dream.kernels.voronoi_cells` call, with the clipping points as each
-        robot's virtual agents and no clipping by the other robots."""
-        cells = kernels.voronoi_cells(
-            here,
-            radius=CELL_RADIUS,
-            bounds=cell_bounds(self.arena),
-            virtual=(indptr, clips),
-            polygons=True,
-            neighbours=False,
-        )
-        assert cells.vertices is not None and cells.offsets is not None  # polygons=True
-        for i, polygon in zip(who, np.split(cells.vertices, cells.offsets[1:-1]), strict=True):
-            self.team.cells[i] = polygon
-        return cells.centroids
 
     def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
         return corner_poses(n, rng, self.arena)

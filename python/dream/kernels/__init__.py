@@ -30,7 +30,7 @@ from dream.kernels._hrvo import HrvoPlanner, hrvo
 from dream.kernels._neighbours import far_from, neighbours, neighbours_of
 from dream.kernels._obstacles import obstacle_agents, virtual_agents
 from dream.kernels._raycast import distance_rays
-from dream.kernels._voronoi import VoronoiCells, voronoi_cell, voronoi_cells
+from dream.kernels._voronoi import VoronoiCells, heard_cells, voronoi_cell, voronoi_cells
 
 Bounds = _checks.Bounds
 """``tuple[float, float, float, float]``: ``(xmin, xmax, ymin, ymax)`` (m), the type of ``bounds`` arguments."""
@@ -54,6 +54,7 @@ __all__ = [
     "VoronoiCells",
     "voronoi_cells",
     "voronoi_cell",
+    "heard_cells",
     "obstacle_agents",
     "virtual_agents",
     "distance_rays",

@@ -1,4 +1,5 @@
-"""Voronoi cells bounded by a disc and the arena: every robot's (:func:`voronoi_cells`) or one robot's."""
+"""Voronoi cells bounded by a disc and the arena: every robot's (:func:`voronoi_cells`), one robot's, or
+those of robots that know the others by radio (:func:`heard_cells`)."""
 
 from __future__ import annotations
 
@@ -87,6 +88,116 @@ def voronoi_cells(
         virtual_points=points,
         resolution=resolution,
         neighbours=neighbours,
+    )
+    return VoronoiCells(centroids, areas, vertices if polygons else None, offsets if polygons else None)
+
+
+def _messages(value: Any, name: str, n: int) -> FloatArray:
+    """``value`` as ``(n, 2)`` messages: finite points within reach, or rows of NaN (nothing said)."""
+    try:
+        array = np.ascontiguousarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"`{name}` must be a float array of shape ({n}, 2): {err}") from None
+    if array.shape != (n, 2):
+        raise ValueError(f"`{name}` must have shape ({n}, 2), got {array.shape}")
+    unsaid = np.isnan(array)
+    half = np.flatnonzero(unsaid[:, 0] != unsaid[:, 1])
+    if len(half):
+        raise ValueError(f"`{name}` row {half[0]} is half NaN: a message is a finite point, or NaN in both coordinates")
+    _within_reach(array[~unsaid[:, 0]], name)
+    return array
+
+
+def _rows(value: Any, name: str, rows: int) -> tuple[np.ndarray, FloatArray]:
+    """CSR ``(indptr (rows + 1,), points (m, 2))``, empty rows when ``value`` is ``None``."""
+    if value is None:
+        return np.zeros(rows + 1, dtype=np.int64), np.zeros((0, 2))
+    points = _within_reach(as_array(value[1], f"{name} points", (None, 2)), f"{name} points")
+    return as_offsets(value[0], name, len(points), rows, part="indptr"), points
+
+
+def heard_cells(
+    here: Any,
+    hearers: Any,
+    positions: Any,
+    said: Any,
+    said_now: Any = None,
+    *,
+    range: float,
+    seen: tuple[Any, Any] | None = None,
+    same: float = 0.0,
+    virtual: tuple[Any, Any] | None = None,
+    radius: float = 1.0,
+    bounds: Bounds = ROBOTARIUM.bounds,
+    resolution: int = 64,
+    polygons: bool = False,
+) -> VoronoiCells:
+    """The cells of robots that know the others only by what a range radio tells them, each as
+    :func:`voronoi_cell` computes it from what its robot knows.
+
+    Robot ``hearers[r]``'s cell is its disc around ``here[r]`` within the arena, clipped by the
+    messages it hears, then by the robots it sees that no message accounts for, then by its
+    virtual agents. It hears robot j when their ``positions`` are within ``range`` (as
+    :func:`neighbours` measures): ``said_now[j]`` when j is below it (the robots of one step take
+    their turns by index, so the lower ones have spoken), else ``said[j]``. What
+    :func:`neighbours` (of the hearers), :func:`far_from` and :func:`voronoi_cells` give one after
+    the other, to the bit, in one pass that looks only at the messages near each cell.
+
+    Parameters
+    ----------
+    here : (k, 2)
+        Where each hearer believes itself: its cell's site.
+    hearers : (k,) int
+        The hearers' indices among ``positions``, strictly increasing.
+    positions : (n, 2)
+        Where every robot is: who hears whom.
+    said, said_now : (n, 2)
+        What each robot said before and after its turn in this round; a row of NaN is nothing
+        said. ``said_now`` defaults to ``said``.
+    seen : (indptr (k + 1,), points (m, 2)), optional
+        The positions each hearer sees; those farther than ``same`` (m) from every message it
+        hears clip its cell too.
+    virtual : (indptr (k + 1,), points (j, 2)), optional
+        Each hearer's virtual agents (see :func:`obstacle_agents`).
+    """
+    p = _within_reach(as_array(here, "here", (None, 2)), "here")
+    k = p.shape[0]
+    ids = np.asarray(hearers)
+    if ids.size and ids.dtype.kind not in "iu":
+        raise ValueError(f"`hearers` must hold robot indices, got dtype {ids.dtype}")
+    ids = np.ascontiguousarray(ids, dtype=np.int64)
+    x = as_array(positions, "positions", (None, 2))
+    n = x.shape[0]
+    if ids.shape != (k,):
+        raise ValueError(f"`hearers` must have shape ({k},) (one per row of `here`), got {ids.shape}")
+    if k and (ids[0] < 0 or ids[-1] >= n or np.any(np.diff(ids) <= 0)):
+        raise ValueError(f"`hearers` must be strictly increasing indices below {n}, got {ids.tolist()[:8]}")
+    before = _messages(said, "said", n)
+    after = before if said_now is None else _messages(said_now, "said_now", n)
+    for name, value in (("range", range), ("same", same)):
+        if not (np.isfinite(value) and value >= 0):
+            raise ValueError(f"`{name}` must be finite and >= 0, got {value}")
+    if not (np.isfinite(radius) and radius > 0):
+        raise ValueError(f"`radius` must be finite and > 0, got {radius}")
+    if not 3 <= resolution <= 2**20:
+        raise ValueError(f"`resolution` must be between 3 and 2^20, got {resolution}")
+    seen_indptr, seen_points = _rows(seen, "seen", k)
+    virtual_indptr, virtual_points = _rows(virtual, "virtual", k)
+    centroids, areas, vertices, offsets = implementation("heard_cells")(
+        p,
+        ids,
+        x,
+        before,
+        after,
+        range=range,
+        seen_indptr=seen_indptr,
+        seen_points=seen_points,
+        same=same,
+        virtual_indptr=virtual_indptr,
+        virtual_points=virtual_points,
+        radius=radius,
+        bounds=_checked_box(bounds),
+        resolution=resolution,
     )
     return VoronoiCells(centroids, areas, vertices if polygons else None, offsets if polygons else None)
 

@@ -1,0 +1,481 @@
+//! Voronoi cells of robots that know the others only by what a range radio tells them.
+//!
+//! Each hearing robot's cell is clipped by the positions it hears, by the robots it sees that no
+//! message accounts for, and by its virtual agents: what [`neighbours::within`] (the hearers'
+//! rows), [`neighbours::far_from`] and [`voronoi::voronoi_cells`] (without neighbours) give one
+//! after the other, to the bit. One pass does it here, looking only at the messages near each
+//! cell: a robot in a crowd hears hundreds, of which a dozen shape its cell, and handing every
+//! message from kernel to kernel cost more than the cells themselves.
+//!
+//! The search: a grid of the robots' positions (who hears whom) finds the messages within a
+//! growing distance of the cell's site, since a message lies within the largest gap between a
+//! robot and what it said. Clipping nearest first in rounds of doubling distance gives the order
+//! of clipping them all, and once the cell is settled ([`Clipper::settled`]) the rest change
+//! nothing.
+
+use rayon::prelude::*;
+
+use crate::dynamics::Arena;
+use crate::error::{check_finite, check_len, check_offsets, GeomError, Result};
+use crate::grid::Grid;
+use crate::hrvo::Vec2;
+use crate::neighbours::{in_range, radius_squared, Closeness};
+use crate::voronoi::{
+    area_centroid, check_cell_parameters, check_coordinates, squared_distance, unit_circle, widest, Cells, Clipper,
+    PARALLEL_ROBOTS,
+};
+
+/// What a range radio lets the robots hear.
+#[derive(Debug, Clone, Copy)]
+pub struct Radio<'a> {
+    /// Where every robot is (n): robots within `range` of each other hear each other.
+    pub positions: &'a [Vec2],
+    /// Radio range (m), inclusive, as [`crate::neighbours::within`] measures it.
+    pub range: f64,
+    /// What each robot said before this round (n; NaN: nothing yet)...
+    pub said: &'a [Vec2],
+    /// ...and after its turn in it (n), which the robots of higher index hear: the robots of one
+    /// step take their turns by index.
+    pub said_now: &'a [Vec2],
+}
+
+/// The robots whose cells are wanted, and what each knows besides its radio.
+#[derive(Debug, Clone, Copy)]
+pub struct Hearers<'a> {
+    /// Their indices among the radio's robots (k, strictly increasing).
+    pub ids: &'a [i64],
+    /// Where each believes itself (k): its cell's site.
+    pub here: &'a [Vec2],
+    /// The robots each sees (CSR, k rows): those farther than `same` from every message it
+    /// hears clip its cell too, after the messages.
+    pub seen_offsets: &'a [i64],
+    pub seen: &'a [Vec2],
+    pub same: f64,
+    /// Its virtual agents (CSR, k rows), clipping after the robots seen.
+    pub agents_offsets: &'a [i64],
+    pub agents: &'a [Vec2],
+}
+
+/// The cells (k rows, see [`Cells`]) of the `hearers`, each the disc of `radius` within the
+/// arena clipped by what its robot hears on the `radio` (in order of index), the robots it sees
+/// that no message accounts for (in the given order), then its virtual agents, nearest first.
+///
+/// # Errors
+/// Non-finite positions, a message that is neither a point nor all NaN, coordinates beyond
+/// [`crate::voronoi::MAX_COORDINATE`], hearer indices that are not strictly increasing robot
+/// indices, mismatched lengths or CSR offsets, a negative range or `same`, or the cell
+/// parameters of [`crate::voronoi::voronoi_cells`].
+pub fn heard_cells(
+    radio: &Radio<'_>,
+    hearers: &Hearers<'_>,
+    radius: f64,
+    arena: &Arena,
+    resolution: usize,
+) -> Result<Cells> {
+    check(radio, hearers)?;
+    check_cell_parameters(radius, arena, resolution)?;
+    let (xs, ys): (Vec<f64>, Vec<f64>) = radio.positions.iter().map(|p| (p[0], p[1])).unzip();
+    let cell = radio.range / 4.0;
+    let search = Search {
+        radio,
+        hearers,
+        grid: Grid::new(&xs, &ys, if cell.is_normal() { cell } else { 1.0 }),
+        cell: if cell.is_normal() { cell } else { 1.0 },
+        drift: drift(radio),
+        range_squared: radius_squared(radio.range),
+        close: Closeness::new(hearers.same),
+        widest: widest(
+            radio
+                .said
+                .iter()
+                .chain(radio.said_now)
+                .filter(|q| !q[0].is_nan())
+                .chain(hearers.seen)
+                .chain(hearers.agents)
+                .copied(),
+        ),
+        circle: unit_circle(resolution),
+        radius,
+        arena,
+    };
+    let k = hearers.ids.len();
+    let per_robot: Vec<(Vec<Vec2>, f64, Vec2)> = if k >= PARALLEL_ROBOTS {
+        (0..k)
+            .into_par_iter()
+            .map_init(Vec::new, |scratch, r| search.cell(r, scratch))
+            .collect()
+    } else {
+        let mut scratch = Vec::new();
+        (0..k).map(|r| search.cell(r, &mut scratch)).collect()
+    };
+    let mut cells = Cells {
+        offsets: Vec::with_capacity(k + 1),
+        ..Cells::default()
+    };
+    cells.offsets.push(0);
+    for (polygon, area, centroid) in per_robot {
+        cells.vertices.extend(polygon);
+        cells.offsets.push(cells.vertices.len() as i64);
+        cells.areas.push(area);
+        cells.centroids.push(centroid);
+    }
+    Ok(cells)
+}
+
+fn check(radio: &Radio<'_>, hearers: &Hearers<'_>) -> Result<()> {
+    let n = radio.positions.len();
+    check_finite("positions", radio.positions.as_flattened())?;
+    if !(radio.range.is_finite() && radio.range >= 0.0) {
+        return Err(GeomError::InvalidParameter {
+            arg: "range",
+            rule: ">= 0",
+            got: radio.range,
+        });
+    }
+    if !(hearers.same.is_finite() && hearers.same >= 0.0) {
+        return Err(GeomError::InvalidParameter {
+            arg: "same",
+            rule: ">= 0",
+            got: hearers.same,
+        });
+    }
+    for (arg, said) in [("said", radio.said), ("said_now", radio.said_now)] {
+        check_len(arg, n, said.len())?;
+        if let Some(index) = said.iter().position(|q| q[0].is_nan() != q[1].is_nan()) {
+            return Err(GeomError::PartlyNaN { arg, index });
+        }
+        let spoken: Vec<f64> = said.iter().filter(|q| !q[0].is_nan()).flatten().copied().collect();
+        check_coordinates(arg, &spoken)?;
+    }
+    let k = hearers.ids.len();
+    check_len("here", k, hearers.here.len())?;
+    check_coordinates("here", hearers.here.as_flattened())?;
+    let mut previous = -1;
+    for &id in hearers.ids {
+        if id <= previous || id >= n as i64 {
+            return Err(GeomError::InvalidParameter {
+                arg: "hearers",
+                rule: "strictly increasing robot indices below the number of positions",
+                got: id as f64,
+            });
+        }
+        previous = id;
+    }
+    for (arg, offsets, points) in [
+        ("seen", hearers.seen_offsets, hearers.seen),
+        ("virtual", hearers.agents_offsets, hearers.agents),
+    ] {
+        check_len(arg, k + 1, offsets.len())?;
+        check_offsets(arg, offsets, points.len(), "points")?;
+        check_coordinates(arg, points.as_flattened())?;
+    }
+    Ok(())
+}
+
+/// A bound on how far any message lies from the robot that said it (m): messages near a point
+/// are found among the robots within this much more of it.
+fn drift(radio: &Radio<'_>) -> f64 {
+    let gap = radio
+        .said
+        .iter()
+        .chain(radio.said_now)
+        .zip(radio.positions.iter().chain(radio.positions))
+        .filter(|(q, _)| !q[0].is_nan())
+        .map(|(q, p)| squared_distance(*p, *q))
+        .fold(0.0, f64::max)
+        .sqrt();
+    gap * (1.0 + 1e-9)
+}
+
+/// One call's shared inputs.
+struct Search<'a> {
+    radio: &'a Radio<'a>,
+    hearers: &'a Hearers<'a>,
+    grid: Grid,
+    cell: f64,
+    drift: f64,
+    range_squared: f64,
+    close: Closeness,
+    widest: f64,
+    circle: Vec<Vec2>,
+    radius: f64,
+    arena: &'a Arena,
+}
+
+/// A clipping point of a cell: `(|q - p|^2 as bits, rank, index, q)`, clipped in that order
+/// (rank 0: messages, by the sender's index; 1: robots seen; 2: virtual agents).
+type Candidate = (u64, u8, usize, Vec2);
+
+impl Search<'_> {
+    /// What robot `i` hears from robot `j`, if anything.
+    fn heard(&self, i: usize, j: usize) -> Option<Vec2> {
+        let (p, o) = (self.radio.positions[i], self.radio.positions[j]);
+        if j == i || !in_range(o[0] - p[0], o[1] - p[1], self.radio.range, self.range_squared) {
+            return None;
+        }
+        let q = if j < i {
+            self.radio.said_now[j]
+        } else {
+            self.radio.said[j]
+        };
+        (!q[0].is_nan()).then_some(q)
+    }
+
+    /// Calls `visit(q)` for what robot `i` hears from robots near `at`: every message within
+    /// `distance` of it, and maybe more.
+    fn heard_near(&self, i: usize, at: Vec2, distance: f64, mut visit: impl FnMut(usize, Vec2)) {
+        let members = self.grid.members();
+        self.grid
+            .for_each_run_within(at[0], at[1], distance + self.drift, |run| {
+                for &j in &members[run] {
+                    if let Some(q) = self.heard(i, j) {
+                        visit(j, q);
+                    }
+                }
+            });
+    }
+
+    /// Row `r`'s polygon, area and centroid.
+    fn cell(&self, r: usize, candidates: &mut Vec<Candidate>) -> (Vec<Vec2>, f64, Vec2) {
+        let h = self.hearers;
+        let (i, p) = (h.ids[r] as usize, h.here[r]);
+        let seen = &h.seen[h.seen_offsets[r] as usize..h.seen_offsets[r + 1] as usize];
+        let agents = &h.agents[h.agents_offsets[r] as usize..h.agents_offsets[r + 1] as usize];
+        let silent: Vec<Vec2> = seen
+            .iter()
+            .copied()
+            .filter(|&s| {
+                let mut accounted = false;
+                self.heard_near(i, s, h.same, |_, q| accounted |= self.close.within(s, q));
+                !accounted
+            })
+            .collect();
+        let extras = || {
+            let ranked = |rank: u8| move |(k, &q): (usize, &Vec2)| (rank, k, q);
+            silent
+                .iter()
+                .enumerate()
+                .map(ranked(1))
+                .chain(agents.iter().enumerate().map(ranked(2)))
+        };
+        // Beyond this distance from the site no message is heard: the robot's own position is
+        // within it of the site, the senders within range of that, the messages within drift.
+        let own = squared_distance(p, self.radio.positions[i]).sqrt() * (1.0 + 1e-9);
+        let last_message = (self.radio.range * (1.0 + 1e-9) + self.drift + own) * (1.0 + 1e-9);
+        let last_extra = extras().map(|(_, _, q)| squared_distance(p, q)).fold(0.0, f64::max);
+        let mut clipper = Clipper::new(p, self.radius, self.arena, &self.circle);
+        let (mut reach, mut low) = (self.cell, f64::NEG_INFINITY);
+        loop {
+            let last = reach >= last_message && reach * reach >= last_extra;
+            let high = if last { f64::INFINITY } else { reach * reach };
+            let window = |d: f64| d > low && d <= high;
+            candidates.clear();
+            self.heard_near(i, p, reach, |j, q| {
+                let d = squared_distance(p, q);
+                if window(d) {
+                    candidates.push((d.to_bits(), 0, j, q));
+                }
+            });
+            for (rank, k, q) in extras() {
+                let d = squared_distance(p, q);
+                if window(d) {
+                    candidates.push((d.to_bits(), rank, k, q));
+                }
+            }
+            candidates.sort_unstable_by_key(|&(d, rank, k, _)| (d, rank, k));
+            for &(d, _, _, q) in candidates.iter() {
+                if clipper.settled(f64::from_bits(d), self.widest) {
+                    return finish(clipper, p);
+                }
+                clipper.cut(q);
+            }
+            // Every later point lies farther than `high`.
+            if last || clipper.settled(high, self.widest) {
+                return finish(clipper, p);
+            }
+            (low, reach) = (high, 2.0 * reach);
+        }
+    }
+}
+
+fn finish(clipper: Clipper, p: Vec2) -> (Vec<Vec2>, f64, Vec2) {
+    let polygon = clipper.polygon();
+    let (area, centroid) = area_centroid(&polygon, p);
+    (polygon, area, centroid)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::neighbours::{far_from, within, RowsOf};
+    use crate::voronoi::voronoi_cells;
+
+    /// A pseudo-random stream in [0, 1) (no test dependency for a few numbers).
+    fn stream(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+        move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// The same cells from the three kernels one after the other.
+    fn composed(radio: &Radio<'_>, hearers: &Hearers<'_>, radius: f64, arena: &Arena) -> Cells {
+        let n = radio.positions.len();
+        let (xs, ys): (Vec<f64>, Vec<f64>) = radio.positions.iter().map(|p| (p[0], p[1])).unzip();
+        let mut rows = vec![false; n];
+        hearers.ids.iter().for_each(|&i| rows[i as usize] = true);
+        let near = within(&xs, &ys, radio.range, None, None, Some(&rows)).unwrap();
+        let mut heard: Vec<Vec<Vec2>> = Vec::new();
+        for &i in hearers.ids {
+            let i = i as usize;
+            let senders = &near.indices[near.indptr[i] as usize..near.indptr[i + 1] as usize];
+            heard.push(
+                senders
+                    .iter()
+                    .map(|&j| {
+                        if (j as usize) < i {
+                            radio.said_now[j as usize]
+                        } else {
+                            radio.said[j as usize]
+                        }
+                    })
+                    .filter(|q| !q[0].is_nan())
+                    .collect(),
+            );
+        }
+        let mut heard_offsets = vec![0_i64];
+        heard
+            .iter()
+            .for_each(|h| heard_offsets.push(heard_offsets.last().unwrap() + h.len() as i64));
+        let flat: Vec<Vec2> = heard.concat();
+        let silent = far_from(
+            RowsOf {
+                points: hearers.seen,
+                points_offsets: hearers.seen_offsets,
+                others: &flat,
+                others_offsets: &heard_offsets,
+            },
+            hearers.same,
+        )
+        .unwrap();
+        let (mut offsets, mut points) = (vec![0_i64], Vec::new());
+        for (r, messages) in heard.iter().enumerate() {
+            points.extend(messages);
+            let (a, b) = (hearers.seen_offsets[r] as usize, hearers.seen_offsets[r + 1] as usize);
+            points.extend((a..b).filter(|&s| silent[s]).map(|s| hearers.seen[s]));
+            let (a, b) = (
+                hearers.agents_offsets[r] as usize,
+                hearers.agents_offsets[r + 1] as usize,
+            );
+            points.extend(&hearers.agents[a..b]);
+            offsets.push(points.len() as i64);
+        }
+        voronoi_cells(hearers.here, radius, arena, Some((&offsets, &points)), 32, false).unwrap()
+    }
+
+    #[test]
+    fn equals_the_three_kernels_in_a_row() {
+        for (seed, n, side, range) in [
+            (1, 60, 2.0, 0.6),
+            (2, 300, 3.0, 2.0),
+            (3, 40, 10.0, 1.0),
+            (4, 5, 1.0, 0.0),
+        ] {
+            let mut u = stream(seed);
+            let arena = Arena::new(-side / 2.0, side / 2.0, -side / 2.0, side / 2.0).unwrap();
+            let positions: Vec<Vec2> = (0..n).map(|_| [side * (u() - 0.5), side * (u() - 0.5)]).collect();
+            let moved = |p: &Vec2, u: &mut dyn FnMut() -> f64| {
+                if u() < 0.1 {
+                    [f64::NAN, f64::NAN]
+                } else {
+                    [p[0] + 0.05 * (u() - 0.5), p[1] + 0.05 * (u() - 0.5)]
+                }
+            };
+            let said: Vec<Vec2> = positions.iter().map(|p| moved(p, &mut u)).collect();
+            let said_now: Vec<Vec2> = said
+                .iter()
+                .zip(&positions)
+                .map(|(q, p)| if u() < 0.3 { moved(p, &mut u) } else { *q })
+                .collect();
+            let ids: Vec<i64> = (0..n as i64).filter(|_| u() < 0.5).collect();
+            let here: Vec<Vec2> = ids
+                .iter()
+                .map(|&i| [positions[i as usize][0] + 0.02 * (u() - 0.5), positions[i as usize][1]])
+                .collect();
+            let (mut seen_offsets, mut seen) = (vec![0_i64], Vec::new());
+            let (mut agents_offsets, mut agents) = (vec![0_i64], Vec::new());
+            for &i in &ids {
+                for (j, q) in positions.iter().enumerate() {
+                    if j != i as usize && squared_distance(*q, positions[i as usize]) < 0.09 {
+                        seen.push([q[0] + 0.1 * (u() - 0.5), q[1] + 0.1 * (u() - 0.5)]);
+                    }
+                }
+                seen_offsets.push(seen.len() as i64);
+                if u() < 0.5 {
+                    agents.push([side * (u() - 0.5), side * (u() - 0.5)]);
+                }
+                agents_offsets.push(agents.len() as i64);
+            }
+            let radio = Radio {
+                positions: &positions,
+                range,
+                said: &said,
+                said_now: &said_now,
+            };
+            let hearers = Hearers {
+                ids: &ids,
+                here: &here,
+                seen_offsets: &seen_offsets,
+                seen: &seen,
+                same: 0.04,
+                agents_offsets: &agents_offsets,
+                agents: &agents,
+            };
+            let fused = heard_cells(&radio, &hearers, 0.5, &arena, 32).unwrap();
+            assert_eq!(fused, composed(&radio, &hearers, 0.5, &arena), "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn bad_input_is_an_error() {
+        let positions = [[0.0, 0.0], [1.0, 0.0]];
+        let said = [[0.0, 0.0], [f64::NAN, 1.0]];
+        let radio = Radio {
+            positions: &positions,
+            range: 1.0,
+            said: &said,
+            said_now: &positions,
+        };
+        let hearers = Hearers {
+            ids: &[0],
+            here: &[[0.0, 0.0]],
+            seen_offsets: &[0, 0],
+            seen: &[],
+            same: 0.1,
+            agents_offsets: &[0, 0],
+            agents: &[],
+        };
+        let arena = Arena::new(-1.0, 1.0, -1.0, 1.0).unwrap();
+        assert!(matches!(
+            heard_cells(&radio, &hearers, 1.0, &arena, 16),
+            Err(GeomError::PartlyNaN { arg: "said", index: 1 })
+        ));
+        let radio = Radio {
+            said: &positions,
+            ..radio
+        };
+        let twice = Hearers {
+            ids: &[1, 1],
+            here: &[[0.0, 0.0]; 2],
+            seen_offsets: &[0, 0, 0],
+            agents_offsets: &[0, 0, 0],
+            ..hearers
+        };
+        assert!(heard_cells(&radio, &twice, 1.0, &arena, 16).is_err());
+        assert!(heard_cells(&Radio { range: -1.0, ..radio }, &hearers, 1.0, &arena, 16).is_err());
+        assert!(heard_cells(&radio, &hearers, 1.0, &arena, 16).is_ok());
+    }
+}

@@ -1,0 +1,175 @@
+"""``heard_cells``, the cells of robots that know the others by radio: the Rust pass against its
+NumPy reference (``neighbours``, ``far_from`` and ``voronoi_cells`` one after the other) to the
+bit, against the one-robot kernel a robot calls for itself, and its errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numpy.testing import assert_array_equal
+
+from dream import _core, _reference, kernels
+
+BOUNDS = (-2.0, 2.0, -1.5, 1.5)
+
+
+def scene(rng, n, side, share=0.4, drift=0.05, unsaid=0.1):
+    """Robots at ``positions`` whose last messages lie up to ``drift`` off, some silent, some
+    having spoken again this round; a ``share`` of them hear, each seeing the robots within
+    0.3 m (a few placed exactly ``same`` off a message) and sensing up to two virtual agents."""
+    positions = rng.uniform(-side / 2, side / 2, (n, 2))
+    said = positions + rng.uniform(-drift, drift, (n, 2))
+    said[rng.random(n) < unsaid] = np.nan
+    said_now = said.copy()
+    again = rng.random(n) < 0.3
+    said_now[again] = positions[again]
+    hearers = np.flatnonzero(rng.random(n) < share)
+    here = positions[hearers] + rng.normal(scale=0.01, size=(len(hearers), 2))
+    seen, seen_counts, agents, agent_counts = [], [], [], []
+    for i in hearers:
+        near = np.flatnonzero(np.hypot(*(positions - positions[i]).T) < 0.3)
+        near = near[near != i]
+        points = positions[near] + rng.normal(scale=0.05, size=(len(near), 2))
+        if len(near) and not np.isnan(said[near[0], 0]):
+            points[0] = said[near[0]] + (0.08, 0.0)  # exactly `same` off a message heard
+        seen.append(points)
+        seen_counts.append(len(near))
+        count = int(rng.integers(0, 3))
+        agents.append(positions[i] + rng.uniform(-0.5, 0.5, (count, 2)))
+        agent_counts.append(count)
+    return dict(
+        here=here,
+        hearers=hearers.astype(np.int64),
+        positions=positions,
+        said=said,
+        said_now=said_now,
+        seen=csr(seen, seen_counts),
+        virtual=csr(agents, agent_counts),
+    )
+
+
+def csr(parts, counts):
+    """CSR ``(indptr, points)`` of rows ``parts`` of ``counts`` points each."""
+    return np.concatenate(([0], np.cumsum(counts))).astype(np.int64), np.vstack([np.zeros((0, 2)), *parts])
+
+
+def both(s, radius=1.0, range_=2.0, same=0.08, bounds=BOUNDS, resolution=32):
+    """The Rust pass's and the reference's ``(centroids, areas, vertices, offsets)``."""
+    args = (s["here"], s["hearers"], s["positions"], s["said"], s["said_now"])
+    kw = dict(
+        range=range_,
+        seen_indptr=s["seen"][0],
+        seen_points=s["seen"][1],
+        same=same,
+        virtual_indptr=s["virtual"][0],
+        virtual_points=s["virtual"][1],
+        radius=radius,
+        bounds=bounds,
+        resolution=resolution,
+    )
+    return _core.heard_cells(*args, **kw), _reference.heard_cells(*args, **kw)
+
+
+@pytest.mark.parametrize(
+    ("n", "side", "range_", "radius"),
+    [
+        (1, 1.0, 2.0, 1.0),
+        (40, 3.0, 0.0, 1.0),  # nobody heard: cells clipped by sight and agents alone
+        (120, 3.0, 2.0, 1.0),  # everyone hears everyone, the crowd of a packed start
+        (150, 12.0, 1.0, 0.5),  # spread: the search widens round after round
+        (700, 4.0, 2.0, 1.0),  # 280 hearers: rows on rayon
+    ],
+)
+def test_heard_cells_match_the_reference_to_the_bit(rng, n, side, range_, radius):
+    s = scene(rng, n, side)
+    got, want = both(s, radius=radius, range_=range_, bounds=(-side / 2, side / 2, -side / 2, side / 2))
+    for a, b in zip(got, want, strict=True):
+        assert_array_equal(a, b)
+    if n >= 120:
+        areas = got[1]
+        assert 0 < areas.min() < np.pi * radius**2 * 0.5  # crowded cells were clipped: not vacuous
+
+
+def test_heard_cells_far_from_the_origin_and_with_late_messages(rng):
+    # Far-flung robots (the grid's sparse table) and messages a metre off their robots.
+    s = scene(rng, 200, 6.0, drift=1.0)
+    s["positions"][:5] += 1e9
+    got, want = both(s, bounds=(-4.0, 4.0, -4.0, 4.0))
+    for a, b in zip(got, want, strict=True):
+        assert_array_equal(a, b)
+
+
+def test_a_hearers_cell_is_the_cell_it_computes_for_itself(rng):
+    # What CoverageRobot.update computes from its radio's messages, its silent sightings and its agents.
+    s = scene(rng, 150, 3.0)
+    cells = kernels.heard_cells(
+        s["here"], s["hearers"], s["positions"], s["said"], s["said_now"], range=2.0, seen=s["seen"], same=0.08,
+        virtual=s["virtual"], radius=1.0, bounds=BOUNDS, polygons=True,
+    )  # fmt: skip
+    for r, i in enumerate(s["hearers"][:20]):
+        near, _ = kernels.neighbours_of(s["positions"], int(i), 2.0)
+        heard = np.where((near < i)[:, None], s["said_now"][near], s["said"][near])
+        heard = heard[~np.isnan(heard[:, 0])]
+        seen = s["seen"][1][s["seen"][0][r] : s["seen"][0][r + 1]]
+        silent = seen[kernels.far_from(seen, heard, 0.08)]
+        agents = s["virtual"][1][s["virtual"][0][r] : s["virtual"][0][r + 1]]
+        centroid, area, polygon = kernels.voronoi_cell(
+            s["here"][r], np.vstack((heard, silent)), virtual=agents, radius=1.0, bounds=BOUNDS
+        )
+        assert_array_equal(cells.centroids[r], centroid)
+        assert cells.areas[r] == area
+        assert_array_equal(cells.vertices[cells.offsets[r] : cells.offsets[r + 1]], polygon)
+
+
+def test_heard_cells_defaults_and_empty_input(rng):
+    s = scene(rng, 30, 3.0)
+    plain = kernels.heard_cells(s["here"], s["hearers"], s["positions"], s["said"], range=1.0, bounds=BOUNDS)
+    same_round = kernels.heard_cells(
+        s["here"], s["hearers"], s["positions"], s["said"], s["said"], range=1.0, bounds=BOUNDS
+    )
+    assert_array_equal(plain.centroids, same_round.centroids)
+    assert plain.vertices is None
+    nobody = kernels.heard_cells(np.zeros((0, 2)), np.zeros(0, dtype=np.int64), s["positions"], s["said"], range=1.0)
+    assert nobody.centroids.shape == (0, 2)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (
+            lambda s: s["said"].__setitem__((3, 0), np.nan) or s["said"].__setitem__((3, 1), 0.5),
+            "`said` row 3 is half NaN",
+        ),
+        (lambda s: s["said_now"].__setitem__((2, 0), np.inf), "`said_now`"),
+        (lambda s: s.__setitem__("hearers", s["hearers"][::-1].copy()), "strictly increasing"),
+        (lambda s: s["hearers"].__setitem__(-1, 10**6), "strictly increasing"),
+        (lambda s: s.__setitem__("hearers", s["hearers"].astype(float)), "robot indices"),
+        (lambda s: s["positions"].__setitem__((0, 0), np.nan), "`positions`"),
+        (lambda s: s.__setitem__("said", s["said"][:-1]), "`said` must have shape"),
+        (lambda s: s.__setitem__("seen", (s["seen"][0][:-1], s["seen"][1])), "`seen` indptr"),
+        (lambda s: s["here"].__setitem__((0, 1), 1e200), "`here`"),
+    ],
+)
+def test_heard_cells_bad_input_names_the_argument(rng, change, message):
+    s = scene(rng, 30, 3.0, unsaid=0.0)
+    change(s)
+    with pytest.raises(ValueError, match=message):
+        kernels.heard_cells(
+            s["here"], s["hearers"], s["positions"], s["said"], s["said_now"], range=1.0, seen=s["seen"],
+            same=0.08, virtual=s["virtual"], bounds=BOUNDS,
+        )  # fmt: skip
+
+
+@pytest.mark.parametrize("bad", [dict(range=-1.0), dict(same=np.nan), dict(radius=0.0), dict(resolution=2)])
+def test_heard_cells_bad_parameters_are_value_errors(rng, bad):
+    s = scene(rng, 10, 3.0)
+    kw = dict(range=1.0, same=0.08, radius=1.0, resolution=16) | bad
+    with pytest.raises(ValueError, match=next(iter(bad))):
+        kernels.heard_cells(s["here"], s["hearers"], s["positions"], s["said"], **kw)
+    # The binding checks too: no panic reaches Python.
+    with pytest.raises(ValueError):
+        _core.heard_cells(
+            s["here"], s["hearers"], s["positions"], s["said"], s["said"], seen_indptr=s["seen"][0],
+            seen_points=s["seen"][1], virtual_indptr=s["virtual"][0], virtual_points=s["virtual"][1],
+            bounds=BOUNDS, **kw,
+        )  # fmt: skip
