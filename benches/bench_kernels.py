@@ -219,6 +219,82 @@ def far_from_rows(sizes) -> list[list[object]]:
     return [row(f"far_from/crowd/n={n}", n, build, lambda m: build(m, _reference.far_from), 1_000) for n in sizes]
 
 
+def heard_scene(m: int) -> dict[str, object]:
+    """The voronoi-coverage start at a step: ``m`` robots 0.2 m apart (the crowd scene), their
+    messages a few centimetres off, a fifth of them hearing (radio range 2 m: ~300 messages
+    each) and each seeing the ~20 robots within 0.5 m."""
+    p, _, (seen, where) = crowd(m)
+    rng = np.random.default_rng(1)
+    said = p + rng.uniform(-0.03, 0.03, p.shape)
+    hearers = np.arange(0, m, 5)
+    starts, counts = seen[hearers], np.diff(seen)[hearers]
+    picks = np.concatenate([np.arange(a, a + c) for a, c in zip(starts, counts, strict=True)] or [np.zeros(0, int)])
+    return dict(
+        here=p[hearers],
+        hearers=hearers,
+        positions=p,
+        said=said,
+        seen=(np.concatenate(([0], np.cumsum(counts))), where[picks]),
+    )
+
+
+def heard_rows(sizes) -> list[list[object]]:
+    """The cells of the robots that talk at a step of the coverage start, each clipped by what its
+    radio heard: :func:`dream.kernels.heard_cells` (one pass) against the three kernels it
+    replaces (neighbour rows of the hearers, ``far_from``, ``voronoi_cells`` of the gathered
+    points, as the swarm mode called them before) and against the NumPy reference."""
+
+    def fused(m: int, cells: Callable = kernels.heard_cells) -> Callable[[], object]:
+        s = heard_scene(m)
+        return lambda: cells(
+            s["here"], s["hearers"], s["positions"], s["said"], range=2.0, seen=s["seen"], same=0.08, bounds=BIG
+        )
+
+    def three(m: int) -> Callable[[], object]:
+        s = heard_scene(m)
+        here, hearers, p, said, (seen_indptr, seen) = (s[k] for k in ("here", "hearers", "positions", "said", "seen"))
+
+        def call() -> object:
+            rows = np.zeros(len(p), dtype=bool)
+            rows[hearers] = True
+            indptr, senders, _ = kernels.neighbours(p, 2.0, rows=rows)
+            heard = said[senders]
+            offsets = np.concatenate(([0], indptr[1:][rows]))
+            silent = kernels.far_from(seen, heard, 0.08, offsets=(seen_indptr, offsets))
+            extra_rows = np.repeat(np.arange(len(hearers)), np.diff(seen_indptr))[silent]
+            clips = np.insert(heard, offsets[1:][extra_rows], seen[silent], axis=0)
+            counts = np.diff(offsets) + np.bincount(extra_rows, minlength=len(hearers))
+            return kernels.voronoi_cells(
+                here,
+                radius=1.0,
+                bounds=BIG,
+                virtual=(np.concatenate(([0], np.cumsum(counts))), clips),
+                neighbours=False,
+            )
+
+        return call
+
+    def reference(m: int) -> Callable[[], object]:
+        s = heard_scene(m)
+        none = (np.zeros(len(s["hearers"]) + 1, dtype=np.int64), np.zeros((0, 2)))
+        return lambda: _reference.heard_cells(
+            s["here"], s["hearers"], s["positions"], s["said"], s["said"], range=2.0, seen_indptr=s["seen"][0],
+            seen_points=s["seen"][1], same=0.08, virtual_indptr=none[0], virtual_points=none[1], radius=1.0, bounds=BIG,
+        )  # fmt: skip
+
+    rows = []
+    for n in sizes:
+        one, apart = median_seconds(fused(n)), median_seconds(three(n))
+        slow = min(n, 100)
+        ref = median_seconds(reference(slow), min_time=0.0)
+        at = "" if slow == n else f" (at n={slow})"
+        rows.append(
+            [f"heard_cells/crowd/n={n}", show(one), show(apart), f"{apart / one:.1f}x", show(ref) + at,
+             f"{(ref / slow) / (one / n):,.0f}x"]
+        )  # fmt: skip
+    return rows
+
+
 def per_robot_rows() -> list[list[object]]:
     """One robot's HRVO call with 9 neighbours: DREAM's per-robot API against the prototype's loops."""
     rng = np.random.default_rng(3)
@@ -237,7 +313,9 @@ if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small sizes only")
     parser.add_argument(
-        "--only", choices=("dynamics", "neighbours", "hrvo", "voronoi", "far_from", "per-robot"), help="one table"
+        "--only",
+        choices=("dynamics", "neighbours", "hrvo", "voronoi", "far_from", "heard", "per-robot"),
+        help="one table",
     )
     parser.add_argument("--baseline", metavar="SO", help="another build of dream._core to time beside this one")
     args = parser.parse_args()
@@ -256,5 +334,15 @@ if __name__ == "__main__":
     for name, rows in tables.items():
         if args.only in (None, name):
             print(table(header(), rows()), "\n")
+    if args.only in (None, "heard"):
+        heard_header = [
+            "kernel",
+            "heard_cells (median)",
+            "three kernels (median)",
+            "ratio",
+            "NumPy reference",
+            "speed-up",
+        ]
+        print(table(heard_header, heard_rows((1_000,) if quick else (1_000, 10_000))), "\n")
     if args.only in (None, "per-robot"):
         print(table(["call", "DREAM (median)", "prototype-style Python (median)", "speed-up"], per_robot_rows()))

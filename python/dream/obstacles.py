@@ -151,14 +151,21 @@ def _distances(local: FloatArray, half: Any) -> FloatArray:
     return np.hypot(outside[..., 0], outside[..., 1])
 
 
-def touching(obstacles: list[Obstacle], positions: Any, radius: float) -> np.ndarray:
+def touching(obstacles: Sequence[Obstacle], positions: Any, radius: float) -> np.ndarray:
     """Which robots ``(n,)`` touch an obstacle: their centre, at ``positions`` ``(n, 2)``, is closer
     than ``radius`` (m) to one of ``obstacles`` (or inside it)."""
+    return _touching(_frames(obstacles) if obstacles else None, positions, radius)
+
+
+def _touching(
+    frames: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None, positions: Any, radius: float
+) -> np.ndarray:
+    """:func:`touching` for rectangles given by their frames (:func:`_frames`; ``None``: none)."""
     points = as_array(positions, "positions", (None, 2))
     touch = np.zeros(len(points), dtype=bool)
-    if not obstacles or not len(points):
+    if frames is None or not len(frames[0]) or not len(points):
         return touch
-    centres, cos, sin, half = _frames(obstacles)
+    centres, cos, sin, half = frames
     # Only a robot within an obstacle's circumcircle grown by `radius` can be that close to it. With
     # the robots sorted along the axis they spread most on, each obstacle's candidates are one
     # slice: thousands of obstacles cost no loop, and a large one no pair of robots (a neighbour
@@ -169,13 +176,43 @@ def touching(obstacles: list[Obstacle], positions: Any, radius: float) -> np.nda
     along = points[order, axis]
     starts = np.searchsorted(along, centres[:, axis] - reach, side="left")
     counts = np.searchsorted(along, centres[:, axis] + reach, side="right") - starts
-    owners = np.repeat(np.arange(len(obstacles)), counts)
+    owners = np.repeat(np.arange(len(centres)), counts)
     others = order[spans(starts, counts)]
     across = np.abs(points[others, 1 - axis] - centres[owners, 1 - axis]) <= reach[owners]
     owners, others = owners[across], others[across]
     local = _local(points[others], centres[owners], cos[owners], sin[owners])
     touch[others[_distances(local, half[owners]) < radius]] = True
     return touch
+
+
+class Fleet:
+    """Obstacles that move at constant velocities with no walls to bounce off (the affine
+    experiment's thousands of bars), kept as arrays: one step moves them all, as
+    :meth:`Obstacle.step` moves each (the same arithmetic, the same bits)."""
+
+    def __init__(self, obstacles: Sequence[Obstacle] = ()) -> None:
+        self.centres, self.cos, self.sin, self.half = _frames(obstacles)
+        self.angles = np.array([o.angle for o in obstacles])
+        self.velocities = np.array([o.velocity for o in obstacles]).reshape(-1, 2)
+
+    def __len__(self) -> int:
+        return len(self.centres)
+
+    def step(self, dt: float) -> None:
+        """Move every obstacle by its ``velocity * dt``."""
+        self.centres = self.centres + self.velocities * dt
+
+    def touching(self, positions: Any, radius: float) -> np.ndarray:
+        """:func:`touching` of the fleet."""
+        return _touching((self.centres, self.cos, self.sin, self.half), positions, radius)
+
+    @property
+    def obstacles(self) -> list[Obstacle]:
+        """The obstacles where they are now (for drawing)."""
+        return [
+            Obstacle(centre, 2 * half, angle, velocity)
+            for centre, half, angle, velocity in zip(self.centres, self.half, self.angles, self.velocities, strict=True)
+        ]
 
 
 def as_csr(obstacles: list[Obstacle]) -> tuple[FloatArray, np.ndarray]:

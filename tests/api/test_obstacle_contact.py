@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from dream.obstacles import Obstacle, touching
+from dream.obstacles import Fleet, Obstacle, touching
 
 
 @pytest.mark.parametrize("angle", [0.0, 0.7])
@@ -55,3 +55,24 @@ def test_touching_matches_each_obstacles_distances(column):
         radius = rng.uniform(0.0, 0.5)
         expected = np.any([obstacle.distances(positions) < radius for obstacle in obstacles], axis=0)
         assert touching(obstacles, positions, radius).tolist() == expected.tolist()
+
+
+def test_a_fleet_moves_and_touches_as_its_obstacles_do():
+    # The affine experiment's bars as arrays: the same positions, to the bit, and the same contacts.
+    rng = np.random.default_rng(4)
+    obstacles = [
+        Obstacle(rng.uniform(-2, 2, 2), rng.uniform(0.05, 0.5, 2), float(rng.uniform(-1, 1)), rng.uniform(-0.2, 0.2, 2))
+        for _ in range(40)
+    ]
+    fleet = Fleet(obstacles)
+    points = rng.uniform(-2.5, 2.5, (500, 2))
+    for _ in range(25):
+        for obstacle in obstacles:
+            obstacle.step(0.033)
+        fleet.step(0.033)
+        np.testing.assert_array_equal(fleet.centres, [o.center for o in obstacles])
+        np.testing.assert_array_equal(fleet.touching(points, 0.055), touching(obstacles, points, 0.055))
+    assert touching(obstacles, points, 0.055).any()  # the comparison is not vacuous
+    drawn = fleet.obstacles
+    np.testing.assert_array_equal([o.polygon for o in drawn], [o.polygon for o in obstacles])
+    assert len(Fleet()) == 0 and not Fleet().touching(points, 0.1).any()

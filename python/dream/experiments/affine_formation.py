@@ -77,7 +77,7 @@ from dream.experiments.sightings import Nearby, Sight, decide_in_order, last_det
 from dream.experiments.spec import Experiment
 from dream.frames import Frame
 from dream.heartbeats import Heartbeats
-from dream.obstacles import Obstacle, touching
+from dream.obstacles import Fleet, Obstacle
 from dream.radios import GraphRadio
 from dream.robot import RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
@@ -645,7 +645,7 @@ class AffineFormation(Experiment):
         self.centres = tile_centres(n // 7)
         self.leader = np.arange(n) % 7 < LEADERS
         self.passes = schedule()
-        self.bars: list[Obstacle] = []
+        self.bars = Fleet()
         self.contacts, self.settled_error, self.deformed_error, self.error = 0, math.nan, 0.0, math.nan
 
     def build(self, n: int) -> None:
@@ -796,9 +796,11 @@ class AffineFormation(Experiment):
             if step in (deform, leave):
                 self._lead(shape if step == deform else "nominal")
             if step == enter:
-                self.bars = [bar for centre in self.centres for bar in bars(gap, ROBOTARIUM.xmax + ENTRY, centre)]
+                self.bars = Fleet(
+                    [bar for centre in self.centres for bar in bars(gap, ROBOTARIUM.xmax + ENTRY, centre)]
+                )
             if step == leave:
-                self.bars = []
+                self.bars = Fleet()
 
     def _lead(self, shape: str) -> None:
         """Send every leader towards its place in ``shape`` (the leaders know the plan)."""
@@ -810,17 +812,16 @@ class AffineFormation(Experiment):
                 robot.head_for(formation(shape) + self.centres[robot.robot_id // 7])
 
     def after_step(self, step: int, poses: np.ndarray) -> None:
-        for bar in self.bars:
-            bar.step(self.sim.time_step)
+        self.bars.step(self.sim.time_step)
         correct = self.correct
         self.targets = follower_positions(self.anchors(poses))
         errors = np.linalg.norm(poses[:2, ~self.leader].T - self.targets, axis=1)
         self.error = float(errors[correct[~self.leader]].max(initial=0.0))
         if step == self.passes[0][0]:
             self.settled_error = self.error
-        if self.bars:
+        if len(self.bars):
             self.deformed_error = max(self.deformed_error, self.error)
-            self.contacts += bool(touching(self.bars, poses[:2, correct].T, GRITSBOT.radius).any())
+            self.contacts += bool(self.bars.touching(poses[:2, correct].T, GRITSBOT.radius).any())
 
     def anchors(self, poses: np.ndarray) -> np.ndarray:
         """The leaders' positions ``(n, 2)`` (rows of followers unused) that the survivors' formation
@@ -867,7 +868,7 @@ class AffineFormation(Experiment):
             goals=goals,
             velocities=velocities,
             links=(links[None] + 7 * np.arange(self.n // 7)[:, None, None]).reshape(-1, 2),
-            obstacles=[bar.polygon for bar in self.bars],
+            obstacles=[bar.polygon for bar in self.bars.obstacles],
             obstacle_moving=[True] * len(self.bars),
             roles=np.where(self.leader, "leader", "follower"),
             title=f"{NAME}: follower error {self.error:.3f} m, bar contacts {self.contacts}",
