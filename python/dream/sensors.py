@@ -14,7 +14,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from dream._checks import FloatArray, RobotCallback, check_nonnegative, check_robot_id
-from dream.obstacles import sensed
 from dream.world import current_world
 
 if TYPE_CHECKING:
@@ -191,5 +190,5 @@ class ObstacleSensor(Sensor):
     def update(self, x: Any) -> None:
         """Measure from the attached robot's pose in ``x`` ``(3, n)`` and call the callback."""
         super().update(x)
-        found = sensed(self.obstacles, [self.pos_x, self.pos_y], self.range)[0]
+        found = self.world.obstacles_near(self._poses, self.robot_id, self.obstacles, self.range)
         self._report(found[~np.isnan(found[:, 0])])

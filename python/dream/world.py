@@ -27,10 +27,12 @@ import numpy as np
 from dream import kernels
 from dream._checks import as_array, as_poses
 from dream.faults import Faults, FaultState
+from dream.obstacles import sensed
 from dream.timers import Timer
 
 if TYPE_CHECKING:
     from dream.backends import Backend
+    from dream.obstacles import Obstacle
 
 
 class World:
@@ -55,6 +57,7 @@ class World:
         self._indexed_poses: np.ndarray | None = None  # the pose array the indexes were built for
         self._indexed_xy = b""  # ...and the bytes of its positions then, to notice in-place changes
         self._indexes: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._readings: dict[tuple[Any, ...], np.ndarray] = {}  # obstacle readings of every robot
         self._checked_input: Any = None  # the last pose array checked, at clock `_checked_time`
         self._checked_time: float = -1
         self._checked = np.zeros((3, 0))
@@ -103,12 +106,7 @@ class World:
         Same answer as :func:`dream.kernels.neighbours_of`, but from one whole-swarm index per
         pose array and radius (Rust grid query), shared by every sensor and radio of the step.
         """
-        # The bytes of the positions tell in-place changes (rps moves one array) far faster
-        # than an element-wise comparison; the poses are checked finite, so equal bytes are equal values.
-        xy = poses[:2].tobytes()
-        if poses is not self._indexed_poses or xy != self._indexed_xy:
-            self._indexed_poses, self._indexed_xy = poses, xy
-            self._indexes = {}
+        self._fresh(poses)
         if radius not in self._indexes:
             self._indexes[radius] = kernels.neighbours(poses[:2].T, radius)
         indptr, indices, distances = self._indexes[radius]
@@ -122,6 +120,32 @@ class World:
         relative = (np.arctan2(dy, dx) - (heading + direction) + np.pi) % (2 * np.pi) - np.pi
         seen = (np.abs(relative) <= fov / 2) | (dist == 0)
         return found[seen], dist[seen]
+
+    def _fresh(self, poses: np.ndarray) -> None:
+        """Forget what was found for other poses than ``poses`` (checked, ``(3, n)``)."""
+        # The bytes of the positions tell in-place changes (rps moves one array) far faster
+        # than an element-wise comparison; the poses are checked finite, so equal bytes are equal values.
+        xy = poses[:2].tobytes()
+        if poses is not self._indexed_poses or xy != self._indexed_xy:
+            self._indexed_poses, self._indexed_xy = poses, xy
+            self._indexes, self._readings = {}, {}
+
+    def obstacles_near(
+        self, poses: np.ndarray, robot_id: int, obstacles: Sequence[Obstacle], radius: float
+    ) -> np.ndarray:
+        """What robot ``robot_id``'s obstacle sensor reads in the checked poses ``(3, n)``: the
+        closest point of each of ``obstacles`` ``(k, 2)``, NaN beyond ``radius`` or around it.
+
+        Same answer as :func:`dream.obstacles.sensed` for that robot, but from one whole-swarm call
+        per pose array, obstacle layout and range, shared by every obstacle sensor of the step.
+        """
+        self._fresh(poses)
+        # The obstacles' layout, not the list's identity: obstacles move between steps.
+        key = (radius, *((o.center.tobytes(), o.angle, o.size.tobytes()) for o in obstacles))
+        reading = self._readings.get(key)
+        if reading is None:
+            reading = self._readings[key] = sensed(obstacles, poses[:2].T, radius)
+        return reading[robot_id]
 
     # -- faults ----------------------------------------------------------------------------
     def inject(self, faults: Faults | None, n: int) -> FaultState | None:

@@ -7,6 +7,7 @@ import pytest
 from numpy.testing import assert_array_equal
 
 from dream import kernels
+from dream.obstacles import Obstacle, sensed
 
 
 @pytest.mark.parametrize("n", [1, 2, 40])
@@ -34,3 +35,17 @@ def test_world_neighbours_of_keeps_one_index_per_radius(world):
     assert_array_equal(world.neighbours_of(poses, 0, 0.6)[0], [1])
     assert_array_equal(world.neighbours_of(poses, 0, 1.0)[0], [1, 2])
     assert_array_equal(world.neighbours_of(poses, 0, 0.6)[0], [1])
+
+
+def test_world_obstacles_near_matches_one_robots_reading_and_follows_the_obstacles(world, rng):
+    # One whole-swarm reading per pose array and obstacle layout: each row as the robot's own,
+    # to the bit; an obstacle moved (or poses moved in place) gives a fresh reading.
+    obstacles = [Obstacle((0.3, 0.2), (0.4, 0.2), angle=0.4), Obstacle((-0.6, -0.3), (0.2, 0.5), velocity=(0.1, 0))]
+    poses = np.vstack((rng.uniform(-1, 1, (2, 60)), np.zeros(60)))
+    for _ in range(3):
+        for i in range(60):
+            want = sensed(obstacles, [poses[0, i], poses[1, i]], 0.5)[0]
+            assert_array_equal(world.obstacles_near(poses, i, obstacles, 0.5), want)
+        assert np.isfinite(world.obstacles_near(poses, 0, obstacles, 5.0)).all()  # one reading per range
+        obstacles[1].step(1.0)
+        poses[:2] += 0.05
