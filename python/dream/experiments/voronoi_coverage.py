@@ -33,6 +33,7 @@ and :data:`MARGIN` off the walls (:func:`cell_bounds`), as off the obstacles.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from typing import Any, NamedTuple
@@ -199,7 +200,10 @@ class CoverageRobot(Robot):
         self.seen = np.zeros((0, 2))  # positions of the robots the movement sensor detects
 
     def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
-        self.others = np.array([(x, y) for _, x, y in messages]).reshape(-1, 2)
+        # The (id, x, y) triples flattened into one array: half the cost of a list of pairs, for
+        # the hundreds of messages a robot in a crowd hears.
+        flat = np.fromiter(itertools.chain.from_iterable(messages), np.float64, 3 * len(messages))
+        self.others = flat.reshape(-1, 3)[:, 1:]
         return (self.robot_id, self.pos_x, self.pos_y) if self.has_pose else None
 
     def update_obstacles(self, closest_points: np.ndarray) -> None:
