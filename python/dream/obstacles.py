@@ -199,8 +199,9 @@ class Fleet:
         return len(self.centres)
 
     def step(self, dt: float) -> None:
-        """Move every obstacle by its ``velocity * dt``."""
-        self.centres = self.centres + self.velocities * dt
+        """Move every moving obstacle by its ``velocity * dt``."""
+        moving = np.any(self.velocities != 0, axis=1)[:, None]
+        self.centres = np.where(moving, self.centres + self.velocities * dt, self.centres)
 
     def touching(self, positions: Any, radius: float) -> np.ndarray:
         """:func:`touching` of the fleet."""

@@ -18,6 +18,7 @@ messages or timers::
 from __future__ import annotations
 
 import copy
+import math
 import pickle
 from collections.abc import Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
@@ -57,7 +58,8 @@ class World:
         self._indexed_poses: np.ndarray | None = None  # the pose array the indexes were built for
         self._indexed_xy = b""  # ...and the bytes of its positions then, to notice in-place changes
         self._indexes: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
-        self._readings: dict[tuple[Any, ...], np.ndarray] = {}  # obstacle readings of every robot
+        # Every robot's obstacle reading, by range: the obstacles' layout it was read for, and it.
+        self._readings: dict[float, tuple[tuple[Any, ...], np.ndarray]] = {}
         self._checked_input: Any = None  # the last pose array checked, at clock `_checked_time`
         self._checked_time: float = -1
         self._checked = np.zeros((3, 0))
@@ -140,11 +142,13 @@ class World:
         per pose array, obstacle layout and range, shared by every obstacle sensor of the step.
         """
         self._fresh(poses)
-        # The obstacles' layout, not the list's identity: obstacles move between steps.
-        key = (radius, *((o.center.tobytes(), o.angle, o.size.tobytes()) for o in obstacles))
-        reading = self._readings.get(key)
-        if reading is None:
-            reading = self._readings[key] = sensed(obstacles, poses[:2].T, radius)
+        # The obstacles' layout, not the list's identity: obstacles move between steps. The
+        # angle's sign too: -0.0 and 0.0 are equal, but their sines differ in sign.
+        layout = tuple((o.center.tobytes(), o.size.tobytes(), o.angle, math.copysign(1.0, o.angle)) for o in obstacles)
+        known, reading = self._readings.get(radius, ((), None))
+        if reading is None or known != layout:
+            reading = sensed(obstacles, poses[:2].T, radius)
+            self._readings[radius] = (layout, reading)
         return reading[robot_id]
 
     # -- faults ----------------------------------------------------------------------------

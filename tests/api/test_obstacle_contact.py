@@ -76,3 +76,11 @@ def test_a_fleet_moves_and_touches_as_its_obstacles_do():
     drawn = fleet.obstacles
     np.testing.assert_array_equal([o.polygon for o in drawn], [o.polygon for o in obstacles])
     assert len(Fleet()) == 0 and not Fleet().touching(points, 0.1).any()
+
+
+def test_a_fleet_leaves_static_obstacles_alone():
+    # Obstacle.step does not touch a static obstacle: not even the sign of a zero.
+    fleet = Fleet([Obstacle((-0.0, 0.5), (0.2, 0.2)), Obstacle((0.0, 0.0), (0.2, 0.2), velocity=(0.1, 0.0))])
+    fleet.step(0.5)
+    assert math.copysign(1.0, fleet.centres[0, 0]) == -1.0
+    np.testing.assert_array_equal(fleet.centres[1], [0.05, 0.0])

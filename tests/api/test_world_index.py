@@ -49,3 +49,13 @@ def test_world_obstacles_near_matches_one_robots_reading_and_follows_the_obstacl
         assert np.isfinite(world.obstacles_near(poses, 0, obstacles, 5.0)).all()  # one reading per range
         obstacles[1].step(1.0)
         poses[:2] += 0.05
+
+
+def test_world_obstacles_near_keeps_one_reading_per_range(world):
+    # Robots standing still while obstacles move: the reading is replaced, not kept beside the old.
+    obstacle = Obstacle((0.0, 0.0), (0.2, 0.2), velocity=(0.1, 0.0))
+    poses = np.array([[0.5, -0.5], [0.0, 0.0], [0.0, 0.0]])
+    for _ in range(20):
+        world.obstacles_near(poses, 0, [obstacle], 1.0)
+        obstacle.step(0.1)
+    assert len(world._readings) == 1

@@ -173,3 +173,30 @@ def test_heard_cells_bad_parameters_are_value_errors(rng, bad):
             seen_points=s["seen"][1], virtual_indptr=s["virtual"][0], virtual_points=s["virtual"][1],
             bounds=BOUNDS, **kw,
         )  # fmt: skip
+
+
+def test_heard_cells_at_tiny_and_huge_scales_match_the_reference(rng):
+    # Squared distances that underflow (a message must not be lost between two rounds' boxes) and
+    # a robot 3e18 m away (the search box's cell count overflows: no endless walk of empty cells).
+    tiny = dict(positions=np.array([[0.0, 0.0], [1e-201, 0.0]]), here=np.array([[1e-170, 0.0]]))
+    far = dict(positions=np.array([[3e18, 0.0], [0.0, 0.0]]), here=np.array([[0.5, 0.0]]))
+    for scene_, hearer, range_ in ((tiny, 0, 1e-200), (far, 1, 1.0)):
+        s = dict(scene_, hearers=np.array([hearer]), said=scene_["positions"] + 0.0, said_now=scene_["positions"] + 0.0)
+        s["seen"] = s["virtual"] = (np.zeros(2, dtype=np.int64), np.zeros((0, 2)))
+        got, want = both(s, range_=range_, same=0.0, resolution=8)
+        for a, b in zip(got, want, strict=True):
+            assert_array_equal(a, b)
+    for scale in (1e-175, 1e-160):
+        s = scene(rng, 60, 1.0)
+        for key in ("here", "positions", "said", "said_now"):
+            s[key] = s[key] * scale
+        s["seen"] = (s["seen"][0], s["seen"][1] * scale)
+        s["virtual"] = (s["virtual"][0], s["virtual"][1] * scale)
+        got, want = both(s, radius=scale, range_=2 * scale, same=0.08 * scale, bounds=(-scale, scale, -scale, scale))
+        for a, b in zip(got, want, strict=True):
+            assert_array_equal(a, b)
+
+
+def test_heard_cells_refuse_positions_beyond_reach():
+    with pytest.raises(ValueError, match="`positions`"):
+        kernels.heard_cells([[0.0, 0.0]], [0], [[0.0, 0.0], [1e308, 0.0]], [[0.0, 0.0], [0.0, 0.0]], range=1.0)

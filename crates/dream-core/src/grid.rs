@@ -179,7 +179,7 @@ impl Grid {
             CellTable::Sparse(index) => {
                 let width = i128::from(x1_cell) - i128::from(x0_cell) + 1;
                 let height = i128::from(y1_cell) - i128::from(y0_cell) + 1;
-                if width * height > index.len() as i128 {
+                if width.saturating_mul(height) > index.len() as i128 {
                     // Fewer occupied cells than cells in the square: visit them all.
                     for slot in 0..index.len() {
                         let run = self.starts[slot]..self.starts[slot + 1];

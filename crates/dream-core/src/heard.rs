@@ -16,7 +16,7 @@
 use rayon::prelude::*;
 
 use crate::dynamics::Arena;
-use crate::error::{check_finite, check_len, check_offsets, GeomError, Result};
+use crate::error::{check_len, check_offsets, GeomError, Result};
 use crate::grid::Grid;
 use crate::hrvo::Vec2;
 use crate::neighbours::{in_range, radius_squared, Closeness};
@@ -75,13 +75,17 @@ pub fn heard_cells(
     check(radio, hearers)?;
     check_cell_parameters(radius, arena, resolution)?;
     let (xs, ys): (Vec<f64>, Vec<f64>) = radio.positions.iter().map(|p| (p[0], p[1])).unzip();
-    let cell = radio.range / 4.0;
+    let drift = drift(radio);
+    // A quarter of the farthest a message can be heard from: a crowd's cell settles within the
+    // first 3x3 block. At least 1e-150, whose square is still a normal number: below, the squared
+    // distances of the rounds underflow and a point beyond the searched box could pass for within.
+    let cell = ((radio.range + drift) / 4.0).max(1e-150);
     let search = Search {
         radio,
         hearers,
-        grid: Grid::new(&xs, &ys, if cell.is_normal() { cell } else { 1.0 }),
-        cell: if cell.is_normal() { cell } else { 1.0 },
-        drift: drift(radio),
+        grid: Grid::new(&xs, &ys, cell),
+        cell,
+        drift,
         range_squared: radius_squared(radio.range),
         close: Closeness::new(hearers.same),
         widest: widest(
@@ -108,23 +112,11 @@ pub fn heard_cells(
         let mut scratch = Vec::new();
         (0..k).map(|r| search.cell(r, &mut scratch)).collect()
     };
-    let mut cells = Cells {
-        offsets: Vec::with_capacity(k + 1),
-        ..Cells::default()
-    };
-    cells.offsets.push(0);
-    for (polygon, area, centroid) in per_robot {
-        cells.vertices.extend(polygon);
-        cells.offsets.push(cells.vertices.len() as i64);
-        cells.areas.push(area);
-        cells.centroids.push(centroid);
-    }
-    Ok(cells)
+    Ok(Cells::from_rows(per_robot))
 }
 
 fn check(radio: &Radio<'_>, hearers: &Hearers<'_>) -> Result<()> {
     let n = radio.positions.len();
-    check_finite("positions", radio.positions.as_flattened())?;
     if !(radio.range.is_finite() && radio.range >= 0.0) {
         return Err(GeomError::InvalidParameter {
             arg: "range",
@@ -147,6 +139,8 @@ fn check(radio: &Radio<'_>, hearers: &Hearers<'_>) -> Result<()> {
         let spoken: Vec<f64> = said.iter().filter(|q| !q[0].is_nan()).flatten().copied().collect();
         check_coordinates(arg, &spoken)?;
     }
+    // Coordinates within reach of the clipping's arithmetic also keep every search distance finite.
+    check_coordinates("positions", radio.positions.as_flattened())?;
     let k = hearers.ids.len();
     check_len("here", k, hearers.here.len())?;
     check_coordinates("here", hearers.here.as_flattened())?;
@@ -173,7 +167,8 @@ fn check(radio: &Radio<'_>, hearers: &Hearers<'_>) -> Result<()> {
 }
 
 /// A bound on how far any message lies from the robot that said it (m): messages near a point
-/// are found among the robots within this much more of it.
+/// are found among the robots within this much more of it. One message far from its robot
+/// widens every search by as much (the messages of a range radio lie a few steps of travel off).
 fn drift(radio: &Radio<'_>) -> f64 {
     let gap = radio
         .said
@@ -259,14 +254,16 @@ impl Search<'_> {
                 .chain(agents.iter().enumerate().map(ranked(2)))
         };
         // Beyond this distance from the site no message is heard: the robot's own position is
-        // within it of the site, the senders within range of that, the messages within drift.
-        let own = squared_distance(p, self.radio.positions[i]).sqrt() * (1.0 + 1e-9);
-        let last_message = (self.radio.range * (1.0 + 1e-9) + self.drift + own) * (1.0 + 1e-9);
+        // within it of the site, the senders within range of that, the messages within drift
+        // (with a margin far above the rounding of the three).
+        let own = squared_distance(p, self.radio.positions[i]).sqrt();
+        let last_message = (self.radio.range + self.drift + own) * (1.0 + 1e-9);
         let last_extra = extras().map(|(_, _, q)| squared_distance(p, q)).fold(0.0, f64::max);
         let mut clipper = Clipper::new(p, self.radius, self.arena, &self.circle);
         let (mut reach, mut low) = (self.cell, f64::NEG_INFINITY);
         loop {
-            let last = reach >= last_message && reach * reach >= last_extra;
+            // A square that overflows belongs to a box around every robot (coordinates <= 1e100).
+            let last = (reach >= last_message && reach * reach >= last_extra) || reach * reach == f64::INFINITY;
             let high = if last { f64::INFINITY } else { reach * reach };
             let window = |d: f64| d > low && d <= high;
             candidates.clear();

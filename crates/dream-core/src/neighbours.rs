@@ -222,8 +222,9 @@ impl<'a> Near<'a> {
 }
 
 /// A hair above `radius^2`: beyond it a point is surely out of range; below it `sqrt` decides.
+/// Never below the least normal number: subnormal squares round too coarsely for the margin.
 pub(crate) fn radius_squared(radius: f64) -> f64 {
-    radius * radius * (1.0 + 4.0 * f64::EPSILON)
+    (radius * radius).max(f64::MIN_POSITIVE) * (1.0 + 4.0 * f64::EPSILON)
 }
 
 /// Whether the offset `(dx, dy)` lies within `radius` (inclusive), as every neighbour query

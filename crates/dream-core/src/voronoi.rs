@@ -40,6 +40,24 @@ pub struct Cells {
     pub offsets: Vec<i64>,
 }
 
+impl Cells {
+    /// The cells of robots given one after the other as `(polygon, area, centroid)`.
+    pub(crate) fn from_rows(rows: Vec<(Vec<Vec2>, f64, Vec2)>) -> Self {
+        let mut cells = Cells {
+            offsets: Vec::with_capacity(rows.len() + 1),
+            ..Cells::default()
+        };
+        cells.offsets.push(0);
+        for (polygon, area, centroid) in rows {
+            cells.vertices.extend(polygon);
+            cells.offsets.push(cells.vertices.len() as i64);
+            cells.areas.push(area);
+            cells.centroids.push(centroid);
+        }
+        cells
+    }
+}
+
 /// Keeps the part of the convex `polygon` where `(q - point) . normal <= 0`, into `out`.
 fn clip(polygon: &[Vec2], point: Vec2, normal: Vec2, out: &mut Vec<Vec2>) {
     out.clear();
@@ -354,18 +372,7 @@ pub fn voronoi_cells(
     } else {
         (0..n).map(robot).collect()
     };
-    let mut cells = Cells {
-        offsets: Vec::with_capacity(n + 1),
-        ..Cells::default()
-    };
-    cells.offsets.push(0);
-    for (polygon, area, centroid) in per_robot {
-        cells.vertices.extend(polygon);
-        cells.offsets.push(cells.vertices.len() as i64);
-        cells.areas.push(area);
-        cells.centroids.push(centroid);
-    }
-    Ok(cells)
+    Ok(Cells::from_rows(per_robot))
 }
 
 #[cfg(test)]

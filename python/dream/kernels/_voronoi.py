@@ -166,7 +166,7 @@ def heard_cells(
     if ids.size and ids.dtype.kind not in "iu":
         raise ValueError(f"`hearers` must hold robot indices, got dtype {ids.dtype}")
     ids = np.ascontiguousarray(ids, dtype=np.int64)
-    x = as_array(positions, "positions", (None, 2))
+    x = _within_reach(as_array(positions, "positions", (None, 2)), "positions")
     n = x.shape[0]
     if ids.shape != (k,):
         raise ValueError(f"`hearers` must have shape ({k},) (one per row of `here`), got {ids.shape}")
