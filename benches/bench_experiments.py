@@ -4,7 +4,7 @@ python benches/bench_experiments.py
 
 The swarm-mode rows at N = 10,000 run the first 100 steps, from the packed start: the hardest
 stretch (voronoi-coverage's robots each hear about 300 others there, ten times as many as once
-spread).
+spread); affine-formation's runs through its first bar pass.
 """
 
 from __future__ import annotations
@@ -25,10 +25,13 @@ CASES = [
     ("hrvo-circle n=10, rps, to completion", _run("hrvo-circle", 10, "robotarium")),
     ("hrvo-circle n=10, fast, to completion", _run("hrvo-circle", 10)),
     ("hrvo-circle n=1000, fast, per-robot API, 300 steps", _run("hrvo-circle", 1000, steps=300)),
+    ("voronoi-coverage n=1000, fast, per-robot API, 300 steps", _run("voronoi-coverage", 1000, steps=300)),
     *(
         (f"{name} n=10000, swarm mode, 100 steps", _run(name, 10_000, steps=100, swarm=True))
         for name in ("hrvo-circle", "line-consensus", "voronoi-coverage")
     ),
+    # Through the first pass of its 2,858 bars (steps 1,800-2,507), the costliest stretch.
+    ("affine-formation n=10003, swarm mode, 2507 steps", _run("affine-formation", 10_003, steps=2507, swarm=True)),
 ]
 
 
