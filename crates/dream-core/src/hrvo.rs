@@ -562,10 +562,7 @@ pub fn hrvo_batch(
             got: radius,
         });
     }
-    // Built once and copied for each piece of work rayon makes (dozens at n = 10,000): building
-    // the clusters costs ~55k instructions (a `hypot` per candidate), a copy a few hundred.
-    let blank = Scratch::new(grid, &params);
-    let scratch = || blank.clone();
+    let scratch = Scratch::new(grid, &params);
     let decide = |scratch: &mut Scratch, i: usize| choose(scratch, preferred[i], positions[i], &params);
     let cone = |i: usize, b: &Neighbour| Cone::new(velocities[i], b, params.safety);
     if let Some((indptr, indices)) = neighbours {
@@ -613,10 +610,12 @@ pub fn hrvo_batch(
 }
 
 /// `robot(scratch, robots(k))` for k in `0..n`, in that order; on all threads for a large
-/// swarm, on this one (no thread pool, one scratch) for a small one.
+/// swarm, on this one (no thread pool) for a small one. Each piece of work rayon makes
+/// (dozens at n = 10,000) gets a copy of `scratch`: building one costs ~55k instructions (a
+/// `hypot` per candidate for the clusters), a copy a few hundred.
 fn for_each_robot(
     n: usize,
-    scratch: impl Fn() -> Scratch + Sync + Send,
+    mut scratch: Scratch,
     robots: impl Fn(usize) -> usize + Sync + Send,
     robot: impl Fn(&mut Scratch, usize) -> Vec2 + Sync + Send,
 ) -> Vec<Vec2> {
@@ -624,10 +623,9 @@ fn for_each_robot(
         (0..n)
             .into_par_iter()
             .with_min_len(PARALLEL_ROBOTS)
-            .map_init(&scratch, |scratch, k| robot(scratch, robots(k)))
+            .map_init(|| scratch.clone(), |scratch, k| robot(scratch, robots(k)))
             .collect()
     } else {
-        let mut scratch = scratch();
         (0..n).map(|k| robot(&mut scratch, robots(k))).collect()
     }
 }
