@@ -186,9 +186,10 @@ impl Cone {
         let (to_left, to_right) = (cross(left, from_rvo).abs(), cross(right, from_rvo).abs());
         let gap = (to_left - to_right).abs();
         // hypot(a, b) < 2 max(|a|, |b|), so a gap above that bound is no tie and libm's hypot (the
-        // reference's) is only called for the rare near-tie.
-        let tie =
-            gap <= 2.0 * TIE * from_rvo[0].abs().max(from_rvo[1].abs()) && gap <= TIE * from_rvo[0].hypot(from_rvo[1]);
+        // reference's) is only called for the rare near-tie; hypot(0, 0) is 0, so not for `v_A`
+        // at the apex either (robots and neighbours that stand still).
+        let widest = from_rvo[0].abs().max(from_rvo[1].abs());
+        let tie = gap <= 2.0 * TIE * widest && (widest == 0.0 || gap <= TIE * from_rvo[0].hypot(from_rvo[1]));
         let left_apex = select(!tie & (to_left < to_right), rvo, vo);
         let right_apex = select(!tie & (to_left > to_right), rvo, vo);
         Cone {
@@ -729,6 +730,16 @@ mod tests {
             }
         }
         assert!(covered > 1_000, "{covered}");
+    }
+
+    #[test]
+    fn velocity_at_the_apex_is_a_tie() {
+        // v_A = v_B: v_A sits on the RVO's apex, equally close to both edges, so both are the VO's.
+        for v in [[0.0, 0.0], [0.1, -0.05]] {
+            let b = Neighbour::from_offset([0.3, 0.4], v);
+            let cone = Cone::new(v, &b, 0.24);
+            assert_eq!((cone.left_apex, cone.right_apex), (v, v));
+        }
     }
 
     #[test]
