@@ -4,6 +4,7 @@
 mod arrays;
 mod dynamics;
 mod errors;
+mod heard;
 mod hrvo;
 mod neighbours;
 mod obstacles;
@@ -27,7 +28,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<hrvo::PyHrvoPlanner>()?;
     m.add_function(wrap_pyfunction!(voronoi::voronoi_cells, m)?)?;
     m.add_function(wrap_pyfunction!(voronoi::voronoi_cell, m)?)?;
-    m.add_function(wrap_pyfunction!(voronoi::heard_cells, m)?)?;
+    m.add_function(wrap_pyfunction!(heard::heard_cells, m)?)?;
     m.add_function(wrap_pyfunction!(obstacles::virtual_agents, m)?)?;
     m.add_function(wrap_pyfunction!(raycast::distance_rays, m)?)?;
     Ok(())

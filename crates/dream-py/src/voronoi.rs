@@ -1,8 +1,6 @@
-//! Bindings of `dream_core::voronoi` and `dream_core::heard`: disc-bounded Voronoi cells of the
-//! whole swarm, and of robots that know the others by radio.
+//! Bindings of `dream_core::voronoi`: disc-bounded Voronoi cells of the whole swarm.
 
 use dream_core::dynamics::Arena;
-use dream_core::heard;
 use dream_core::voronoi as core;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
@@ -10,7 +8,7 @@ use pyo3::prelude::*;
 use crate::arrays::{both, count_of, indices_of, points_of, vector_of};
 use crate::errors::PyDreamResult;
 
-type CellArrays<'py> = (
+pub(crate) type CellArrays<'py> = (
     Bound<'py, PyArray2<f64>>,
     Bound<'py, PyArray1<f64>>,
     Bound<'py, PyArray2<f64>>,
@@ -51,7 +49,7 @@ pub fn voronoi_cells<'py>(
     cell_arrays(py, cells)
 }
 
-fn cell_arrays(py: Python<'_>, cells: core::Cells) -> PyDreamResult<CellArrays<'_>> {
+pub(crate) fn cell_arrays(py: Python<'_>, cells: core::Cells) -> PyDreamResult<CellArrays<'_>> {
     let (n, m) = (cells.centroids.len(), cells.vertices.len());
     Ok((
         cells.centroids.into_flattened().into_pyarray(py).reshape([n, 2])?,
@@ -87,60 +85,4 @@ pub fn voronoi_cell<'py>(
         area,
         polygon.into_flattened().into_pyarray(py).reshape([m, 2])?,
     ))
-}
-
-/// The cells `(centroids (k, 2), areas (k,), vertices (m, 2), offsets (k + 1,))` of robots
-/// `hearers` `(k,)` at `here` `(k, 2)`, each clipped by what its range radio hears (`said` and
-/// `said_now` `(n, 2)` of the robots at `positions` `(n, 2)`), by the robots it sees that no
-/// message accounts for and by its virtual agents (both CSR).
-#[pyfunction]
-#[pyo3(signature = (here, hearers, positions, said, said_now, *, range, seen_indptr, seen_points, same, virtual_indptr, virtual_points, radius, bounds, resolution=64))]
-#[allow(clippy::too_many_arguments)]
-pub fn heard_cells<'py>(
-    py: Python<'py>,
-    here: Bound<'py, PyAny>,
-    hearers: Bound<'py, PyAny>,
-    positions: Bound<'py, PyAny>,
-    said: Bound<'py, PyAny>,
-    said_now: Bound<'py, PyAny>,
-    range: f64,
-    seen_indptr: Bound<'py, PyAny>,
-    seen_points: Bound<'py, PyAny>,
-    same: f64,
-    virtual_indptr: Bound<'py, PyAny>,
-    virtual_points: Bound<'py, PyAny>,
-    radius: f64,
-    bounds: (f64, f64, f64, f64),
-    resolution: i64,
-) -> PyDreamResult<CellArrays<'py>> {
-    let resolution = count_of("resolution", resolution)?;
-    let arena = Arena::new(bounds.0, bounds.1, bounds.2, bounds.3)?;
-    let here = points_of::<2>("here", &here)?;
-    let ids = indices_of("hearers", &hearers)?;
-    let positions = points_of::<2>("positions", &positions)?;
-    let said = points_of::<2>("said", &said)?;
-    let said_now = points_of::<2>("said_now", &said_now)?;
-    let seen_offsets = indices_of("seen_indptr", &seen_indptr)?;
-    let seen = points_of::<2>("seen_points", &seen_points)?;
-    let agents_offsets = indices_of("virtual_indptr", &virtual_indptr)?;
-    let agents = points_of::<2>("virtual_points", &virtual_points)?;
-    let cells = py.detach(|| {
-        let radio = heard::Radio {
-            positions: &positions,
-            range,
-            said: &said,
-            said_now: &said_now,
-        };
-        let hearers = heard::Hearers {
-            ids: &ids,
-            here: &here,
-            seen_offsets: &seen_offsets,
-            seen: &seen,
-            same,
-            agents_offsets: &agents_offsets,
-            agents: &agents,
-        };
-        heard::heard_cells(&radio, &hearers, radius, &arena, resolution)
-    })?;
-    cell_arrays(py, cells)
 }

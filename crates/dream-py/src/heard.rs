@@ -1,0 +1,65 @@
+//! Bindings of `dream_core::heard`: the Voronoi cells of robots that know the others by radio.
+
+use dream_core::dynamics::Arena;
+use dream_core::heard;
+use pyo3::prelude::*;
+
+use crate::arrays::{count_of, indices_of, points_of};
+use crate::errors::PyDreamResult;
+use crate::voronoi::{cell_arrays, CellArrays};
+
+/// The cells `(centroids (k, 2), areas (k,), vertices (m, 2), offsets (k + 1,))` of robots
+/// `hearers` `(k,)` at `here` `(k, 2)`, each clipped by what its range radio hears (`said` and
+/// `said_now` `(n, 2)` of the robots at `positions` `(n, 2)`), by the robots it sees that no
+/// message accounts for and by its virtual agents (both CSR).
+#[pyfunction]
+#[pyo3(signature = (here, hearers, positions, said, said_now, *, range, seen_indptr, seen_points, same, virtual_indptr, virtual_points, radius, bounds, resolution=64))]
+#[allow(clippy::too_many_arguments)]
+pub fn heard_cells<'py>(
+    py: Python<'py>,
+    here: Bound<'py, PyAny>,
+    hearers: Bound<'py, PyAny>,
+    positions: Bound<'py, PyAny>,
+    said: Bound<'py, PyAny>,
+    said_now: Bound<'py, PyAny>,
+    range: f64,
+    seen_indptr: Bound<'py, PyAny>,
+    seen_points: Bound<'py, PyAny>,
+    same: f64,
+    virtual_indptr: Bound<'py, PyAny>,
+    virtual_points: Bound<'py, PyAny>,
+    radius: f64,
+    bounds: (f64, f64, f64, f64),
+    resolution: i64,
+) -> PyDreamResult<CellArrays<'py>> {
+    let resolution = count_of("resolution", resolution)?;
+    let arena = Arena::new(bounds.0, bounds.1, bounds.2, bounds.3)?;
+    let here = points_of::<2>("here", &here)?;
+    let ids = indices_of("hearers", &hearers)?;
+    let positions = points_of::<2>("positions", &positions)?;
+    let said = points_of::<2>("said", &said)?;
+    let said_now = points_of::<2>("said_now", &said_now)?;
+    let seen_offsets = indices_of("seen_indptr", &seen_indptr)?;
+    let seen = points_of::<2>("seen_points", &seen_points)?;
+    let agents_offsets = indices_of("virtual_indptr", &virtual_indptr)?;
+    let agents = points_of::<2>("virtual_points", &virtual_points)?;
+    let cells = py.detach(|| {
+        let radio = heard::Radio {
+            positions: &positions,
+            range,
+            said: &said,
+            said_now: &said_now,
+        };
+        let hearers = heard::Hearers {
+            ids: &ids,
+            here: &here,
+            seen_offsets: &seen_offsets,
+            seen: &seen,
+            same,
+            agents_offsets: &agents_offsets,
+            agents: &agents,
+        };
+        heard::heard_cells(&radio, &hearers, radius, &arena, resolution)
+    })?;
+    cell_arrays(py, cells)
+}
