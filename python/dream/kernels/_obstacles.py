@@ -42,6 +42,8 @@ def obstacle_agents(
         return _reference.mirrored(p, c, offset)
     p = as_array(position, "position", (2,))
     c = as_array(closest_points, "closest_points", (None, 2))
+    if not len(c):  # most robots of a large arena sense no obstacle at a given step
+        return np.zeros((0, 2))
     return _reference.agents_from_closest(p, c, offset)
 
 
