@@ -44,24 +44,55 @@ impl Csr {
                 from += length;
             }
         }
-        let total = blocks.iter().map(|block| block.indices.len()).sum();
-        let mut csr = Csr {
-            indptr: Vec::with_capacity(n + 1),
-            indices: Vec::with_capacity(total),
-            distances: Vec::with_capacity(total),
-        };
-        csr.indptr.push(0);
-        for (b, from, length) in rows {
-            if length > 0 {
-                let block = &blocks[b];
-                csr.indices.extend_from_slice(&block.indices[from..from + length]);
-                csr.distances.extend_from_slice(&block.distances[from..from + length]);
-            }
-            csr.indptr.push(csr.indices.len() as i64);
+        let mut indptr = Vec::with_capacity(n + 1);
+        indptr.push(0_i64);
+        for &(_, _, length) in &rows {
+            indptr.push(indptr[indptr.len() - 1] + length as i64);
         }
-        csr
+        let total = indptr[n] as usize;
+        let (mut indices, mut distances) = (vec![0_i64; total], vec![0.0; total]);
+        // Robots in runs of GATHER_ROWS, each run's rows copied into its own part of the output:
+        // on all cores for a large swarm, where the copy is a sixth of the query.
+        let mut parts = Vec::with_capacity(n / GATHER_ROWS + 1);
+        let (mut rest_i, mut rest_d) = (&mut indices[..], &mut distances[..]);
+        for first in (0..n).step_by(GATHER_ROWS) {
+            let last = (first + GATHER_ROWS).min(n);
+            let size = (indptr[last] - indptr[first]) as usize;
+            let (part_i, tail_i) = std::mem::take(&mut rest_i).split_at_mut(size);
+            let (part_d, tail_d) = std::mem::take(&mut rest_d).split_at_mut(size);
+            (rest_i, rest_d) = (tail_i, tail_d);
+            parts.push((first..last, part_i, part_d));
+        }
+        let copy = |(robots, part_i, part_d): (std::ops::Range<usize>, &mut [i64], &mut [f64])| {
+            let mut at = 0;
+            for &(b, from, length) in &rows[robots] {
+                if length > 0 {
+                    let block = &blocks[b];
+                    part_i[at..at + length].copy_from_slice(&block.indices[from..from + length]);
+                    part_d[at..at + length].copy_from_slice(&block.distances[from..from + length]);
+                    at += length;
+                }
+            }
+        };
+        if total >= PARALLEL_GATHER {
+            parts.into_par_iter().for_each(copy);
+        } else {
+            parts.into_iter().for_each(copy);
+        }
+        Csr {
+            indptr,
+            indices,
+            distances,
+        }
     }
 }
+
+/// Robots whose rows are copied into robot order by one task.
+const GATHER_ROWS: usize = 4096;
+
+/// Neighbour pairs below this count are put in robot order on one thread (at 100,000 pairs the
+/// parallel copy measured 10-17 % slower, at 1,000,000 it is 1.14-1.31x faster).
+const PARALLEL_GATHER: usize = 400_000;
 
 /// Wraps an angle to [-pi, pi) as NumPy's `(a + pi) % (2 pi) - pi` does.
 pub(crate) fn wrap_angle(angle: f64) -> f64 {
