@@ -63,15 +63,20 @@ fn bench_neighbours(c: &mut Criterion) {
     group.finish();
 }
 
-fn bench_hrvo(c: &mut Criterion) {
-    let mut group = c.benchmark_group("hrvo");
-    let grid = hrvo::candidate_grid(0.2, 20, 10);
+/// The original candidate grid and the experiments' HRVO parameters, for both HRVO benches.
+fn hrvo_setup() -> (Vec<Vec2>, HrvoParams) {
     let params = HrvoParams {
         safety: 0.24,
         v_max: 0.2,
         bounds: None,
         include_preferred: true,
     };
+    (hrvo::candidate_grid(0.2, 20, 10), params)
+}
+
+fn bench_hrvo(c: &mut Criterion) {
+    let mut group = c.benchmark_group("hrvo");
+    let (grid, params) = hrvo_setup();
     for n in [100, 1_000, 10_000] {
         let v: Vec<Vec2> = (0..n)
             .map(|i| [0.1 * (i as f64).sin(), 0.1 * (i as f64).cos()])
@@ -93,13 +98,7 @@ fn bench_hrvo(c: &mut Criterion) {
 /// called again and again lets the branch predictor learn its branches by heart (n = 100 then
 /// looks twice as fast as in a simulation, whose swarm moves between calls).
 fn bench_hrvo_varied(c: &mut Criterion) {
-    let grid = hrvo::candidate_grid(0.2, 20, 10);
-    let params = HrvoParams {
-        safety: 0.24,
-        v_max: 0.2,
-        bounds: None,
-        include_preferred: true,
-    };
+    let (grid, params) = hrvo_setup();
     let n = 100;
     let swarms: Vec<[Vec<Vec2>; 3]> = (1..=32_u64)
         .map(|seed| {
