@@ -23,6 +23,7 @@ from types import ModuleType
 import numpy as np
 
 from dream import _core, _reference, backends, kernels
+from dream._csr import spans
 from dream.kernels import _dispatch
 from dream.specs import RPS, ArenaSpec
 from harness import machine, median_seconds, show, table
@@ -228,7 +229,7 @@ def heard_scene(m: int) -> dict[str, object]:
     said = p + rng.uniform(-0.03, 0.03, p.shape)
     hearers = np.arange(0, m, 5)
     starts, counts = seen[hearers], np.diff(seen)[hearers]
-    picks = np.concatenate([np.arange(a, a + c) for a, c in zip(starts, counts, strict=True)] or [np.zeros(0, int)])
+    picks = spans(starts, counts)
     return dict(
         here=p[hearers],
         hearers=hearers,
