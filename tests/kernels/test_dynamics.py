@@ -189,6 +189,18 @@ def test_validate_matches_reference_and_brute_force(rng, n):
         assert all(count > 0 for count in expected[:2])  # the test exercises both counts
 
 
+def test_large_swarms_step_and_validate_on_every_core_as_the_reference(rng):
+    # From 4,096 robots the Rust kernels split the swarm across threads: same poses, same counts.
+    n = 6000
+    poses = np.vstack((rng.uniform(-4.0, 4.0, (2, n)), rng.uniform(-3, 3, (1, n))))
+    commands = random_commands(rng, n)
+    assert_allclose(_core.unicycle_step(poses, commands, 0.033), _reference.unicycle_step(poses, commands, 0.033), **TOL)
+    bounds = (-3.5, 3.5, -3.5, 3.5)
+    expected = _reference.validate(poses, commands, bounds, **WHEELS)
+    assert expected[0] > 0 and expected[1] > 100
+    assert _core.validate(poses, commands, bounds, **WHEELS) == expected
+
+
 @pytest.mark.parametrize("n", [2, 7, 30, 50])
 def test_validate_matches_rps_own_validate(rng, n):
     # rps's `_validate` is the definition; pass it a fresh dict (its default one is shared).

@@ -6,13 +6,14 @@
 //! O(n k), not O(n^2). Points are
 //! bucketed by a counting sort into CSR order. When the occupied bounding box has few cells
 //! (robots spread over an arena: the usual case) the cell table is a dense array; otherwise
-//! (a few far-flung robots) a hash map keeps memory O(n).
+//! (a few far-flung robots, or a swarm spread thin over a large arena) a hash map keeps memory
+//! O(n).
 //!
 //! The coordinates are also stored in cell order, and in the dense table the cells of one
 //! column are consecutive, so the 3x3 block around a point is three contiguous runs: queries
 //! stream through memory instead of jumping to each neighbour's index.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 use std::ops::Range;
 
 /// Points bucketed by cell; a cell's points are contiguous in `members`, in increasing index.
@@ -36,7 +37,7 @@ enum CellTable {
         columns: i64,
         rows: i64,
     },
-    Sparse(HashMap<(i64, i64), usize>),
+    Sparse(FxHashMap<(i64, i64), usize>),
 }
 
 impl Grid {
@@ -68,7 +69,8 @@ impl Grid {
                     (columns * rows) as usize,
                 )
             } else {
-                let mut index: HashMap<(i64, i64), usize> = HashMap::with_capacity(keys.len());
+                let mut index: FxHashMap<(i64, i64), usize> =
+                    FxHashMap::with_capacity_and_hasher(keys.len(), Default::default());
                 let slots: Vec<usize> = keys
                     .iter()
                     .map(|key| {
