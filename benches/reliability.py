@@ -4,7 +4,7 @@
     python benches/reliability.py --quick              # fewer seeds, no N = 1,000 (minutes)
     python benches/reliability.py --resilience         # N = 10 and 100 under each fault (Fast)
     python benches/reliability.py --case hrvo-circle:20:robotarium:0-29 --case line-consensus:100:fast:0-9
-    python benches/reliability.py --case hrvo-circle:10000:swarm:0 --workers 2
+    python benches/reliability.py --case hrvo-circle:10000:swarm:0 --checkpoints runs/   # hours; resumable
     python benches/reliability.py --case line-consensus:100:fast:0-9:byzantine=1 --param resilient=1
 
 A case is ``EXPERIMENT:N:BACKEND:SEEDS[:FAULTS]``: BACKEND is ``robotarium``, ``fast`` or
@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import statistics
 import time
+from pathlib import Path
 
 import dream
 from dream.experiments import find
@@ -88,17 +89,35 @@ def parse_param(text: str) -> tuple[str, str]:
 
 
 def measure(
-    name: str, n: int, backend: str, seeds: range, faults: str, workers: int, params: dict[str, str]
+    name: str,
+    n: int,
+    backend: str,
+    seeds: range,
+    faults: str,
+    workers: int,
+    params: dict[str, str],
+    checkpoints: Path | None = None,
 ) -> list[object]:
-    """One row: successes, summed violations, and min/median/max steps of the successful runs."""
+    """One row: successes, summed violations, and min/median/max steps of the successful runs.
+
+    With ``checkpoints``, a folder, each swarm-mode run is saved there as it goes (runs of hours:
+    hrvo-circle at N = 10,000) and resumed from there when the row is measured again.
+    """
     start = time.perf_counter()
     options = [option for option in faults.split("+") if option]
     if backend == "swarm":
         broken = Faults.parse(options) if options else None
-        results = [
-            dream.run(name, n=n, seed=seed, backend="fast", swarm=True, faults=broken, **params).to_dict()
-            for seed in seeds
-        ]
+        results = []
+        for seed in seeds:
+            saved = None if checkpoints is None else checkpoints / f"{name}-{n}-{seed}-{faults or 'none'}.ckpt"
+            if saved is not None and saved.exists():  # a run cut short: go on where it stopped
+                result = dream.resume(saved)
+            else:
+                result = dream.run(name, n=n, seed=seed, backend="fast", swarm=True, faults=broken, checkpoint=saved,
+                                   **params)  # fmt: skip
+            if result.interrupted:
+                raise SystemExit(f"interrupted: run the same command again to resume from {saved}")
+            results.append(result.to_dict())
     else:
         grid = {kind: [value] for kind, _, value in (option.partition("=") for option in options)}
         results = dream.sweep(
@@ -130,6 +149,9 @@ def main() -> None:
     parser.add_argument("--seeds", default="0-9", help="seeds of the resilience table (default 0-9)")
     parser.add_argument("--workers", type=int, default=2, help="local Dask worker processes")
     parser.add_argument("--param", action="append", type=parse_param, default=[], help="NAME=VALUE, every case")
+    parser.add_argument(
+        "--checkpoints", metavar="DIR", type=Path, help="save swarm-mode runs in DIR as they go; resume what it holds"
+    )
     args = parser.parse_args()
     if args.case:
         cases = args.case
@@ -147,7 +169,7 @@ def main() -> None:
     print(machine())
     rows = []
     for case in cases:
-        rows.append(measure(*case, workers=args.workers, params=dict(args.param)))
+        rows.append(measure(*case, workers=args.workers, params=dict(args.param), checkpoints=args.checkpoints))
         print("  " + " | ".join(map(str, rows[-1])), flush=True)
     header = ["experiment", "N", "backend", "faults (+ params)", "seeds", "successes"]
     header += ["collisions", "boundary", "actuator"]

@@ -13,7 +13,7 @@ convention); positions given to geometry kernels are ``(n, 2)``.
 from dream import _version, kernels, specs
 from dream.backends import Backend, Fast, Robotarium, initial_poses, make_robotarium
 from dream.errors import GeometryError
-from dream.experiments import Experiment, ExperimentResult, Param, param, run
+from dream.experiments import Experiment, ExperimentResult, Param, param, resume, run
 from dream.faults import Faults
 from dream.obstacles import Obstacle
 from dream.onboard import DistanceSensor, EncoderSensor, ImuReading, ImuSensor
@@ -98,6 +98,7 @@ __all__ = [
     "make_robotarium",
     "param",
     "reset_default_world",
+    "resume",
     "run",
     "specs",
     "sweep",

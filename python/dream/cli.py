@@ -5,6 +5,8 @@
     dream run hrvo-circle -n 10 --seed 0 --json metrics.json
     dream run my_experiment.py --param gain=2 --video run.mp4 --every 2
     dream run hrvo-circle -n 2000 --swarm --backend fast   # the whole swarm decides in one call
+    dream run hrvo-circle -n 10000 --swarm --checkpoint big.ckpt   # saved as it goes...
+    dream resume big.ckpt                                # ...and resumed where it stopped
     dream new my_experiment                              # a starter file that runs as is
     dream bench                                          # the repository's benches/
 
@@ -27,7 +29,9 @@ from typing import Any
 
 from dream.backends import BACKENDS
 from dream.backends.robotarium import MAX_ROBOTS
-from dream.experiments import EXPERIMENTS, Experiment, find, run
+from dream.experiments import EXPERIMENTS, Experiment, ExperimentResult, find, resume, run
+from dream.experiments.checkpoint import CheckpointError
+from dream.experiments.runner import CHECKPOINT_EVERY
 from dream.faults import KINDS, Faults
 from dream.specs import RULES
 
@@ -103,6 +107,18 @@ def _parser() -> argparse.ArgumentParser:
     runner.add_argument("--realtime", action="store_true", help="pace the run to wall time (30 steps/s)")
     runner.add_argument("--hold", action="store_true", help="keep the live window open at the end until closed")
     runner.add_argument("--check", action="store_true", help="exit with 1 when the run fails its success test")
+    runner.add_argument("--checkpoint", metavar="PATH", help="save the run to PATH as it goes (see `dream resume`)")
+    resumer = commands.add_parser("resume", help="go on with a run saved by `dream run --checkpoint PATH`")
+    resumer.add_argument("checkpoint", metavar="PATH", help="the checkpoint (it is saved again as the run goes on)")
+    resumer.add_argument("--steps", type=_whole(1), default=None, help="a new step cap (default: the run's own)")
+    resumer.add_argument("--json", metavar="PATH", help="also write the metrics as JSON")
+    resumer.add_argument("--no-progress", action="store_true", help="no progress bar")
+    resumer.add_argument("--check", action="store_true", help="exit with 1 when the run fails its success test")
+    for command in (runner, resumer):
+        command.add_argument(
+            "--checkpoint-every", metavar="K", type=_whole(1), default=CHECKPOINT_EVERY,
+            help=f"steps between two saves of the checkpoint (default: {CHECKPOINT_EVERY:,})",
+        )  # fmt: skip
     new = commands.add_parser("new", help="write a starter experiment file that runs as is")
     new.add_argument("name", help="the experiment's name; the file is NAME.py")
     new.add_argument("-o", "--output", metavar="PATH", help="where to write it (default: ./NAME.py)")
@@ -291,10 +307,13 @@ def _run(args: argparse.Namespace) -> int:
                                 realtime=args.realtime, hold=args.hold)  # fmt: skip
         except (ValueError, OSError) as err:
             raise UsageError(str(err)) from None
+    if args.checkpoint:
+        _writable(args.checkpoint, "--checkpoint")
     progress = _progress(not args.no_progress)
     try:
         result = run(cls, n=n, seed=args.seed, backend=args.backend, steps=args.steps, progress=progress, faults=faults,
-                     rules=args.rules, swarm=args.swarm, record=recorder, **params)  # fmt: skip
+                     rules=args.rules, swarm=args.swarm, record=recorder, checkpoint=args.checkpoint,
+                     checkpoint_every=args.checkpoint_every, **params)  # fmt: skip
     except ValueError as err:  # an experiment's refusal (a size it cannot do), said before any step
         raise UsageError(str(err)) from None
     finally:
@@ -307,16 +326,40 @@ def _run(args: argparse.Namespace) -> int:
             print(f"video: {recorder.video} ({recorder.writer.frames_written} frames, one step in {args.every})")
         else:
             print(f"video: none written (no steps recorded) to {recorder.video}")
+    code = _report(result, args)
+    if code == 0 and recorder is not None and recorder.live:
+        print("close the window to exit", file=sys.stderr)
+        recorder.hold()  # keep the live window on the last frame until the user closes it
+    return code
+
+
+def _resume(args: argparse.Namespace) -> int:
+    if args.json:
+        _writable(args.json, "--json")
+    progress = _progress(not args.no_progress)
+    try:
+        result = resume(args.checkpoint, args.steps, progress=progress, checkpoint_every=args.checkpoint_every)
+    except FileNotFoundError:
+        raise UsageError(f"{args.checkpoint}: no such checkpoint") from None
+    except (CheckpointError, ValueError) as err:
+        raise UsageError(str(err)) from None
+    finally:
+        if progress is not None:
+            progress.close()
+    return _report(result, args)
+
+
+def _report(result: ExperimentResult, args: argparse.Namespace) -> int:
+    """Print (and with ``--json`` write) a run's metrics; its exit code."""
     print(result.summary())
     if args.json:
         _write_json(args.json, result.to_dict())
     if result.interrupted:
         kept = f"; metrics so far in {args.json}" if args.json else ""
+        if args.checkpoint:
+            kept += f"; go on with `dream resume {args.checkpoint}`"
         print(f"dream: interrupted after {result.steps} steps{kept}", file=sys.stderr)
         return 128 + (result.signal or signal.SIGINT)
-    if recorder is not None and recorder.live:
-        print("close the window to exit", file=sys.stderr)
-        recorder.hold()  # keep the live window on the last frame until the user closes it
     return 1 if args.check and not result.success else 0
 
 
@@ -341,6 +384,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _bench(args.full)
         if args.command == "new":
             return _new(args.name, args.output)
+        if args.command == "resume":
+            return _resume(args)
         if args.command in ("sweep", "export"):
             return args.handler(args)
         return _run(args)

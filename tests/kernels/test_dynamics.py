@@ -194,7 +194,9 @@ def test_large_swarms_step_and_validate_on_every_core_as_the_reference(rng):
     n = 6000
     poses = np.vstack((rng.uniform(-4.0, 4.0, (2, n)), rng.uniform(-3, 3, (1, n))))
     commands = random_commands(rng, n)
-    assert_allclose(_core.unicycle_step(poses, commands, 0.033), _reference.unicycle_step(poses, commands, 0.033), **TOL)
+    assert_allclose(
+        _core.unicycle_step(poses, commands, 0.033), _reference.unicycle_step(poses, commands, 0.033), **TOL
+    )
     bounds = (-3.5, 3.5, -3.5, 3.5)
     expected = _reference.validate(poses, commands, bounds, **WHEELS)
     assert expected[0] > 0 and expected[1] > 100

@@ -7,7 +7,7 @@ from dream.experiments.files import ExperimentFileError, load_file
 from dream.experiments.hrvo_circle import HrvoCircle
 from dream.experiments.line_consensus import LineConsensus
 from dream.experiments.result import ExperimentResult
-from dream.experiments.runner import run
+from dream.experiments.runner import resume, run
 from dream.experiments.spec import Experiment, Param, param
 from dream.experiments.voronoi_coverage import VoronoiCoverage
 
@@ -41,5 +41,6 @@ __all__ = [
     "find",
     "load_file",
     "param",
+    "resume",
     "run",
 ]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import importlib.util
 import sys
 from pathlib import Path
@@ -11,6 +12,10 @@ from dream.experiments.spec import Experiment
 
 class ExperimentFileError(ValueError):
     """A file that does not define exactly one experiment, or that fails to load."""
+
+
+#: Modules made from researchers' files are named this and the file's stem and path digest.
+MODULE_PREFIX = "dream_user_"
 
 
 def load_file(path: str | Path) -> type[Experiment]:
@@ -25,7 +30,9 @@ def load_file(path: str | Path) -> type[Experiment]:
     path = Path(path)
     if not path.is_file():
         raise ExperimentFileError(f"{path}: no such file")
-    module_name = f"dream_user_{path.stem}_{abs(hash(path.resolve()))}"
+    # The same name in every process (pickles of its objects find it: checkpoints, Dask workers).
+    digest = hashlib.sha1(str(path.resolve()).encode()).hexdigest()[:12]
+    module_name = f"{MODULE_PREFIX}{path.stem}_{digest}"
     spec = importlib.util.spec_from_file_location(module_name, path)
     if spec is None or spec.loader is None:
         raise ExperimentFileError(f"{path}: not a Python file")
@@ -49,3 +56,11 @@ def load_file(path: str | Path) -> type[Experiment]:
         what = "no Experiment subclass" if not found else f"{len(found)} Experiment subclasses ({names})"
         raise ExperimentFileError(f"{path}: defines {what}; a file for `dream run` defines exactly one")
     return found[0]
+
+
+def source_file(cls: type) -> str | None:
+    """The file that defines ``cls`` if it comes from :func:`load_file`, else None."""
+    if not cls.__module__.startswith(MODULE_PREFIX):
+        return None
+    file = getattr(sys.modules.get(cls.__module__), "__file__", None)
+    return None if file is None else str(Path(file).resolve())

@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 import numbers
+import os
 import signal
 import threading
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from dream.backends import BACKENDS, make_robotarium, rules_named
 from dream.backends.base import Backend
+from dream.experiments.checkpoint import Checkpoint, load, save
 from dream.experiments.result import ExperimentResult
 from dream.experiments.spec import Experiment
 from dream.faults import Faults, FaultState
@@ -21,6 +24,9 @@ from dream.specs import GRITSBOT, RPS, SimulatorSpec
 from dream.world import World
 
 Progress = Callable[[int, int], None]
+#: Steps between two checkpoints of a run (:func:`run`'s ``checkpoint``): 20,000 steps of
+#: 10,000 robots take minutes; of 10 robots, seconds (and their saves milliseconds).
+CHECKPOINT_EVERY = 20_000
 
 
 def run(
@@ -36,6 +42,8 @@ def run(
     faults: Faults | None = None,
     rules: str | None = None,
     swarm: bool = False,
+    checkpoint: str | os.PathLike[str] | None = None,
+    checkpoint_every: int = CHECKPOINT_EVERY,
     **params: Any,
 ) -> ExperimentResult:
     """Run ``experiment`` until it is done or ``steps`` have run.
@@ -69,6 +77,13 @@ def run(
         Run the experiment's swarm mode (:meth:`~Experiment.build_swarm`,
         :meth:`~Experiment.swarm_step`: the whole swarm decides every step in one call) instead
         of robot objects and timers.
+    checkpoint : path, optional
+        Save the whole run to this file before the first step, every ``checkpoint_every``
+        steps, and when it stops short of done (a signal, the cap), so that :func:`resume`
+        can go on with it (:mod:`dream.experiments.checkpoint`); a run that cannot be saved
+        (one holding a live window, say) fails before its first step.
+    checkpoint_every : int
+        Steps between two saves (default 20,000).
     **params
         Values of the experiment's declared parameters.
 
@@ -90,37 +105,99 @@ def run(
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
     exp.check(n, backend)
-    with World(seed) as world:
+    every = None if checkpoint is None else _count(checkpoint_every, "checkpoint_every", 1)
+    if checkpoint is not None:
+        _writable_dir(checkpoint)
+    world = World(seed)
+    with world:
         stepper = Stepper(exp, n, world, rules_named(rules), swarm=swarm)
         sim = make_robotarium(n, backend, stepper.initial_conditions, arena=exp.arena, rules=exp.rules.rules)
         stepper.attach(sim, faults)
-        cap = exp.steps(n) if steps is None else _count(steps, "steps", 1)
-        everyone = np.arange(n)
-        poses = [sim.poses] if trace else []
-        done_at = None
-        start = time.perf_counter()
-        with _StopOnSignal() as stop:
-            for t in range(cap):
-                x = sim.get_poses()
-                sim.set_velocities(everyone, stepper.decide(t, x))
-                sim.step()
-                now = sim.poses
-                done = stepper.after(t + 1, now)
-                if trace:
-                    poses.append(now)
-                if progress is not None:
-                    progress(t + 1, cap)
-                if record is not None:
-                    record(stepper.frame(t + 1, now))
-                if done:
-                    done_at = t + 1
-                    break
-                if stop.signal is not None:
-                    break
-        wall = time.perf_counter() - start
-    result = stepper.result(done_at, wall, np.array(poses) if trace else None)
+    cap = exp.steps(n) if steps is None else _count(steps, "steps", 1)
+    state = Checkpoint(stepper, sim, 0, cap, poses=[sim.poses] if trace else None)
+    return _go_on(state, record, progress, checkpoint, every)
+
+
+def resume(
+    checkpoint: str | os.PathLike[str],
+    steps: int | None = None,
+    *,
+    record: Callable[[Frame], None] | None = None,
+    progress: Progress | None = None,
+    checkpoint_every: int = CHECKPOINT_EVERY,
+) -> ExperimentResult:
+    """Go on with the run saved in ``checkpoint`` (see :func:`run`), saving to the same file.
+
+    The result is the one the run would have given uninterrupted (its wall time summed over
+    every part). ``steps`` sets a new step cap (default: the run's own); ``record`` and
+    ``progress`` are as in :func:`run` (a video of the resumed part starts at its first step).
+
+    Raises
+    ------
+    FileNotFoundError, dream.experiments.checkpoint.CheckpointError
+        No such file, or not a checkpoint this DREAM can resume.
+    """
+    state = load(checkpoint)
+    if steps is not None:
+        state.cap = _count(steps, "steps", 1)
+    return _go_on(state, record, progress, checkpoint, _count(checkpoint_every, "checkpoint_every", 1))
+
+
+def _go_on(
+    state: Checkpoint,
+    record: Callable[[Frame], None] | None,
+    progress: Progress | None,
+    checkpoint: str | os.PathLike[str] | None,
+    every: int | None,
+) -> ExperimentResult:
+    """Step the run from ``state.step`` until it is done, reaches its cap or a signal stops it;
+    with ``checkpoint``, save it there first (a run that cannot be saved fails before its first
+    step), every ``every`` steps, and when it stops short of done."""
+    stepper, sim = state.stepper, state.sim
+    everyone = np.arange(stepper.exp.n)
+    done_at = None
+    if checkpoint is not None:
+        save(checkpoint, state)
+    start, before = time.perf_counter(), state.wall_time
+    with stepper.world, _StopOnSignal() as stop:
+        while state.step < state.cap:
+            t = state.step
+            x = sim.get_poses()
+            sim.set_velocities(everyone, stepper.decide(t, x))
+            sim.step()
+            now = sim.poses
+            done = stepper.after(t + 1, now)
+            state.step = t + 1
+            if state.poses is not None:
+                state.poses.append(now)
+            if progress is not None:
+                progress(t + 1, state.cap)
+            if record is not None:
+                record(stepper.frame(t + 1, now))
+            if done:
+                done_at = t + 1
+                break
+            if stop.signal is not None:
+                break
+            if checkpoint is not None and every is not None and state.step % every == 0:
+                state.wall_time = before + time.perf_counter() - start
+                save(checkpoint, state)
+    state.wall_time = before + time.perf_counter() - start
+    if checkpoint is not None and done_at is None:
+        save(checkpoint, state)  # stopped by a signal or the cap: resume() goes on from here
+    trace = None if state.poses is None else np.array(state.poses)
+    result = stepper.result(done_at, state.wall_time, trace)
     result.interrupted, result.signal = stop.signal is not None, stop.signal
     return result
+
+
+def _writable_dir(path: str | os.PathLike[str]) -> None:
+    """Refuse, before the run, a checkpoint path that names a folder or lies in no folder."""
+    target = Path(path)
+    if target.is_dir():
+        raise ValueError(f"checkpoint {path}: is a folder; give a file name")
+    if not target.resolve().parent.is_dir():
+        raise ValueError(f"checkpoint {path}: no folder {target.resolve().parent} to write it in")
 
 
 class Stepper:

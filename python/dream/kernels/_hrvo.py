@@ -73,9 +73,25 @@ class HrvoPlanner:
         self.bounds = checked_bounds(bounds)
         self.candidates = _checked_grid(v_max, n_angles, n_speeds)
         self.include_preferred = include_preferred
-        self._planner = implementation("HrvoPlanner")(
-            self.candidates, safety=self.safety, v_max=v_max, bounds=self.bounds, include_preferred=include_preferred
+        self._planner = self._build()
+
+    def _build(self) -> Any:
+        return implementation("HrvoPlanner")(
+            self.candidates,
+            safety=self.safety,
+            v_max=self.v_max,
+            bounds=self.bounds,
+            include_preferred=self.include_preferred,
         )
+
+    def __getstate__(self) -> dict[str, Any]:
+        # The Rust planner holds only scratch space and these parameters: pickles (checkpoints)
+        # keep the parameters and build it again.
+        return {key: value for key, value in self.__dict__.items() if key != "_planner"}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._planner = self._build()
 
     def velocity(
         self, detections: FloatArray, velocity: FloatArray, preferred: FloatArray, position: FloatArray

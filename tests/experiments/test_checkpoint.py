@@ -1,0 +1,156 @@
+"""A run saved to a checkpoint and resumed takes exactly the steps of the uninterrupted run."""
+
+from __future__ import annotations
+
+import os
+import pickle
+import signal
+import subprocess
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+import dream
+from dream.experiments import checkpoint as checkpoints
+from dream.experiments.checkpoint import CheckpointError
+
+CASES = [
+    # robots, timers, radios and the world's random generator, under faults that draw from it
+    ("hrvo-circle", 10, False, dream.Faults(loss=0.3, drift=0.05, latency=3)),
+    ("voronoi-coverage", 12, False, None),
+    ("line-consensus", 100, True, None),  # swarm mode
+]
+
+
+@pytest.mark.parametrize(("name", "n", "swarm", "faults"), CASES)
+def test_resumed_run_equals_the_uninterrupted_one(tmp_path, name, n, swarm, faults):
+    path = tmp_path / "run.ckpt"
+    common = dict(n=n, seed=4, backend="fast", swarm=swarm, trace=True, faults=faults)
+    whole = dream.run(name, steps=700, **common)
+    first = dream.run(name, steps=300, checkpoint=path, checkpoint_every=100, **common)
+    assert first.steps == 300 and checkpoints.load(path).step == 300  # saved at the cap
+    rest = dream.resume(path, steps=700)
+    assert rest.steps == whole.steps and rest.completed_step == whole.completed_step
+    np.testing.assert_array_equal(rest.trace, whole.trace)
+    assert rest.measures == whole.measures and rest.faults == whole.faults
+    assert (rest.collisions, rest.boundary, rest.actuator) == (whole.collisions, whole.boundary, whole.actuator)
+    assert rest.wall_time >= first.wall_time  # summed over both parts
+
+
+def test_checkpoint_is_saved_every_k_steps(tmp_path):
+    path, seen = tmp_path / "run.ckpt", []
+
+    def progress(step, cap):  # the file as the run sees it after each step
+        if step % 50 == 1:
+            seen.append(checkpoints.load(path).step)
+
+    dream.run("hrvo-circle", n=10, backend="fast", steps=260, checkpoint=path, checkpoint_every=100, progress=progress)
+    assert seen == [0, 0, 100, 100, 200, 200]
+    assert checkpoints.load(path).step == 260
+
+
+def test_a_signal_saves_the_run_where_it_stopped(tmp_path):
+    path = tmp_path / "run.ckpt"
+
+    def progress(step, cap):
+        if step == 123:
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    common = dict(n=10, seed=1, backend="fast", steps=500, trace=True)
+    stopped = dream.run("hrvo-circle", checkpoint=path, progress=progress, **common)
+    assert stopped.interrupted and stopped.steps == 123 and checkpoints.load(path).step == 123
+    rest, whole = dream.resume(path), dream.run("hrvo-circle", **common)
+    assert not rest.interrupted and rest.steps == 500 and rest.measures == whole.measures
+    np.testing.assert_array_equal(rest.trace, whole.trace)
+
+
+def test_a_finished_run_leaves_its_last_save(tmp_path):
+    path = tmp_path / "run.ckpt"
+    done = dream.run("hrvo-circle", n=4, backend="fast", checkpoint=path, checkpoint_every=10_000)
+    assert done.success and checkpoints.load(path).step == 0  # saved before the first step only
+
+
+class Locked(dream.Experiment):
+    name = "locked"
+
+    def build(self, n):
+        self.lock = threading.Lock()  # pickle cannot write a lock
+
+
+def test_an_unpicklable_run_fails_before_its_first_step_and_keeps_the_old_file(tmp_path):
+    path = tmp_path / "run.ckpt"
+    path.write_bytes(b"previous")
+    with pytest.raises(CheckpointError, match=r"cannot checkpoint this run to .*run\.ckpt.*lock"):
+        dream.run(Locked, n=2, backend="fast", checkpoint=path, progress=lambda step, cap: pytest.fail("stepped"))
+    assert path.read_bytes() == b"previous"
+    assert [p.name for p in tmp_path.iterdir()] == ["run.ckpt"]  # no temporary file left
+
+
+def test_bad_checkpoints_are_refused_with_what_is_wrong(tmp_path):
+    with pytest.raises(FileNotFoundError):
+        dream.resume(tmp_path / "missing.ckpt")
+    other = tmp_path / "other.ckpt"
+    other.write_bytes(b"hello\n")
+    with pytest.raises(CheckpointError, match="other.ckpt is not a DREAM checkpoint"):
+        dream.resume(other)
+    path = tmp_path / "run.ckpt"
+    dream.run("hrvo-circle", n=4, backend="fast", steps=5, checkpoint=path)
+    magic, _, body = path.read_bytes().partition(b"\n")
+    header, _, data = body.partition(b"\n")
+    path.write_bytes(magic + b"\n" + header.replace(b'"version": "', b'"version": "0.0.0-old') + b"\n" + data)
+    with pytest.raises(CheckpointError, match=r"written by DREAM 0\.0\.0-old.*; this is DREAM"):
+        dream.resume(path)
+    path.write_bytes(magic + b"\n" + header + b"\n" + data[: len(data) // 2])
+    with pytest.raises(CheckpointError, match="cannot read the checkpoint"):
+        dream.resume(path)
+    path.write_bytes(magic + b"\n" + header + b"\n" + pickle.dumps({"not": "a run"}))
+    with pytest.raises(CheckpointError, match="is not a DREAM checkpoint"):
+        dream.resume(path)
+    with pytest.raises(ValueError, match="is a folder"):
+        dream.run("hrvo-circle", n=4, backend="fast", checkpoint=tmp_path)
+    with pytest.raises(ValueError, match="no folder"):
+        dream.run("hrvo-circle", n=4, backend="fast", checkpoint=tmp_path / "nowhere" / "run.ckpt")
+    with pytest.raises(ValueError, match="checkpoint_every must be an integer >= 1"):
+        dream.run("hrvo-circle", n=4, backend="fast", checkpoint=path, checkpoint_every=0)
+
+
+STARTER = """
+import numpy as np
+import dream
+
+
+class Drift(dream.Experiment):
+    name = "drift"
+    default_n = 3
+
+    def build(self, n):
+        self.moved = 0
+
+    def before_step(self, step):
+        self.dxu[0] = 0.05 * self.world.rng.uniform(size=self.n)
+        self.moved += 1
+
+    def measures(self):
+        return {"moved": self.moved}
+"""
+
+
+def test_a_researchers_experiment_resumes_in_another_process(tmp_path):
+    source, path = tmp_path / "drift.py", tmp_path / "run.ckpt"
+    source.write_text(STARTER)
+    cli = [sys.executable, "-m", "dream.cli"]
+    first = subprocess.run(cli + ["run", str(source), "--steps", "40", "--checkpoint", str(path), "--no-progress"],
+                           capture_output=True, text=True, check=False)  # fmt: skip
+    assert first.returncode == 0, first.stderr
+    rest = subprocess.run(cli + ["resume", str(path), "--steps", "90", "--no-progress", "--json", str(tmp_path / "m.json")],
+                          capture_output=True, text=True, check=False)  # fmt: skip
+    assert rest.returncode == 0, rest.stderr
+    whole = dream.run(dream.experiments.load_file(source), steps=90)
+    assert '"moved": 90' in (tmp_path / "m.json").read_text() and whole.measures == {"moved": 90}
+    missing = subprocess.run(cli + ["resume", str(tmp_path / "nope.ckpt")], capture_output=True, text=True, check=False)
+    assert (
+        missing.returncode == 2
+        and missing.stderr.strip() == f"dream: error: {tmp_path / 'nope.ckpt'}: no such checkpoint"
+    )
