@@ -114,8 +114,8 @@ def _parser() -> argparse.ArgumentParser:
     resumer.add_argument("--json", metavar="PATH", help="also write the metrics as JSON")
     resumer.add_argument("--no-progress", action="store_true", help="no progress bar")
     resumer.add_argument("--check", action="store_true", help="exit with 1 when the run fails its success test")
-    for command in (runner, resumer):
-        command.add_argument(
+    for saving in (runner, resumer):
+        saving.add_argument(
             "--checkpoint-every", metavar="K", type=_whole(1), default=CHECKPOINT_EVERY,
             help=f"steps between two saves of the checkpoint (default: {CHECKPOINT_EVERY:,})",
         )  # fmt: skip

@@ -144,11 +144,12 @@ def test_a_researchers_experiment_resumes_in_another_process(tmp_path):
     first = subprocess.run(cli + ["run", str(source), "--steps", "40", "--checkpoint", str(path), "--no-progress"],
                            capture_output=True, text=True, check=False)  # fmt: skip
     assert first.returncode == 0, first.stderr
-    rest = subprocess.run(cli + ["resume", str(path), "--steps", "90", "--no-progress", "--json", str(tmp_path / "m.json")],
+    metrics = tmp_path / "m.json"
+    rest = subprocess.run(cli + ["resume", str(path), "--steps", "90", "--no-progress", "--json", str(metrics)],
                           capture_output=True, text=True, check=False)  # fmt: skip
     assert rest.returncode == 0, rest.stderr
     whole = dream.run(dream.experiments.load_file(source), steps=90)
-    assert '"moved": 90' in (tmp_path / "m.json").read_text() and whole.measures == {"moved": 90}
+    assert '"moved": 90' in metrics.read_text() and whole.measures == {"moved": 90}
     missing = subprocess.run(cli + ["resume", str(tmp_path / "nope.ckpt")], capture_output=True, text=True, check=False)
     assert (
         missing.returncode == 2
