@@ -15,6 +15,10 @@ spread evenly, preferred velocities are mostly free); the other three are the ha
 - ``blocked``: a standing crowd (zero velocities, uniform positions) in which every robot
   wants to drive straight into its nearest neighbour, so no preferred velocity is ever free
   and every robot searches the candidate grid.
+- ``ring``: hrvo-circle's swarm parked on its ring (goals 0.34 m apart around an ellipse of
+  the Robotarium's shape, a few centimetres off), about 5 within RANGE: a swarm spread thin
+  over an arena hundreds of metres wide at large n, where the grids' cell tables are sparse.
+  (Up to n = 10 the thesis's circle of 0.85 m: use it from n = 100.)
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from dream import kernels
+from dream.experiments.hrvo_circle import circle_layout
 
 RANGE = 1.0  #: sensing range (m) of the neighbour search and of HRVO
 DENSITY = 10  #: robots within RANGE of a robot, on average
@@ -100,10 +105,19 @@ def blocked(n: int, seed: int = 0) -> Scene:
     return Scene(points, np.zeros((n, 2)), preferred)
 
 
+def ring(n: int, seed: int = 0) -> Scene:
+    """hrvo-circle's goals for ``n`` robots on Fast, each robot within 3 cm of its goal, heading
+    around the ring or across it."""
+    rng = np.random.default_rng(seed)
+    points = circle_layout(n).goals + rng.uniform(-0.03, 0.03, (n, 2))
+    return Scene(points, rng.uniform(-0.7 * V_MAX, 0.7 * V_MAX, (n, 2)), _headings(rng, n, V_MAX))
+
+
 #: Every scene by name, in the order the benches print them.
 SCENES: dict[str, Callable[[int, int], Scene]] = {
     "lattice": lattice,
     "uniform": uniform,
     "crossing": crossing,
     "blocked": blocked,
+    "ring": ring,
 }

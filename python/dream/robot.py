@@ -188,12 +188,24 @@ def stopping(
     return np.bincount(owners[hit], minlength=len(speeds)) > 0
 
 
-def guard_swarm(dxu: np.ndarray, poses: np.ndarray, near: float) -> np.ndarray:
+def guard_swarm(
+    dxu: np.ndarray, poses: np.ndarray, near: float, seen: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+) -> np.ndarray:
     """``dxu`` ``(2, n)`` with no linear speed for the robots that :func:`stopping` stops, seeing
-    the others at their positions ``poses`` ``(3, n)``."""
+    the others at their positions ``poses`` ``(3, n)``.
+
+    ``seen``, optional: :func:`dream.kernels.neighbours` of the positions within some radius at
+    least the guard's reach, to share one search with HRVO; the rows within the reach are kept.
+    """
     p = poses[:2].T
-    indptr, indices, _ = kernels.neighbours(p, near + GRITSBOT.v_max * GUARD_HORIZON)
-    owners = np.repeat(np.arange(len(p)), np.diff(indptr))
+    reach = near + GRITSBOT.v_max * GUARD_HORIZON
+    if seen is None:
+        indptr, indices, _ = kernels.neighbours(p, reach)
+        owners = np.repeat(np.arange(len(p)), np.diff(indptr))
+    else:  # the pairs a search within `reach` finds: it decides `distance <= reach` alike
+        indptr, indices, distances = seen
+        kept = distances <= reach
+        owners, indices = np.repeat(np.arange(len(p)), np.diff(indptr))[kept], indices[kept]
     out = dxu.copy()
     out[0, stopping(dxu[0], poses[2], owners, p[owners] - p[indices], near)] = 0.0
     return out

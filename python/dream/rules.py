@@ -125,17 +125,20 @@ def roundabout_aim(positions: Any, goals: Any, semi_axes: tuple[float, float], i
     q = np.asarray(positions, dtype=np.float64) / scale
     g = np.asarray(goals, dtype=np.float64) / scale
     way = g - q
-    length2 = np.maximum(np.sum(way * way, axis=-1), 1e-300)
+    (qx, qy), (wx, wy) = np.moveaxis(q, -1, 0), np.moveaxis(way, -1, 0)
+    length2 = np.maximum(wx * wx + wy * wy, 1e-300)
     # Closest approach to the centre along the way, only if it lies ahead of the robot.
-    t = -np.sum(q * way, axis=-1) / length2
+    t = -(qx * wx + qy * wy) / length2
     closest = q + np.clip(t, 0.0, 1.0)[..., None] * way
     crosses = (t > 0.0) & (np.hypot(closest[..., 0], closest[..., 1]) < island)
+    # The trigonometry only for the robots that go round (element by element, as for one robot).
+    q = q[crosses]
     radii = np.hypot(q[..., 0], q[..., 1])
     # The counter-clockwise tangent point from q is acos(island / r) past q's own angle.
     turns = np.arccos(np.minimum(island / np.maximum(radii, 1e-300), 1.0)) + ROUNDABOUT_LEAD
     angles = np.arctan2(q[..., 1], q[..., 0]) + turns
-    edge = island * np.stack((np.cos(angles), np.sin(angles)), axis=-1)
-    return np.where(crosses[..., None], edge, g) * scale
+    g[crosses] = island * np.stack((np.cos(angles), np.sin(angles)), axis=-1)
+    return g * scale
 
 
 def outside_ring(positions: Any, semi_axes: tuple[float, float]) -> np.ndarray:

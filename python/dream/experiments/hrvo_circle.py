@@ -632,10 +632,14 @@ class HrvoCircle(Experiment):
         aim = rules.roundabout_aim(p, goal, self.layout.semi_axes, ISLAND)
         desired = rules.preferred_velocity(p, aim, goal, GRITSBOT.v_max, APPROACH_GAIN)
         wanted, team.sidestep = rules.sidestep_preference(desired, team.sidestep, team.side)
-        team.dxi = kernels.hrvo(p, team.dxi, wanted, radius=self.sensing, safety=self.layout.safety, bounds=self.bounds)
+        # One neighbour search for HRVO and the motion guard (whose reach, 0.17 m, is within it).
+        seen = kernels.neighbours(p, self.sensing)
+        team.dxi = kernels.hrvo(
+            p, team.dxi, wanted, seen[:2], radius=self.sensing, safety=self.layout.safety, bounds=self.bounds
+        )
         team.sidestep, team.side = rules.sidestep_update(team.dxi, desired, team.sidestep, team.side, SIDESTEP_UPDATES)
         dxu = kernels.actuator_limit(kernels.dxi_to_dxu(team.dxi.T, x), GRITSBOT.within(self.sim.spec))
-        return guard_swarm(dxu, x, guard_distance(GRITSBOT.diameter, self.layout.safety))
+        return guard_swarm(dxu, x, guard_distance(GRITSBOT.diameter, self.layout.safety), seen)
 
     def steps(self, n: int) -> int:
         return default_steps(n)
