@@ -294,6 +294,30 @@ def test_hrvo_matches_reference_on_random_swarms(rng, n, mode, bounds, include_p
     assert_hrvo_matches(p, v, pref, csr, radius=radius, bounds=bounds, include_preferred=include_preferred)
 
 
+def ring_swarm(rng, n, radius):
+    """hrvo-circle's swarm spread thin: ``n`` robots on a ring ~0.34 m apart, hundreds of radii
+    wide, so the grids keep a table per column (too many cells for a dense one)."""
+    angle = np.linspace(0.0, TAU, n, endpoint=False)
+    wide = 0.34 * n / TAU
+    p = np.column_stack((wide * np.cos(angle), 0.6 * wide * np.sin(angle))) + rng.uniform(-0.05, 0.05, (n, 2))
+    return p, rng.uniform(-V_MAX, V_MAX, (n, 2)), rng.uniform(-V_MAX, V_MAX, (n, 2))
+
+
+@pytest.mark.parametrize("radius", [0.11, 1.0])
+def test_kernels_match_reference_on_a_thin_ring(rng, radius):
+    n = 3000
+    p, v, pref = ring_swarm(rng, n, radius)
+    assert_csr_equal(_core.neighbours(p, radius, None, 0.0, TAU, None, None), _reference.neighbours(p, radius))
+    assert_hrvo_matches(p, v, pref, None, radius=radius)
+    poses = np.vstack((p.T, rng.uniform(-3, 3, n)))
+    commands = np.zeros((2, n))
+    box = (-150.0, 150.0, -90.0, 90.0)  # some robots outside
+    wheels = dict(diameter=radius, wheel_radius=0.016, base_length=0.105, max_wheel=12.5)
+    expected = _reference.validate(poses, commands, box, **wheels)
+    assert expected[0] > 0 and (radius < 0.34 or expected[1] > 0)
+    assert _core.validate(poses, commands, box, **wheels) == expected
+
+
 def test_hrvo_matches_reference_on_arbitrary_csr_with_self_loops_and_repeats(rng):
     # CSR rows need not be symmetric or within range; a robot may list itself (d = 0) or a
     # neighbour twice: both kernels must treat every row entry the same way.

@@ -5,9 +5,10 @@
 //! computed distance of exactly `reach` across two cell borders; a whole-swarm query costs
 //! O(n k), not O(n^2). Points are
 //! bucketed by a counting sort into CSR order. When the occupied bounding box has few cells
-//! (robots spread over an arena: the usual case) the cell table is a dense array; otherwise
-//! (a few far-flung robots, or a swarm spread thin over a large arena) a hash map keeps memory
-//! O(n).
+//! (robots spread over an arena: the usual case) the cell table is a dense array. A swarm spread
+//! thin over a large arena (hrvo-circle's ring of 10,000 robots, 1.3 km wide) has too many cells
+//! but few columns: each column lists its occupied cells by row, found by binary search. Else
+//! (a few far-flung robots) a hash map keeps memory O(n).
 //!
 //! The coordinates are also stored in cell order, and in the dense table the cells of one
 //! column are consecutive, so the 3x3 block around a point is three contiguous runs: queries
@@ -37,6 +38,13 @@ enum CellTable {
         columns: i64,
         rows: i64,
     },
+    /// The occupied cells column by column, each column's by row: cell `slot` is in row
+    /// `rows_of[slot]`, and column `cx` holds the slots `firsts[cx - x0]..firsts[cx - x0 + 1]`.
+    Columns {
+        x0: i64,
+        firsts: Vec<usize>,
+        rows_of: Vec<i64>,
+    },
     Sparse(FxHashMap<(i64, i64), usize>),
 }
 
@@ -57,17 +65,39 @@ impl Grid {
         let columns = x1.checked_sub(x0).and_then(|w| w.checked_add(1)).unwrap_or(i64::MAX);
         let rows = y1.checked_sub(y0).and_then(|h| h.checked_add(1)).unwrap_or(i64::MAX);
         let budget = 4 * keys.len() as i64 + 1024;
-        let (table, slots, cells) =
+        let (table, starts, members) =
             if !keys.is_empty() && columns <= budget && rows <= budget && columns * rows <= budget {
                 let slots: Vec<usize> = keys
                     .iter()
                     .map(|&(cx, cy)| ((cx - x0) * rows + (cy - y0)) as usize)
                     .collect();
-                (
-                    CellTable::Dense { x0, y0, columns, rows },
-                    slots,
-                    (columns * rows) as usize,
-                )
+                let (starts, members) = bucket(&slots, (columns * rows) as usize);
+                (CellTable::Dense { x0, y0, columns, rows }, starts, members)
+            } else if !keys.is_empty() && columns <= budget {
+                // A swarm spread thin over a wide arena (a ring hundreds of metres across): too
+                // many cells for a table of them all, few columns.
+                let (by_column, order) = bucket(
+                    &keys.iter().map(|&(cx, _)| (cx - x0) as usize).collect::<Vec<_>>(),
+                    columns as usize,
+                );
+                let mut members = order;
+                let (mut firsts, mut rows_of, mut starts) =
+                    (Vec::with_capacity(by_column.len()), Vec::new(), Vec::new());
+                for column in by_column.windows(2) {
+                    firsts.push(rows_of.len());
+                    let points = &mut members[column[0]..column[1]];
+                    points.sort_by_key(|&point| keys[point].1); // stable: increasing index per cell
+                    for (k, &point) in points.iter().enumerate() {
+                        let row = keys[point].1;
+                        if k == 0 || rows_of.last() != Some(&row) {
+                            rows_of.push(row);
+                            starts.push(column[0] + k);
+                        }
+                    }
+                }
+                firsts.push(rows_of.len());
+                starts.push(keys.len());
+                (CellTable::Columns { x0, firsts, rows_of }, starts, members)
             } else {
                 let mut index: FxHashMap<(i64, i64), usize> =
                     FxHashMap::with_capacity_and_hasher(keys.len(), Default::default());
@@ -78,23 +108,9 @@ impl Grid {
                         *index.entry(*key).or_insert(next)
                     })
                     .collect();
-                let cells = index.len();
-                (CellTable::Sparse(index), slots, cells)
+                let (starts, members) = bucket(&slots, index.len());
+                (CellTable::Sparse(index), starts, members)
             };
-        // Counting sort of point indices by slot: stable, so each cell lists increasing indices.
-        let mut starts = vec![0_usize; cells + 1];
-        for &slot in &slots {
-            starts[slot + 1] += 1;
-        }
-        for s in 0..cells {
-            starts[s + 1] += starts[s];
-        }
-        let mut fill = starts.clone();
-        let mut members = vec![0; keys.len()];
-        for (point, &slot) in slots.iter().enumerate() {
-            members[fill[slot]] = point;
-            fill[slot] += 1;
-        }
         let sorted_xs = members.iter().map(|&j| xs[j]).collect();
         let sorted_ys = members.iter().map(|&j| ys[j]).collect();
         Self {
@@ -143,6 +159,14 @@ impl Grid {
                     }
                 }
             }
+            CellTable::Columns { .. } => {
+                for ax in cx.saturating_sub(1)..=cx.saturating_add(1) {
+                    let cells = self.cells_in_column(ax, cy.saturating_sub(1), cy.saturating_add(1));
+                    if !cells.is_empty() {
+                        visit(self.starts[cells.start]..self.starts[cells.end]);
+                    }
+                }
+            }
             CellTable::Sparse(index) => {
                 for (ax, ay) in block(cx, cy) {
                     if let Some(&slot) = index.get(&(ax, ay)) {
@@ -151,6 +175,22 @@ impl Grid {
                 }
             }
         }
+    }
+
+    /// The slots of the occupied cells of column `cx` in rows `low..=high` (consecutive slots).
+    fn cells_in_column(&self, cx: i64, low: i64, high: i64) -> Range<usize> {
+        let CellTable::Columns { x0, firsts, rows_of } = &self.table else {
+            return 0..0;
+        };
+        let Some(column) = cx
+            .checked_sub(*x0)
+            .filter(|&c| (0..firsts.len() as i64 - 1).contains(&c))
+        else {
+            return 0..0;
+        };
+        let (first, last) = (firsts[column as usize], firsts[column as usize + 1]);
+        let rows = &rows_of[first..last];
+        first + rows.partition_point(|&row| row < low)..first + rows.partition_point(|&row| row <= high)
     }
 
     /// Calls `visit(run)` with ranges of positions in cell order (see [`Grid::members`]) that
@@ -175,6 +215,18 @@ impl Grid {
                         self.starts[(column * rows + low) as usize]..self.starts[(column * rows + high) as usize + 1];
                     if !run.is_empty() {
                         visit(run);
+                    }
+                }
+            }
+            CellTable::Columns { x0, firsts, .. } => {
+                let first = x0_cell.max(*x0);
+                let last = x1_cell.min(x0.saturating_add(firsts.len() as i64 - 2));
+                if first <= last {
+                    for ax in first..=last {
+                        let cells = self.cells_in_column(ax, y0_cell, y1_cell);
+                        if !cells.is_empty() {
+                            visit(self.starts[cells.start]..self.starts[cells.end]);
+                        }
                     }
                 }
             }
@@ -235,9 +287,32 @@ impl Grid {
                 (0..*rows).contains(&j).then_some(())?;
                 Some((i * rows + j) as usize)
             }
+            CellTable::Columns { .. } => {
+                let cells = self.cells_in_column(cx, cy, cy);
+                (!cells.is_empty()).then_some(cells.start)
+            }
             CellTable::Sparse(index) => index.get(&(cx, cy)).copied(),
         }
     }
+}
+
+/// Counting sort of point indices by `slots[point]` into `cells` buckets: the buckets' starts
+/// (`cells + 1` of them) and the points in bucket order, each bucket in increasing index.
+fn bucket(slots: &[usize], cells: usize) -> (Vec<usize>, Vec<usize>) {
+    let mut starts = vec![0_usize; cells + 1];
+    for &slot in slots {
+        starts[slot + 1] += 1;
+    }
+    for s in 0..cells {
+        starts[s + 1] += starts[s];
+    }
+    let mut fill = starts.clone();
+    let mut members = vec![0; slots.len()];
+    for (point, &slot) in slots.iter().enumerate() {
+        members[fill[slot]] = point;
+        fill[slot] += 1;
+    }
+    (starts, members)
 }
 
 /// The distinct cells of the 3x3 block around cell `(cx, cy)`: fewer at the saturated edges of
@@ -286,6 +361,51 @@ mod tests {
         assert!(matches!(grid.table, CellTable::Sparse(_)));
         assert_eq!(near(&grid, 1e12, 1e12), vec![1, 3]);
         assert_eq!(near(&grid, 0.0, 0.0), vec![0]);
+    }
+
+    #[test]
+    fn a_thin_ring_uses_the_column_table_and_finds_every_point_of_each_block() {
+        let cell = 0.25;
+        let (xs, ys): (Vec<f64>, Vec<f64>) = (0..2000)
+            .map(|i| {
+                let angle = i as f64 * std::f64::consts::TAU / 2000.0;
+                (
+                    300.0 * angle.cos() + (i as f64 * 0.754_877_666).fract() * 0.3,
+                    190.0 * angle.sin(),
+                )
+            })
+            .unzip();
+        let grid = Grid::new(&xs, &ys, cell);
+        assert!(matches!(grid.table, CellTable::Columns { .. }));
+        let key = |x: f64, y: f64| cell_of(x, y, cell * (1.0 + 1e-9));
+        let queries = xs
+            .iter()
+            .zip(&ys)
+            .map(|(&x, &y)| (x, y))
+            .chain([(0.0, 0.0), (300.2, 0.1), (-1e4, 3.0)]);
+        for (x, y) in queries {
+            let (cx, cy) = key(x, y);
+            let expected: Vec<usize> = (0..xs.len())
+                .filter(|&j| {
+                    let (jx, jy) = key(xs[j], ys[j]);
+                    (jx - cx).abs() <= 1 && (jy - cy).abs() <= 1
+                })
+                .collect();
+            assert_eq!(near(&grid, x, y), expected, "around ({x}, {y})");
+            assert_eq!(near_by_runs(&grid, x, y), expected, "runs around ({x}, {y})");
+            let mut within = Vec::new();
+            grid.for_each_run_within(x, y, 0.6, |run| within.extend(run.map(|k| grid.members()[k])));
+            within.sort_unstable();
+            let inside: Vec<usize> = (0..xs.len())
+                .filter(|&j| (xs[j] - x).abs() <= 0.6 && (ys[j] - y).abs() <= 0.6)
+                .collect();
+            assert!(
+                inside.iter().all(|j| within.binary_search(j).is_ok()),
+                "square around ({x}, {y})"
+            );
+        }
+        // Cells list their points in increasing index, as the other tables do.
+        assert!(grid.occupied().all(|members| members.windows(2).all(|w| w[0] < w[1])));
     }
 
     #[test]
