@@ -108,15 +108,18 @@ def measure(
     if backend == "swarm":
         broken = Faults.parse(options) if options else None
         results = []
+        settings = "+".join([faults or "none", *(f"{key}={value}" for key, value in sorted(params.items()))])
         for seed in seeds:
-            saved = None if checkpoints is None else checkpoints / f"{name}-{n}-{seed}-{faults or 'none'}.ckpt"
+            saved = None if checkpoints is None else checkpoints / f"{name}-{n}-{seed}-{settings}.ckpt"
             if saved is not None and saved.exists():  # a run cut short: go on where it stopped
                 result = dream.resume(saved)
             else:
                 result = dream.run(name, n=n, seed=seed, backend="fast", swarm=True, faults=broken, checkpoint=saved,
                                    **params)  # fmt: skip
-            if result.interrupted:
-                raise SystemExit(f"interrupted: run the same command again to resume from {saved}")
+            if saved is not None:
+                if result.interrupted:
+                    raise SystemExit(f"interrupted: run the same command again to resume from {saved}")
+                saved.unlink()  # measured: the next measurement starts afresh
             results.append(result.to_dict())
     else:
         grid = {kind: [value] for kind, _, value in (option.partition("=") for option in options)}
@@ -153,6 +156,8 @@ def main() -> None:
         "--checkpoints", metavar="DIR", type=Path, help="save swarm-mode runs in DIR as they go; resume what it holds"
     )
     args = parser.parse_args()
+    if args.checkpoints is not None:
+        args.checkpoints.mkdir(parents=True, exist_ok=True)
     if args.case:
         cases = args.case
     elif args.resilience:

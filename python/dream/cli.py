@@ -18,20 +18,18 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import signal
 import subprocess
 import sys
-import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from dream._files import check_writable, replaced
 from dream.backends import BACKENDS
 from dream.backends.robotarium import MAX_ROBOTS
 from dream.experiments import EXPERIMENTS, Experiment, ExperimentResult, find, resume, run
-from dream.experiments.checkpoint import CheckpointError
-from dream.experiments.runner import CHECKPOINT_EVERY
+from dream.experiments.checkpoint import CHECKPOINT_EVERY, CheckpointError
 from dream.faults import KINDS, Faults
 from dream.specs import RULES
 
@@ -116,8 +114,8 @@ def _parser() -> argparse.ArgumentParser:
     resumer.add_argument("--check", action="store_true", help="exit with 1 when the run fails its success test")
     for saving in (runner, resumer):
         saving.add_argument(
-            "--checkpoint-every", metavar="K", type=_whole(1), default=CHECKPOINT_EVERY,
-            help=f"steps between two saves of the checkpoint (default: {CHECKPOINT_EVERY:,})",
+            "--checkpoint-every", metavar="K", type=_whole(1), default=None,
+            help=f"steps between two saves of the checkpoint (default: {CHECKPOINT_EVERY:,}; resume: the run's own)",
         )  # fmt: skip
     new = commands.add_parser("new", help="write a starter experiment file that runs as is")
     new.add_argument("name", help="the experiment's name; the file is NAME.py")
@@ -245,22 +243,15 @@ def _params(cls: type[Experiment], pairs: Sequence[str]) -> dict[str, Any]:
 
 def _writable(path: str, option: str) -> None:
     """Refuse, before the run, an output path that cannot be written."""
-    target = Path(path)
-    folder = target.parent if str(target.parent) else Path(".")
-    if target.is_dir():
-        raise UsageError(f"{option} {path}: is a folder; give a file name")
-    if not folder.is_dir():
-        raise UsageError(f"{option} {path}: the folder {folder} does not exist")
-    if not os.access(folder, os.W_OK):
-        raise UsageError(f"{option} {path}: the folder {folder} is not writable")
+    try:
+        check_writable(path, option)
+    except ValueError as err:
+        raise UsageError(str(err)) from None
 
 
 def _write_json(path: str, data: dict[str, Any]) -> None:
-    """Write whole or not at all: a temporary file beside the target, renamed over it."""
-    target = Path(path)
-    with tempfile.NamedTemporaryFile("w", dir=target.parent or ".", suffix=".tmp", delete=False) as out:
+    with replaced(path) as out:
         json.dump(data, out, indent=2)
-    os.replace(out.name, target)
 
 
 def _progress(enabled: bool) -> Any:
@@ -294,8 +285,9 @@ def _run(args: argparse.Namespace) -> int:
     n = cls.default_n if args.n is None else args.n
     if args.backend == "robotarium" and n > MAX_ROBOTS:
         raise UsageError(f"-n {n}: the Robotarium backend runs at most {MAX_ROBOTS} robots; use --backend fast")
-    if args.json:
-        _writable(args.json, "--json")
+    for path, option in ((args.json, "--json"), (args.checkpoint, "--checkpoint")):
+        if path:
+            _writable(path, option)
     if args.focus is not None and args.focus >= n:
         raise UsageError(f"--focus {args.focus}: no such robot; the run has {n} (ids 0 to {n - 1})")
     recorder = None
@@ -307,13 +299,12 @@ def _run(args: argparse.Namespace) -> int:
                                 realtime=args.realtime, hold=args.hold)  # fmt: skip
         except (ValueError, OSError) as err:
             raise UsageError(str(err)) from None
-    if args.checkpoint:
-        _writable(args.checkpoint, "--checkpoint")
     progress = _progress(not args.no_progress)
+    every = CHECKPOINT_EVERY if args.checkpoint_every is None else args.checkpoint_every
     try:
         result = run(cls, n=n, seed=args.seed, backend=args.backend, steps=args.steps, progress=progress, faults=faults,
                      rules=args.rules, swarm=args.swarm, record=recorder, checkpoint=args.checkpoint,
-                     checkpoint_every=args.checkpoint_every, **params)  # fmt: skip
+                     checkpoint_every=every, **params)  # fmt: skip
     except ValueError as err:  # an experiment's refusal (a size it cannot do), said before any step
         raise UsageError(str(err)) from None
     finally:
@@ -327,22 +318,24 @@ def _run(args: argparse.Namespace) -> int:
         else:
             print(f"video: none written (no steps recorded) to {recorder.video}")
     code = _report(result, args)
-    if code == 0 and recorder is not None and recorder.live:
+    if not result.interrupted and recorder is not None and recorder.live:
         print("close the window to exit", file=sys.stderr)
         recorder.hold()  # keep the live window on the last frame until the user closes it
     return code
 
 
 def _resume(args: argparse.Namespace) -> int:
+    if not Path(args.checkpoint).is_file():
+        raise UsageError(f"{args.checkpoint}: no such checkpoint")
     if args.json:
         _writable(args.json, "--json")
     progress = _progress(not args.no_progress)
     try:
         result = resume(args.checkpoint, args.steps, progress=progress, checkpoint_every=args.checkpoint_every)
-    except FileNotFoundError:
-        raise UsageError(f"{args.checkpoint}: no such checkpoint") from None
     except (CheckpointError, ValueError) as err:
         raise UsageError(str(err)) from None
+    except OSError as err:
+        raise UsageError(f"{args.checkpoint}: {err.strerror or err}") from None
     finally:
         if progress is not None:
             progress.close()

@@ -19,7 +19,6 @@ import logging
 import os
 import signal
 import sys
-import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
@@ -29,9 +28,11 @@ from typing import Any
 
 import numpy as np
 
+from dream._files import replaced
 from dream.backends import BACKENDS
 from dream.backends.robotarium import MAX_ROBOTS
 from dream.experiments import EXPERIMENTS, Experiment, find, run
+from dream.experiments.files import source_file
 from dream.experiments.runner import _count
 from dream.faults import Faults
 
@@ -319,12 +320,10 @@ class Table:
             return
         if self._file is not None:
             self._file.close()
-        folder = self.path.parent
-        with tempfile.NamedTemporaryFile("w", dir=folder, suffix=".tmp", delete=False, newline="") as tmp:
+        with replaced(self.path, newline="", encoding="utf-8") as tmp:
             writer = csv.DictWriter(tmp, self.columns)
             writer.writeheader()
             writer.writerows({k: _cell(v) for k, v in row.items()} for row in self.rows)
-        os.replace(tmp.name, self.path)
         self._file = self.path.open("a", newline="", encoding="utf-8")
 
 
@@ -474,9 +473,8 @@ def _source(experiment: type[Experiment] | Experiment | str) -> tuple[str | type
         raise TypeError(f"sweep() takes an Experiment subclass, instance, name or .py path, got {experiment!r}")
     if EXPERIMENTS.get(experiment.name) is experiment:
         return experiment.name, experiment, base
-    module = sys.modules.get(experiment.__module__)
-    path = getattr(module, "__file__", None)
-    if experiment.__module__.startswith("dream_user_") and path:  # load_file's modules: not importable by name
+    path = source_file(experiment)
+    if path is not None:  # load_file's modules: not importable by name
         return path, experiment, base
     return experiment, experiment, base  # importable, or from __main__ (cloudpickle sends it by value)
 

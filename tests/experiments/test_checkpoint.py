@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import pickle
 import signal
@@ -21,6 +22,7 @@ CASES = [
     ("hrvo-circle", 10, False, dream.Faults(loss=0.3, drift=0.05, latency=3)),
     ("voronoi-coverage", 12, False, None),
     ("line-consensus", 100, True, None),  # swarm mode
+    ("hrvo-circle", 30, True, None),  # swarm mode: the runs of hours this is for
 ]
 
 
@@ -36,7 +38,43 @@ def test_resumed_run_equals_the_uninterrupted_one(tmp_path, name, n, swarm, faul
     np.testing.assert_array_equal(rest.trace, whole.trace)
     assert rest.measures == whole.measures and rest.faults == whole.faults
     assert (rest.collisions, rest.boundary, rest.actuator) == (whole.collisions, whole.boundary, whole.actuator)
-    assert rest.wall_time >= first.wall_time  # summed over both parts
+
+
+def test_a_run_that_dies_resumes_from_its_last_periodic_save(tmp_path):
+    path = tmp_path / "run.ckpt"
+    common = dict(n=10, seed=2, backend="fast", trace=True)
+
+    def crash(step, cap):
+        if step == 250:
+            raise MemoryError("the machine ran out")  # the process dies: no save at the end
+
+    with pytest.raises(MemoryError):
+        dream.run("hrvo-circle", steps=400, checkpoint=path, checkpoint_every=100, progress=crash, **common)
+    saved = checkpoints.load(path)
+    assert (saved.step, saved.every) == (200, 100)
+    rest = dream.resume(path, steps=saved.step + 1)  # one step more: the wall time is the parts' sum
+    assert rest.wall_time >= saved.wall_time > 0
+    rest = dream.resume(path, steps=400)
+    np.testing.assert_array_equal(rest.trace, dream.run("hrvo-circle", steps=400, **common).trace)
+    with pytest.raises(ValueError, match="has taken 400 steps already"):
+        dream.resume(path, steps=300)
+
+
+def test_a_save_that_fails_mid_run_warns_and_the_run_goes_on(tmp_path):
+    folder = tmp_path / "gone"
+    folder.mkdir()
+
+    def remove(step, cap):
+        if step == 150:
+            (folder / "run.ckpt").unlink()
+            folder.rmdir()
+
+    with pytest.warns(RuntimeWarning, match="checkpoint not saved at step 200: .*the run goes on"):
+        result = dream.run(
+            "hrvo-circle", n=10, backend="fast", steps=300, checkpoint=folder / "run.ckpt", checkpoint_every=100,
+            progress=remove,
+        )  # fmt: skip
+    assert result.steps == 300 and not result.interrupted
 
 
 def test_checkpoint_is_saved_every_k_steps(tmp_path):
@@ -49,6 +87,9 @@ def test_checkpoint_is_saved_every_k_steps(tmp_path):
     dream.run("hrvo-circle", n=10, backend="fast", steps=260, checkpoint=path, checkpoint_every=100, progress=progress)
     assert seen == [0, 0, 100, 100, 200, 200]
     assert checkpoints.load(path).step == 260
+    seen.clear()
+    dream.resume(path, steps=420, progress=progress)  # every 100 steps, as the run was started
+    assert seen == [300, 300, 400]
 
 
 def test_a_signal_saves_the_run_where_it_stopped(tmp_path):
@@ -110,7 +151,7 @@ def test_bad_checkpoints_are_refused_with_what_is_wrong(tmp_path):
         dream.resume(path)
     with pytest.raises(ValueError, match="is a folder"):
         dream.run("hrvo-circle", n=4, backend="fast", checkpoint=tmp_path)
-    with pytest.raises(ValueError, match="no folder"):
+    with pytest.raises(ValueError, match="nowhere does not exist"):
         dream.run("hrvo-circle", n=4, backend="fast", checkpoint=tmp_path / "nowhere" / "run.ckpt")
     with pytest.raises(ValueError, match="checkpoint_every must be an integer >= 1"):
         dream.run("hrvo-circle", n=4, backend="fast", checkpoint=path, checkpoint_every=0)
@@ -133,7 +174,7 @@ class Drift(dream.Experiment):
         self.moved += 1
 
     def measures(self):
-        return {"moved": self.moved}
+        return {"moved": self.moved, "x": self.sim.poses[0].tolist()}
 """
 
 
@@ -149,9 +190,20 @@ def test_a_researchers_experiment_resumes_in_another_process(tmp_path):
                           capture_output=True, text=True, check=False)  # fmt: skip
     assert rest.returncode == 0, rest.stderr
     whole = dream.run(dream.experiments.load_file(source), steps=90)
-    assert '"moved": 90' in metrics.read_text() and whole.measures == {"moved": 90}
-    missing = subprocess.run(cli + ["resume", str(tmp_path / "nope.ckpt")], capture_output=True, text=True, check=False)
-    assert (
-        missing.returncode == 2
-        and missing.stderr.strip() == f"dream: error: {tmp_path / 'nope.ckpt'}: no such checkpoint"
-    )
+    assert json.loads(metrics.read_text())["measures"] == whole.measures
+    for argv, said in (([str(tmp_path / "nope.ckpt")], "no such checkpoint"), ([str(tmp_path)], "no such checkpoint"),
+                       ([str(path), "--steps", "10"], "has taken 90 steps already")):  # fmt: skip
+        refused = subprocess.run(cli + ["resume", *argv], capture_output=True, text=True, check=False)
+        assert refused.returncode == 2 and refused.stderr.startswith("dream: error: ") and said in refused.stderr
+        assert refused.stderr.count("\n") == 1
+
+
+def test_a_changed_experiment_file_is_resumed_with_a_warning(tmp_path):
+    source, path = tmp_path / "drift_changed.py", tmp_path / "run.ckpt"
+    source.write_text(STARTER)
+    dream.run(dream.experiments.load_file(source), steps=20, checkpoint=path)
+    assert dream.resume(path, steps=30).measures["moved"] == 30  # the loaded module is used as it is
+    sys.modules.pop(dream.experiments.files.module_name(source))
+    source.write_text(STARTER + "\n# a comment\n")
+    with pytest.warns(RuntimeWarning, match="has changed since"):
+        assert dream.resume(path, steps=40).measures["moved"] == 40

@@ -30,32 +30,37 @@ def load_file(path: str | Path) -> type[Experiment]:
     path = Path(path)
     if not path.is_file():
         raise ExperimentFileError(f"{path}: no such file")
-    # The same name in every process (pickles of its objects find it: checkpoints, Dask workers).
-    digest = hashlib.sha1(str(path.resolve()).encode()).hexdigest()[:12]
-    module_name = f"{MODULE_PREFIX}{path.stem}_{digest}"
-    spec = importlib.util.spec_from_file_location(module_name, path)
+    name = module_name(path)
+    spec = importlib.util.spec_from_file_location(name, path)
     if spec is None or spec.loader is None:
         raise ExperimentFileError(f"{path}: not a Python file")
     module = importlib.util.module_from_spec(spec)
-    sys.modules[module_name] = module  # dataclasses and pickling look the module up by name
+    sys.modules[name] = module  # dataclasses and pickling look the module up by name
     try:
         spec.loader.exec_module(module)
     except SyntaxError as err:
-        del sys.modules[module_name]
+        del sys.modules[name]
         raise ExperimentFileError(f"{path}, line {err.lineno}: syntax error: {err.msg}") from None
     except Exception as err:  # the user's code: report it, whatever it raised
-        del sys.modules[module_name]
+        del sys.modules[name]
         raise ExperimentFileError(f"{path}: loading it raised {type(err).__name__}: {err}") from err
     found = [
         value
         for value in vars(module).values()
-        if isinstance(value, type) and issubclass(value, Experiment) and value.__module__ == module_name
+        if isinstance(value, type) and issubclass(value, Experiment) and value.__module__ == name
     ]
     if len(found) != 1:
         names = ", ".join(cls.__name__ for cls in found)
         what = "no Experiment subclass" if not found else f"{len(found)} Experiment subclasses ({names})"
         raise ExperimentFileError(f"{path}: defines {what}; a file for `dream run` defines exactly one")
     return found[0]
+
+
+def module_name(path: str | Path) -> str:
+    """The module :func:`load_file` makes of ``path``: the same name in every process, so that
+    pickles of its objects (checkpoints, Dask workers) find it."""
+    path = Path(path)
+    return f"{MODULE_PREFIX}{path.stem}_{hashlib.sha1(str(path.resolve()).encode()).hexdigest()[:12]}"
 
 
 def source_file(cls: type) -> str | None:

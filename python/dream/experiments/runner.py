@@ -7,15 +7,16 @@ import os
 import signal
 import threading
 import time
+import warnings
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from dream._files import check_writable
 from dream.backends import BACKENDS, make_robotarium, rules_named
 from dream.backends.base import Backend
-from dream.experiments.checkpoint import Checkpoint, load, save
+from dream.experiments.checkpoint import CHECKPOINT_EVERY, Checkpoint, CheckpointError, load, save
 from dream.experiments.result import ExperimentResult
 from dream.experiments.spec import Experiment
 from dream.faults import Faults, FaultState
@@ -24,9 +25,6 @@ from dream.specs import GRITSBOT, RPS, SimulatorSpec
 from dream.world import World
 
 Progress = Callable[[int, int], None]
-#: Steps between two checkpoints of a run (:func:`run`'s ``checkpoint``): 20,000 steps of
-#: 10,000 robots take minutes; of 10 robots, seconds (and their saves milliseconds).
-CHECKPOINT_EVERY = 20_000
 
 
 def run(
@@ -105,17 +103,19 @@ def run(
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
     exp.check(n, backend)
-    every = None if checkpoint is None else _count(checkpoint_every, "checkpoint_every", 1)
+    every = _count(checkpoint_every, "checkpoint_every", 1)
     if checkpoint is not None:
-        _writable_dir(checkpoint)
+        check_writable(checkpoint, "checkpoint")
     world = World(seed)
     with world:
         stepper = Stepper(exp, n, world, rules_named(rules), swarm=swarm)
         sim = make_robotarium(n, backend, stepper.initial_conditions, arena=exp.arena, rules=exp.rules.rules)
         stepper.attach(sim, faults)
     cap = exp.steps(n) if steps is None else _count(steps, "steps", 1)
-    state = Checkpoint(stepper, sim, 0, cap, poses=[sim.poses] if trace else None)
-    return _go_on(state, record, progress, checkpoint, every)
+    state = Checkpoint(stepper, sim, 0, cap, every, poses=[sim.poses] if trace else None)
+    if checkpoint is not None:
+        save(checkpoint, state)  # a run that cannot be saved fails here, before its first step
+    return _go_on(state, record, progress, checkpoint)
 
 
 def resume(
@@ -124,23 +124,31 @@ def resume(
     *,
     record: Callable[[Frame], None] | None = None,
     progress: Progress | None = None,
-    checkpoint_every: int = CHECKPOINT_EVERY,
+    checkpoint_every: int | None = None,
 ) -> ExperimentResult:
     """Go on with the run saved in ``checkpoint`` (see :func:`run`), saving to the same file.
 
     The result is the one the run would have given uninterrupted (its wall time summed over
-    every part). ``steps`` sets a new step cap (default: the run's own); ``record`` and
-    ``progress`` are as in :func:`run` (a video of the resumed part starts at its first step).
+    every part). ``steps`` sets a new step cap (default: the run's own), ``checkpoint_every``
+    a new interval between saves (default: the run's own); ``record`` and ``progress`` are as
+    in :func:`run` (a video of the resumed part starts at its first step).
 
     Raises
     ------
     FileNotFoundError, dream.experiments.checkpoint.CheckpointError
         No such file, or not a checkpoint this DREAM can resume.
+    ValueError
+        ``steps`` fewer than the run has taken already.
     """
     state = load(checkpoint)
+    if checkpoint_every is not None:
+        state.every = _count(checkpoint_every, "checkpoint_every", 1)
     if steps is not None:
-        state.cap = _count(steps, "steps", 1)
-    return _go_on(state, record, progress, checkpoint, _count(checkpoint_every, "checkpoint_every", 1))
+        cap = _count(steps, "steps", 1)
+        if cap < state.step:
+            raise ValueError(f"steps={cap}: the run in {checkpoint} has taken {state.step} steps already")
+        state.cap = cap
+    return _go_on(state, record, progress, checkpoint)
 
 
 def _go_on(
@@ -148,16 +156,13 @@ def _go_on(
     record: Callable[[Frame], None] | None,
     progress: Progress | None,
     checkpoint: str | os.PathLike[str] | None,
-    every: int | None,
 ) -> ExperimentResult:
     """Step the run from ``state.step`` until it is done, reaches its cap or a signal stops it;
-    with ``checkpoint``, save it there first (a run that cannot be saved fails before its first
-    step), every ``every`` steps, and when it stops short of done."""
+    with ``checkpoint``, save it there every ``state.every`` steps and when it stops short of
+    done."""
     stepper, sim = state.stepper, state.sim
     everyone = np.arange(stepper.exp.n)
     done_at = None
-    if checkpoint is not None:
-        save(checkpoint, state)
     start, before = time.perf_counter(), state.wall_time
     with stepper.world, _StopOnSignal() as stop:
         while state.step < state.cap:
@@ -179,25 +184,26 @@ def _go_on(
                 break
             if stop.signal is not None:
                 break
-            if checkpoint is not None and every is not None and state.step % every == 0:
+            if checkpoint is not None and state.step % state.every == 0 and state.step < state.cap:
                 state.wall_time = before + time.perf_counter() - start
-                save(checkpoint, state)
-    state.wall_time = before + time.perf_counter() - start
-    if checkpoint is not None and done_at is None:
-        save(checkpoint, state)  # stopped by a signal or the cap: resume() goes on from here
+                _save_on(checkpoint, state)
+        state.wall_time = before + time.perf_counter() - start
+        if checkpoint is not None and done_at is None:  # a signal or the cap: resume() goes on from here
+            _save_on(checkpoint, state)  # within the guard: a second SIGTERM cannot cut it short
     trace = None if state.poses is None else np.array(state.poses)
     result = stepper.result(done_at, state.wall_time, trace)
     result.interrupted, result.signal = stop.signal is not None, stop.signal
     return result
 
 
-def _writable_dir(path: str | os.PathLike[str]) -> None:
-    """Refuse, before the run, a checkpoint path that names a folder or lies in no folder."""
-    target = Path(path)
-    if target.is_dir():
-        raise ValueError(f"checkpoint {path}: is a folder; give a file name")
-    if not target.resolve().parent.is_dir():
-        raise ValueError(f"checkpoint {path}: no folder {target.resolve().parent} to write it in")
+def _save_on(path: str | os.PathLike[str], state: Checkpoint) -> None:
+    """Save a run under way; a save that fails (a full disk, the folder gone) is reported and the
+    run goes on: hours of stepping are worth more than one checkpoint."""
+    try:
+        save(path, state)
+    except (OSError, CheckpointError) as err:
+        message = f"checkpoint not saved at step {state.step}: {err}; the run goes on"
+        warnings.warn(message, RuntimeWarning, stacklevel=3)
 
 
 class Stepper:
