@@ -119,7 +119,7 @@ def load(path: str | os.PathLike[str]) -> Checkpoint:
             raise CheckpointError(f"{target} is not a DREAM checkpoint")
         try:
             header = json.loads(stream.readline())
-            written_by, source, digest = header["version"], header["source"], header["digest"]
+            written_by, source, digest = header["version"], header["source"], header.get("digest")
             if not isinstance(written_by, str) or not all(isinstance(v, (str, type(None))) for v in (source, digest)):
                 raise TypeError
         except (ValueError, KeyError, TypeError):
