@@ -69,12 +69,15 @@ def test_a_save_that_fails_mid_run_warns_and_the_run_goes_on(tmp_path):
             (folder / "run.ckpt").unlink()
             folder.rmdir()
 
-    with pytest.warns(RuntimeWarning, match="checkpoint not saved at step 200: .*the run goes on"):
+    with pytest.warns(RuntimeWarning) as caught:
         result = dream.run(
             "hrvo-circle", n=10, backend="fast", steps=300, checkpoint=folder / "run.ckpt", checkpoint_every=100,
             progress=remove,
         )  # fmt: skip
     assert result.steps == 300 and not result.interrupted
+    said = [str(warning.message) for warning in caught]
+    assert len(said) == 2 and all("the run goes on" in text for text in said)  # step 200, and at the cap
+    assert said[0].startswith("checkpoint not saved at step 200: ") and "step 300" in said[1]
 
 
 def test_checkpoint_is_saved_every_k_steps(tmp_path):
