@@ -6,7 +6,8 @@
 
 The scenes (``scenes.py``) have ~10 robots within 1 m of each, the sensing range of the
 experiments: the easy jittered lattice and the hard ones (uniform random with overlaps, a dense
-antipodal crossing, a crowd whose preferred velocities are all blocked). Neighbours and HRVO
+antipodal crossing, a crowd whose preferred velocities are all blocked), and hrvo-circle's ring,
+~5 within 1 m but spread thin over an arena hundreds of metres wide. Neighbours and HRVO
 query within 1 m (HRVO's neighbour search is included in its time); Voronoi cells have radius
 0.5 m. The NumPy reference is timed at the same size when that takes seconds, otherwise at a
 smaller size (the cell says which) and the speed-up compares the time per robot.
@@ -24,6 +25,7 @@ import numpy as np
 
 from dream import _core, _reference, backends, kernels
 from dream._csr import spans
+from dream.experiments.hrvo_circle import circle_layout
 from dream.kernels import _dispatch
 from dream.specs import RPS, ArenaSpec
 from harness import machine, median_seconds, show, table
@@ -96,12 +98,18 @@ def header(what: str = "Rust") -> list[str]:
 
 
 def dynamics_rows(sizes) -> list[list[object]]:
-    """One Fast-backend tick: rps validation (grid collision search) plus the Euler step."""
+    """One Fast-backend tick: rps validation (grid collision search) plus the Euler step, on
+    rps's random grid start in an arena grown with n, and on hrvo-circle's ring (spread thin)."""
 
-    def tick(step: Callable, check: Callable) -> Callable[[int], Callable[[], object]]:
+    def tick(step: Callable, check: Callable, ring: bool) -> Callable[[int], Callable[[], object]]:
         def build(n: int) -> Callable[[], object]:
-            arena = ArenaSpec.centred(3.2 * math.sqrt(n / 10), 2.0 * math.sqrt(n / 10))
-            poses = backends.initial_poses(n, np.random.default_rng(0), arena)
+            if ring:
+                arena = circle_layout(n).arena
+                headings = np.random.default_rng(0).uniform(-np.pi, np.pi, n)
+                poses = np.vstack((SCENES["ring"](n).positions.T, headings))
+            else:
+                arena = ArenaSpec.centred(3.2 * math.sqrt(n / 10), 2.0 * math.sqrt(n / 10))
+                poses = backends.initial_poses(n, np.random.default_rng(0), arena)
             commands = np.random.default_rng(1).uniform(-0.3, 0.3, (2, n))
             return lambda: (check(poses, commands, arena), step(poses, commands))
 
@@ -115,20 +123,21 @@ def dynamics_rows(sizes) -> list[list[object]]:
 
     return [
         row(
-            f"dynamics/n={n}",
+            f"dynamics/{'ring' if ring else 'grid start'}/n={n}",
             n,
-            tick(kernels.unicycle_step, kernels.validate),
-            tick(reference_step, reference_check),
+            tick(kernels.unicycle_step, kernels.validate, ring),
+            tick(reference_step, reference_check, ring),
             4_000,
         )
+        for ring in (False, True)
         for n in sizes
     ]
 
 
 def neighbour_rows(sizes) -> list[list[object]]:
-    """The whole swarm's neighbours within RANGE, on the lattice and on the uniform scene."""
+    """The whole swarm's neighbours within RANGE, on the lattice, the uniform and the ring scene."""
     rows = []
-    for name in ("lattice", "uniform"):
+    for name in ("lattice", "uniform", "ring"):
         for n in sizes:
 
             def build(m: int, find: Callable = kernels.neighbours, make: Callable = SCENES[name]) -> Callable:
