@@ -138,7 +138,9 @@ def measure(
     steps = f"{min(done)} / {statistics.median(done):.0f} / {max(done)}" if done else "-"
     summed = [sum(row[key] or 0 for row in results) for key in ("collisions", "boundary", "actuator")]
     seed_text = f"{seeds.start}-{seeds.stop - 1}" if len(seeds) > 1 else str(seeds.start)
-    wall = f"{time.perf_counter() - start:.0f}"
+    # Swarm runs one after the other: their own wall times, summed over the parts of resumed runs.
+    spent = sum(row["wall_time"] for row in results) if backend == "swarm" else time.perf_counter() - start
+    wall = f"{spent:.0f}"
     successes = f"{len(done)}/{len(seeds)}"
     faults_text = "+".join([faults, *(f"{key}={value}" for key, value in params.items())][not faults :]) or "-"
     return [name, n, backend, faults_text, seed_text, successes, *summed, steps, failed or "-", wall]
