@@ -29,7 +29,7 @@ from dream._files import check_writable, replaced
 from dream.backends import BACKENDS
 from dream.backends.robotarium import MAX_ROBOTS
 from dream.experiments import EXPERIMENTS, Experiment, ExperimentResult, find, resume, run
-from dream.experiments.checkpoint import CHECKPOINT_EVERY, CheckpointError
+from dream.experiments.checkpoint import CHECKPOINT_EVERY, load
 from dream.faults import KINDS, Faults
 from dream.specs import RULES
 
@@ -93,27 +93,26 @@ def _parser() -> argparse.ArgumentParser:
         metavar="KIND=VALUE",
         help="inject a fault (repeatable): " + ", ".join(f"{kind}={form}" for kind, form in KINDS.items()),
     )
-    runner.add_argument("--json", metavar="PATH", help="also write the metrics as JSON")
-    runner.add_argument("--no-progress", action="store_true", help="no progress bar")
-    runner.add_argument("--video", metavar="PATH", help="record the run to a video: .gif (Pillow) or .mp4 (H.264)")
-    runner.add_argument("--show", action="store_true", help="show the run in a live window")
-    runner.add_argument(
-        "--every", metavar="K", type=_whole(1), default=1, help="draw one step in K into the video/window"
-    )
-    runner.add_argument("--size", metavar="WxH", type=_size, default=(1280, 800), help="image size (default: 1280x800)")
-    runner.add_argument("--focus", metavar="ID", type=_whole(0), help="draw this robot's ranges and who it hears")
-    runner.add_argument("--realtime", action="store_true", help="pace the run to wall time (30 steps/s)")
-    runner.add_argument("--hold", action="store_true", help="keep the live window open at the end until closed")
-    runner.add_argument("--check", action="store_true", help="exit with 1 when the run fails its success test")
     runner.add_argument("--checkpoint", metavar="PATH", help="save the run to PATH as it goes (see `dream resume`)")
     resumer = commands.add_parser("resume", help="go on with a run saved by `dream run --checkpoint PATH`")
     resumer.add_argument("checkpoint", metavar="PATH", help="the checkpoint (it is saved again as the run goes on)")
     resumer.add_argument("--steps", type=_whole(1), default=None, help="a new step cap (default: the run's own)")
-    resumer.add_argument("--json", metavar="PATH", help="also write the metrics as JSON")
-    resumer.add_argument("--no-progress", action="store_true", help="no progress bar")
-    resumer.add_argument("--check", action="store_true", help="exit with 1 when the run fails its success test")
-    for saving in (runner, resumer):
-        saving.add_argument(
+    for sub in (runner, resumer):  # what a run prints, records and saves
+        sub.add_argument("--json", metavar="PATH", help="also write the metrics as JSON")
+        sub.add_argument("--no-progress", action="store_true", help="no progress bar")
+        sub.add_argument("--video", metavar="PATH", help="record the run to a video: .gif (Pillow) or .mp4 (H.264)")
+        sub.add_argument("--show", action="store_true", help="show the run in a live window")
+        sub.add_argument(
+            "--every", metavar="K", type=_whole(1), default=1, help="draw one step in K into the video/window"
+        )
+        sub.add_argument(
+            "--size", metavar="WxH", type=_size, default=(1280, 800), help="image size (default: 1280x800)"
+        )
+        sub.add_argument("--focus", metavar="ID", type=_whole(0), help="draw this robot's ranges and who it hears")
+        sub.add_argument("--realtime", action="store_true", help="pace the run to wall time (30 steps/s)")
+        sub.add_argument("--hold", action="store_true", help="keep the live window open at the end until closed")
+        sub.add_argument("--check", action="store_true", help="exit with 1 when the run fails its success test")
+        sub.add_argument(
             "--checkpoint-every", metavar="K", type=_whole(1), default=None,
             help=f"steps between two saves of the checkpoint (default: {CHECKPOINT_EVERY:,}; resume: the run's own)",
         )  # fmt: skip
@@ -288,7 +287,42 @@ def _run(args: argparse.Namespace) -> int:
     for path, option in ((args.json, "--json"), (args.checkpoint, "--checkpoint")):
         if path:
             _writable(path, option)
-    if args.focus is not None and args.focus >= n:
+    every = CHECKPOINT_EVERY if args.checkpoint_every is None else args.checkpoint_every
+    return _drive(
+        args,
+        n,
+        lambda recorder, progress: run(
+            cls, n=n, seed=args.seed, backend=args.backend, steps=args.steps, progress=progress, faults=faults,
+            rules=args.rules, swarm=args.swarm, record=recorder, checkpoint=args.checkpoint, checkpoint_every=every,
+            **params,
+        ),
+    )  # fmt: skip
+
+
+def _resume(args: argparse.Namespace) -> int:
+    if not Path(args.checkpoint).is_file():
+        raise UsageError(f"{args.checkpoint}: no such checkpoint")
+    if args.json:
+        _writable(args.json, "--json")
+    try:
+        n = None if args.focus is None else load(args.checkpoint).stepper.exp.n  # for --focus's check
+        return _drive(
+            args,
+            n,
+            lambda recorder, progress: resume(
+                args.checkpoint, args.steps, record=recorder, progress=progress, checkpoint_every=args.checkpoint_every
+            ),
+        )
+    except ValueError as err:  # the checkpoint, read for --focus
+        raise UsageError(str(err)) from None
+    except OSError as err:
+        raise UsageError(f"{args.checkpoint}: {err.strerror or err}") from None
+
+
+def _drive(args: argparse.Namespace, n: int | None, call: Callable[[Any, Any], ExperimentResult]) -> int:
+    """Run ``call(recorder, progress)`` with the recorder and progress bar the options ask for,
+    then print and report; refusals before the first step (``ValueError``) are usage errors."""
+    if args.focus is not None and n is not None and args.focus >= n:
         raise UsageError(f"--focus {args.focus}: no such robot; the run has {n} (ids 0 to {n - 1})")
     recorder = None
     if args.video is not None or args.show:
@@ -300,12 +334,9 @@ def _run(args: argparse.Namespace) -> int:
         except (ValueError, OSError) as err:
             raise UsageError(str(err)) from None
     progress = _progress(not args.no_progress)
-    every = CHECKPOINT_EVERY if args.checkpoint_every is None else args.checkpoint_every
     try:
-        result = run(cls, n=n, seed=args.seed, backend=args.backend, steps=args.steps, progress=progress, faults=faults,
-                     rules=args.rules, swarm=args.swarm, record=recorder, checkpoint=args.checkpoint,
-                     checkpoint_every=every, **params)  # fmt: skip
-    except ValueError as err:  # an experiment's refusal (a size it cannot do), said before any step
+        result = call(recorder, progress)
+    except ValueError as err:  # a refusal (a size the experiment cannot do, a bad checkpoint), before any step
         raise UsageError(str(err)) from None
     finally:
         if progress is not None:
@@ -322,24 +353,6 @@ def _run(args: argparse.Namespace) -> int:
         print("close the window to exit", file=sys.stderr)
         recorder.hold()  # keep the live window on the last frame until the user closes it
     return code
-
-
-def _resume(args: argparse.Namespace) -> int:
-    if not Path(args.checkpoint).is_file():
-        raise UsageError(f"{args.checkpoint}: no such checkpoint")
-    if args.json:
-        _writable(args.json, "--json")
-    progress = _progress(not args.no_progress)
-    try:
-        result = resume(args.checkpoint, args.steps, progress=progress, checkpoint_every=args.checkpoint_every)
-    except (CheckpointError, ValueError) as err:
-        raise UsageError(str(err)) from None
-    except OSError as err:
-        raise UsageError(f"{args.checkpoint}: {err.strerror or err}") from None
-    finally:
-        if progress is not None:
-            progress.close()
-    return _report(result, args)
 
 
 def _report(result: ExperimentResult, args: argparse.Namespace) -> int:

@@ -210,3 +210,14 @@ def test_a_changed_experiment_file_is_resumed_with_a_warning(tmp_path):
     source.write_text(STARTER + "\n# a comment\n")
     with pytest.warns(RuntimeWarning, match="has changed since"):
         assert dream.resume(path, steps=40).measures["moved"] == 40
+
+
+def test_dream_resume_records_the_rest_of_the_run_to_a_video(tmp_path):
+    path, video = tmp_path / "run.ckpt", tmp_path / "rest.gif"
+    from dream.cli import main
+
+    assert main(["run", "hrvo-circle", "-n", "4", "--backend", "fast", "--steps", "20", "--checkpoint", str(path),
+                 "--no-progress"]) == 0  # fmt: skip
+    assert main(["resume", str(path), "--steps", "30", "--video", str(video), "--no-progress"]) == 0
+    assert video.stat().st_size > 0
+    assert main(["resume", str(path), "--focus", "4", "--no-progress"]) == 2  # robots 0 to 3
