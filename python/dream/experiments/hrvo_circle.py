@@ -623,8 +623,7 @@ class HrvoCircle(Experiment):
         team.known[reached] = 0  # a new level: start over from itself
         team.known[reached, everyone[reached] // 8] = 128 >> (everyone[reached] % 8)
         if step % self.radio_gap == 0:
-            _merge_known(team.known, team.state, p)
-            full = (team.known == np.packbits(np.ones(self.n, dtype=bool))).all(axis=1)
+            full = _merge_known(team.known, team.state, p)
             moving_on = rules.moves_on(team.state, full, team.unreached, CIRCLES)
             team.heading_for[moving_on] = team.state[moving_on]
             team.unreached |= moving_on
@@ -678,17 +677,24 @@ class HrvoCircle(Experiment):
 run = HrvoCircle.run
 
 
-def _merge_known(known: np.ndarray, state: np.ndarray, positions: np.ndarray, radio_range: float = 1.0) -> None:
-    """One radio exchange: each robot ORs in the sets of the robots in range at its level or above."""
+def _merge_known(known: np.ndarray, state: np.ndarray, positions: np.ndarray, radio_range: float = 1.0) -> np.ndarray:
+    """One radio exchange: each robot ORs in the sets of the robots in range at its level or above.
+    Returns which sets are full ``(n,)``: the robots that know every robot is at their level."""
+    everyone = np.packbits(np.ones(len(state), dtype=bool))
+    full = (known == everyone).all(axis=1)
     indptr, indices, _ = kernels.neighbours(positions, radio_range)
-    rows = np.repeat(np.arange(len(state)), np.diff(indptr))
-    useful = state[indices] >= state[rows]
+    rows = np.repeat(np.arange(len(state)), np.diff(indptr))  # in order: CSR rows
+    # A full set stays full (senders set no bits beyond the robots): while crossing, every robot's is.
+    useful = (state[indices] >= state[rows]) & ~full[rows]
     rows, senders = rows[useful], indices[useful]
+    if not len(rows):
+        return full
     before = known.copy()
     # Row by row would be a Python loop; instead OR in one neighbour slot at a time.
-    order = np.argsort(rows, kind="stable")
-    rows, senders = rows[order], senders[order]
     slot = np.arange(len(rows)) - np.searchsorted(rows, rows)
     for k in range(int(slot.max(initial=-1)) + 1):
         pick = slot == k
         known[rows[pick]] |= before[senders[pick]]
+    merged = np.unique(rows)
+    full[merged] = (known[merged] == everyone).all(axis=1)
+    return full
