@@ -1,13 +1,16 @@
 """Rendezvous: robots meet without a meeting point, each moving to the mean of what it hears.
 
-Written only on DREAM's public API, as a researcher writes a new experiment. Every robot knows
-its own pose (odometry), hears the positions of the robots within radio range (range radio),
-and heads for the mean of those positions and its own; HRVO keeps it off the robots its
-movement sensor sees. Nobody knows where the meeting point is, or how many robots there are.
-Success: every robot within ``radius`` of the team's centre (by default, a disc that holds
-the team at HRVO's safety distance: 0.53 m for 10 robots, 0.75 m for 20), zero collisions.
+Written only on DREAM's public API, as a researcher writes a new experiment, and written once,
+on arrays: the same robot runs robot by robot (the default) and as one swarm (``--swarm``),
+with the same poses at every step. Every robot knows its own pose (odometry), hears the
+positions of the robots within radio range, and heads for the mean of those positions and its
+own; HRVO keeps it off the robots its movement sensor sees. Nobody knows where the meeting point
+is, or how many robots there are. Success: every correct robot (not crashed, stuck or lying)
+within ``radius`` of the correct robots' centre (by default, a disc that holds the team at
+HRVO's safety distance: 0.53 m for 10 robots, 0.75 m for 20), zero collisions.
 
     dream run examples/rendezvous.py -n 20 --json out.json
+    dream run examples/rendezvous.py --swarm -n 1000 --backend fast --fault loss=0.3 --fault crash=0.1@50
     dream run examples/rendezvous.py --param radio_range=0.6 --video rendezvous.gif
 """
 
@@ -17,39 +20,41 @@ import math
 
 import numpy as np
 
-from dream import Experiment, MovementSensor, OdometrySensor, RangeRadio, RobotHRVO, create_timer, param
+from dream import Experiment, param
+from dream.specs import ROBOTARIUM, ArenaSpec
+from dream.swarm import Avoid, Movement, Radio, SwarmRobot, View
 
 
-class MeetingRobot(RobotHRVO):
+class MeetingRobot(SwarmRobot):
     """Heads for the mean of its own position and the positions it hears."""
 
-    def __init__(self, robot_id: int, gain: float, **kwargs) -> None:
-        super().__init__(robot_id, f"robot_{robot_id}", **kwargs)
+    period = 5
+    movement = Movement(range=0.5)
+
+    def __init__(self, gain: float, safety: float, radio_range: float) -> None:
         self.gain = gain
-        self.meeting_point: np.ndarray | None = None
+        self.avoid = Avoid(safety=safety)
+        self.radio = Radio(range=radio_range, fields=("x", "y"))
 
-    def update_radio(self, messages: list[tuple[float, float]]) -> tuple[float, float] | None:
-        if not self.has_pose:
-            return None
-        here = (self.pos_x, self.pos_y)
-        self.meeting_point = np.mean([here, *messages], axis=0)
-        return here
+    def start(self, ids: np.ndarray) -> np.ndarray:
+        return 10 + ids % 5  # the robots start a few steps apart, as they would in a lab
 
-    def update(self, dxu: np.ndarray) -> None:
-        desired = np.zeros(2)
-        if self.has_pose and self.meeting_point is not None:
-            desired = self.gain * (self.meeting_point - (self.pos_x, self.pos_y))
-            speed = math.hypot(*desired)
-            if speed > self.v_max:
-                desired *= self.v_max / speed
-        self.steer(self.detections, desired)
-        self.command(dxu)
+    def decide(self, view: View) -> np.ndarray:
+        here = view.pose[:, :2]
+        view.send(x=here[:, 0], y=here[:, 1])
+        heard = view.heard
+        centre = (heard.sum(["x", "y"]) + here) / (heard.count + 1)[:, None]
+        wished = self.gain * (centre - here)
+        speed = np.hypot(wished[:, 0], wished[:, 1])
+        fast = speed > self.spec.v_max
+        wished[fast] *= (self.spec.v_max / speed[fast])[:, None]
+        return wished
 
 
 class Rendezvous(Experiment):
     name = "rendezvous"
     default_n = 10
-    success = "every robot within `radius` of the team's centre, zero collisions"
+    success = "every correct robot within `radius` of the correct robots' centre, zero collisions"
     radius: float = param(0.0, "the team has met when every robot is this close to its centre (m; 0: met_radius(n))")
     radio_range: float = param(1.0, "how far a robot hears the others (m)")
     gain: float = param(0.5, "proportional gain towards the meeting point (1/s)")
@@ -61,31 +66,28 @@ class Rendezvous(Experiment):
         safety disc along their whole way, so the team settles looser than the densest packing."""
         return 1.6 * self.safety / 2 * math.sqrt(n / 0.9069)
 
-    def build(self, n: int) -> None:
-        for i in range(n):
-            robot = MeetingRobot(i, self.gain, safety=self.safety, arena=self.arena)
-            odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
-            movement = MovementSensor(i, f"movement_{i}", robot.update_sensor, range=0.5)
-            radio = RangeRadio(i, f"radio_{i}", robot.update_radio, range=self.radio_range)
-            create_timer(
-                i,
-                10 + i % 5,
-                [
-                    {"delay": 2, "tag": "odom", "call": odometry.update},
-                    {"delay": 3, "tag": "movement", "call": movement.update},
-                    {"delay": 10, "tag": "radio", "call": radio.update},
-                    {"delay": 4, "tag": "robot", "call": robot.update},
-                ],
-            )
-            self.robots.append(robot)
+    def arena_for(self, n: int) -> ArenaSpec:
+        """The Robotarium up to 40 robots; beyond, the Robotarium's shape with twice the start
+        grid's points per robot (so that the team starts about as dense at any size)."""
+        if n <= 40:
+            return ROBOTARIUM
+        scale = math.sqrt(2 * n / 84)  # 84: the Robotarium's start grid points, 0.2 m apart
+        return ArenaSpec.centred(ROBOTARIUM.width * scale, ROBOTARIUM.height * scale)
+
+    def steps(self, n: int) -> int:
+        return 3000 + 2 * n
+
+    def swarm_robot(self, n: int) -> MeetingRobot:
+        return MeetingRobot(self.gain, self.safety, self.radio_range)
 
     def check(self, n: int, backend: str) -> None:
         if self.radius == 0.0:
             self.radius = self.met_radius(n)
 
     def spread(self, poses: np.ndarray) -> float:
-        """The largest distance of a robot from the team's centre (m)."""
-        offsets = poses[:2] - poses[:2].mean(axis=1, keepdims=True)
+        """The largest distance of a correct robot from the correct robots' centre (m)."""
+        team = poses[:2, self.correct]
+        offsets = team - team.mean(axis=1, keepdims=True)
         return float(np.hypot(*offsets).max())
 
     def done(self, step: int, poses: np.ndarray) -> bool:

@@ -125,18 +125,25 @@ def test_swarm_mode_runs_from_the_command_line(tmp_path, capsys):
     assert re.search(r"^mode\s+swarm", capsys.readouterr().out, re.M)
 
 
-def test_list_says_which_experiments_have_a_swarm_mode(capsys):
+def test_list_says_which_experiments_have_a_swarm_mode(tmp_path, capsys):
     assert main(["list", "hrvo-circle"]) == 0
     assert "swarm mode: yes (dream run hrvo-circle --swarm)" in capsys.readouterr().out
     assert main(["list", "line-consensus"]) == 0
     assert "swarm mode: yes (dream run line-consensus --swarm)" in capsys.readouterr().out
     assert main(["list", "affine-formation"]) == 0
     assert "swarm mode: yes (dream run affine-formation --swarm)" in capsys.readouterr().out
-    assert main(["list", RENDEZVOUS]) == 0
+    assert main(["list", RENDEZVOUS]) == 0  # a swarm robot runs both ways
+    assert f"swarm mode: yes (dream run {RENDEZVOUS} --swarm)" in capsys.readouterr().out
+    starter = tmp_path / "spread.py"
+    assert main(["new", "spread", "-o", str(starter)]) == 0
+    assert main(["list", str(starter)]) == 0
     assert "swarm mode: no" in capsys.readouterr().out
 
 
-def test_swarm_mode_of_an_experiment_without_one_is_refused(capsys):
-    assert main(["run", RENDEZVOUS, "--swarm", "--steps", "5"]) == 2
+def test_swarm_mode_of_an_experiment_without_one_is_refused(tmp_path, capsys):
+    starter = tmp_path / "spread.py"
+    assert main(["new", "spread", "-o", str(starter)]) == 0
+    capsys.readouterr()
+    assert main(["run", str(starter), "--swarm", "--steps", "5"]) == 2
     err = capsys.readouterr().err
-    assert "rendezvous has no swarm mode" in err and err.count("\n") == 1 and "Traceback" not in err
+    assert "spread has no swarm mode" in err and err.count("\n") == 1 and "Traceback" not in err

@@ -30,6 +30,7 @@ use rayon::prelude::*;
 use crate::dynamics::Arena;
 use crate::error::{check_finite, check_len, GeomError, Result};
 use crate::neighbours::Near;
+use crate::reduce::check_offsets;
 
 /// A 2-D vector `[x, y]`.
 pub type Vec2 = [f64; 2];
@@ -509,12 +510,22 @@ pub fn hrvo_one(
     check_finite("preferred", &preferred)?;
     check_finite("position", &position)?;
     check_vec2s("candidates", grid)?;
-    for (index, b) in neighbours.iter().enumerate() {
+    check_neighbours(neighbours)?;
+    let mut scratch = Scratch::new(grid, &params);
+    scratch
+        .cones
+        .extend(neighbours.iter().map(|b| Cone::new(velocity, b, params.safety)));
+    Ok(choose(&mut scratch, preferred, position, &params))
+}
+
+/// Fails at the first neighbour with a non-finite value or a negative distance.
+fn check_neighbours(neighbours: &[Neighbour]) -> Result<()> {
+    for (k, b) in neighbours.iter().enumerate() {
         let values = [b.direction[0], b.direction[1], b.distance, b.velocity[0], b.velocity[1]];
         if !values.iter().all(|v| v.is_finite()) {
             return Err(GeomError::NonFinite {
                 arg: "detections",
-                index,
+                index: k,
             });
         }
         if b.distance < 0.0 {
@@ -525,11 +536,46 @@ pub fn hrvo_one(
             });
         }
     }
-    let mut scratch = Scratch::new(grid, &params);
-    scratch
-        .cones
-        .extend(neighbours.iter().map(|b| Cone::new(velocity, b, params.safety)));
-    Ok(choose(&mut scratch, preferred, position, &params))
+    Ok(())
+}
+
+/// HRVO velocities of the robots deciding now, each from its own detections (what its movement
+/// sensor reported, `[distance, angle, vx, vy]` as in [`Neighbour::from_detection`]): row r's
+/// are `detections[offsets[r]..offsets[r + 1]]`. Row r gets exactly [`hrvo_one`]'s answer for
+/// those detections, rows in parallel for a large swarm.
+///
+/// # Errors
+/// Length mismatches, non-finite inputs, negative distances, invalid parameters or offsets.
+pub fn hrvo_rows(
+    velocities: &[Vec2],
+    preferred: &[Vec2],
+    positions: &[Vec2],
+    offsets: &[i64],
+    detections: &[[f64; 4]],
+    grid: &[Vec2],
+    params: &HrvoParams,
+) -> Result<Vec<Vec2>> {
+    let params = params.validated()?;
+    let m = positions.len();
+    check_len("velocities", m, velocities.len())?;
+    check_len("preferred", m, preferred.len())?;
+    check_len("offsets", m + 1, offsets.len())?;
+    check_offsets("offsets", offsets, detections.len())?;
+    check_vec2s("velocities", velocities)?;
+    check_vec2s("preferred", preferred)?;
+    check_vec2s("positions", positions)?;
+    check_vec2s("candidates", grid)?;
+    let around: Vec<Neighbour> = detections.iter().copied().map(Neighbour::from_detection).collect();
+    check_neighbours(&around)?;
+    let robot = |scratch: &mut Scratch, r: usize| {
+        scratch.cones.clear();
+        let row = &around[offsets[r] as usize..offsets[r + 1] as usize];
+        scratch
+            .cones
+            .extend(row.iter().map(|b| Cone::new(velocities[r], b, params.safety)));
+        choose(scratch, preferred[r], positions[r], &params)
+    };
+    Ok(for_each_robot(m, Scratch::new(grid, &params), |r| r, robot))
 }
 
 /// HRVO velocities of the whole swarm.

@@ -9,6 +9,7 @@
 //!   single-integrator to unicycle conversion and actuator limiting, for the whole swarm.
 //! - [`grid`]: the uniform grid behind neighbour queries.
 //! - [`heard`]: Voronoi cells of robots that know the others by range radio, in one pass.
+//! - [`reduce`]: sums, means, extremes and nearest entries of ragged rows (a robot's neighbourhood).
 //! - [`raycast`]: the GRITSbot's infrared distance sensors for the whole swarm (rps 2.1's model).
 
 pub mod dynamics;
@@ -19,6 +20,7 @@ pub mod hrvo;
 pub mod neighbours;
 pub mod obstacles;
 pub mod raycast;
+pub mod reduce;
 pub mod voronoi;
 
 pub use error::{GeomError, Result};

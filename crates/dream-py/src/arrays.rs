@@ -50,6 +50,15 @@ pub fn rows_of(arg: &str, object: &Bound<'_, PyAny>, rows: usize) -> PyDreamResu
     Ok((values, shape[1]))
 }
 
+/// Copies a `(k, w)` float64 array into a row-major vector; returns it with `w`.
+pub fn matrix_of(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<(Vec<f64>, usize)> {
+    let (values, shape) = float_values(arg, object)?;
+    if shape.len() != 2 {
+        return Err(shape_error(arg, "(k, w)", &shape));
+    }
+    Ok((values, shape[1]))
+}
+
 /// Copies an `(n, W)` float64 array into `n` fixed-size rows.
 pub fn points_of<const W: usize>(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<Vec<[f64; W]>> {
     with_values(arg, object, "float64", |values: &[f64], shape| {

@@ -64,6 +64,36 @@ pub fn hrvo<'py>(
     Ok(chosen.into_flattened().into_pyarray(py).reshape([n, 2])?)
 }
 
+/// HRVO velocities `(m, 2)` of the deciding robots, each from its own detections `(k, 4)`
+/// (row r's: `offsets[r]..offsets[r + 1]`); row r is `HrvoPlanner.velocity`'s answer for them.
+#[pyfunction]
+#[pyo3(signature = (velocities, preferred, positions, offsets, detections, *, safety, v_max, bounds, candidates, include_preferred))]
+#[allow(clippy::too_many_arguments)]
+pub fn hrvo_rows<'py>(
+    py: Python<'py>,
+    velocities: Bound<'py, PyAny>,
+    preferred: Bound<'py, PyAny>,
+    positions: Bound<'py, PyAny>,
+    offsets: Bound<'py, PyAny>,
+    detections: Bound<'py, PyAny>,
+    safety: f64,
+    v_max: f64,
+    bounds: Option<(f64, f64, f64, f64)>,
+    candidates: Bound<'py, PyAny>,
+    include_preferred: bool,
+) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
+    let v = points_of::<2>("velocities", &velocities)?;
+    let pref = points_of::<2>("preferred", &preferred)?;
+    let p = points_of::<2>("positions", &positions)?;
+    let offsets = indices_of("offsets", &offsets)?;
+    let seen = points_of::<4>("detections", &detections)?;
+    let grid = points_of::<2>("candidates", &candidates)?;
+    let params = params(safety, v_max, bounds, include_preferred)?;
+    let chosen = py.detach(|| core::hrvo_rows(&v, &pref, &p, &offsets, &seen, &grid, &params))?;
+    let m = chosen.len();
+    Ok(chosen.into_flattened().into_pyarray(py).reshape([m, 2])?)
+}
+
 /// A robot's HRVO planner: parameters and candidate grid, fixed; one call per decision.
 #[pyclass(name = "HrvoPlanner", module = "dream._core", frozen)]
 pub struct PyHrvoPlanner {

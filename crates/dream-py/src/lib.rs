@@ -9,6 +9,7 @@ mod hrvo;
 mod neighbours;
 mod obstacles;
 mod raycast;
+mod reduce;
 mod voronoi;
 
 use pyo3::prelude::*;
@@ -28,11 +29,15 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(neighbours::neighbours, m)?)?;
     m.add_function(wrap_pyfunction!(neighbours::far_from, m)?)?;
     m.add_function(wrap_pyfunction!(hrvo::hrvo, m)?)?;
+    m.add_function(wrap_pyfunction!(hrvo::hrvo_rows, m)?)?;
     m.add_class::<hrvo::PyHrvoPlanner>()?;
     m.add_function(wrap_pyfunction!(voronoi::voronoi_cells, m)?)?;
     m.add_function(wrap_pyfunction!(voronoi::voronoi_cell, m)?)?;
     m.add_function(wrap_pyfunction!(heard::heard_cells, m)?)?;
     m.add_function(wrap_pyfunction!(obstacles::virtual_agents, m)?)?;
     m.add_function(wrap_pyfunction!(raycast::distance_rays, m)?)?;
+    m.add_function(wrap_pyfunction!(reduce::segment_reduce, m)?)?;
+    m.add_function(wrap_pyfunction!(reduce::segment_any, m)?)?;
+    m.add_function(wrap_pyfunction!(reduce::segment_nearest, m)?)?;
     Ok(())
 }

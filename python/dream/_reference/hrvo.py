@@ -199,6 +199,29 @@ def hrvo(
     return out
 
 
+def hrvo_rows(
+    velocities: FloatArray,
+    preferred: FloatArray,
+    positions: FloatArray,
+    offsets: np.ndarray,
+    detections: FloatArray,
+    *,
+    safety: float,
+    v_max: float,
+    bounds: tuple[float, float, float, float] | None,
+    candidates: FloatArray,
+    include_preferred: bool,
+) -> FloatArray:
+    """HRVO velocities ``(m, 2)`` of the deciding robots, row r from its own detections
+    ``detections[offsets[r]:offsets[r + 1]]`` ``(k, 4)`` (:meth:`HrvoPlanner.velocity`'s answer)."""
+    planner = HrvoPlanner(candidates, safety=safety, v_max=v_max, bounds=bounds, include_preferred=include_preferred)
+    out = np.zeros((len(positions), 2))
+    for r in range(len(positions)):
+        seen = detections[offsets[r] : offsets[r + 1]]
+        out[r] = planner.velocity(seen, velocities[r], preferred[r], positions[r])
+    return out
+
+
 class HrvoPlanner:
     """One robot's HRVO: parameters and candidates ``(m, 2)`` fixed, one :meth:`velocity` call per decision."""
 

@@ -22,6 +22,7 @@ from dream.experiments.spec import Experiment
 from dream.faults import Faults, FaultState
 from dream.frames import Frame, fault_status
 from dream.specs import GRITSBOT, RPS, SimulatorSpec
+from dream.swarm import Engine
 from dream.world import World
 
 Progress = Callable[[int, int], None]
@@ -251,7 +252,10 @@ class Stepper:
                 "has_swarm_mode = True, build_swarm(n) and swarm_step(step, x) (see dream.Experiment)"
             )
         exp.n, exp.world, exp.rules, exp.arena, exp.swarm = n, world, rules, exp.arena_for(n), bool(swarm)
-        if swarm:
+        team = exp.swarm_robot(n)
+        if team is not None:
+            exp.engine = Engine(team, n, world.seed or 0, exp.arena, one_by_one=not swarm)
+        elif swarm:
             exp.build_swarm(n)
         else:
             exp.build(n)
@@ -267,6 +271,8 @@ class Stepper:
         exp.sim, exp.dxu = sim, np.zeros((2, exp.n))
         self.state = self.world.inject(faults, exp.n)
         self._limits = GRITSBOT.within(sim.spec)
+        if exp.engine is not None:
+            exp.engine.attach(sim.spec)
 
     def decide(self, step: int, x: np.ndarray) -> np.ndarray:
         """The commands ``(2, n)`` ``[v; w]`` (m/s, rad/s) of step ``step`` (0-based).
@@ -281,7 +287,9 @@ class Stepper:
         exp.before_step(step)
         # In swarm mode there are no timers: this moves the world's clock and the robots' faults.
         self.world.update_timers(step, exp.timer_params(x, exp.dxu))
-        if self.swarm:
+        if exp.engine is not None:
+            exp.dxu = exp.engine.step(step, x, exp.dxu, self.state)
+        elif self.swarm:
             exp.dxu = self._commands(exp.swarm_step(step, x))
         if self.state is None:
             return exp.dxu

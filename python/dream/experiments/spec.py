@@ -47,6 +47,7 @@ import numpy as np
 from dream.backends import Backend, initial_poses
 from dream.frames import Frame
 from dream.specs import ROBOTARIUM, ArenaSpec, SimulatorSpec
+from dream.swarm import Engine, SwarmRobot
 from dream.world import World
 
 _TRUE = {"1", "true", "yes", "on"}
@@ -156,6 +157,12 @@ class Experiment:
     arena: ArenaSpec
     sim: Backend
     dxu: np.ndarray
+    engine: Engine | None = None
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if cls.swarm_robot is not Experiment.swarm_robot:  # a swarm robot runs both ways
+            cls.has_swarm_mode = True
 
     def __init__(self, **params: Any) -> None:
         declared = self.parameters()
@@ -205,6 +212,13 @@ class Experiment:
         """The arena for ``n`` robots (default: the Robotarium's)."""
         return ROBOTARIUM
 
+    def swarm_robot(self, n: int) -> SwarmRobot | None:
+        """The robots as one :class:`~dream.swarm.SwarmRobot` (its decision written once, on arrays),
+        or ``None`` for robot objects and timers (:meth:`build`). An experiment with a swarm robot
+        needs neither :meth:`build` nor a swarm mode of its own: the runner runs it robot by
+        robot, or as one swarm with ``swarm=True``, with the same poses at every step."""
+        return None
+
     def build(self, n: int) -> None:
         """Create the robots, sensors, radios and timers (in :attr:`world`, the current world).
 
@@ -252,7 +266,7 @@ class Experiment:
     def frame(self, step: int, poses: np.ndarray) -> Frame:
         """What a renderer draws of this step (default: poses, and ``dxi`` of robots that have one)."""
         velocities = [getattr(robot, "dxi", None) for robot in self.robots]
-        drawn = None
+        drawn = None if self.engine is None else self.engine.dxi
         if self.robots and all(v is not None for v in velocities):
             drawn = np.array(velocities, dtype=np.float64).reshape(-1, 2)
         return Frame(step, self.arena, poses, velocities=drawn, title=self.label())

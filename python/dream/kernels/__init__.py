@@ -26,10 +26,11 @@ from dream.kernels._dynamics import (
     validate,
     wheel_speeds,
 )
-from dream.kernels._hrvo import HrvoPlanner, hrvo
+from dream.kernels._hrvo import HrvoPlanner, hrvo, hrvo_rows
 from dream.kernels._neighbours import far_from, neighbours, neighbours_of
 from dream.kernels._obstacles import obstacle_agents, virtual_agents
 from dream.kernels._raycast import distance_rays
+from dream.kernels._reduce import REDUCTIONS, segment_any, segment_nearest, segment_reduce
 from dream.kernels._voronoi import VoronoiCells, heard_cells, voronoi_cell, voronoi_cells
 
 Bounds = _checks.Bounds
@@ -51,6 +52,7 @@ __all__ = [
     "far_from",
     "HrvoPlanner",
     "hrvo",
+    "hrvo_rows",
     "VoronoiCells",
     "voronoi_cells",
     "voronoi_cell",
@@ -58,4 +60,8 @@ __all__ = [
     "obstacle_agents",
     "virtual_agents",
     "distance_rays",
+    "REDUCTIONS",
+    "segment_reduce",
+    "segment_any",
+    "segment_nearest",
 ]

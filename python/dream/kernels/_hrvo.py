@@ -169,3 +169,47 @@ def hrvo(
         candidates=grid,
         include_preferred=include_preferred,
     )
+
+
+def hrvo_rows(
+    velocities: Any,
+    preferred: Any,
+    positions: Any,
+    offsets: Any,
+    detections: Any,
+    *,
+    safety: float = 0.24,
+    v_max: float = 0.2,
+    bounds: Bounds | None = None,
+    n_angles: int = 20,
+    n_speeds: int = 10,
+    include_preferred: bool = True,
+) -> FloatArray:
+    """HRVO velocities ``(m, 2)`` of the robots deciding now, each from its own detections.
+
+    Row r's detections are ``detections[offsets[r]:offsets[r + 1]]``, movement-sensor rows
+    ``[distance, angle, vx, vy]`` (angle from the detected robot towards this one); row r's
+    answer is :meth:`HrvoPlanner.velocity`'s for them, with ``velocities``, ``preferred`` and
+    ``positions`` ``(m, 2)``: the robots' previous, wanted velocities and believed positions.
+    A robot decides from what it perceives, never from the others' true poses (see :func:`hrvo`).
+    """
+    pos = as_array(positions, "positions", (None, 2))
+    m = pos.shape[0]
+    v = as_array(velocities, "velocities", (m, 2))
+    pref = _bounded(as_array(preferred, "preferred", (m, 2)))
+    seen = as_array(detections, "detections", (None, 4))
+    if len(seen) and seen[:, 0].min() < 0:
+        raise ValueError(f"`detection distance` must be finite and >= 0, got {seen[:, 0].min()}")
+    cuts = as_offsets(offsets, "offsets", len(seen), m)
+    return implementation("hrvo_rows")(
+        v,
+        pref,
+        pos,
+        cuts,
+        seen,
+        safety=check_nonnegative(safety, "safety"),
+        v_max=v_max,
+        bounds=checked_bounds(bounds),
+        candidates=_checked_grid(v_max, n_angles, n_speeds),
+        include_preferred=include_preferred,
+    )

@@ -1,0 +1,140 @@
+//! Reductions over ragged rows (CSR): what each robot makes of its own neighbourhood.
+//!
+//! A neighbourhood is `offsets` `(m + 1,)` over entries of `width` values each: row r holds
+//! entries `offsets[r]..offsets[r + 1]`. Each reduction answers one value per row and column,
+//! rows in parallel for large inputs. Empty rows give 0 for a sum and NaN for a mean, a minimum
+//! or a maximum (nothing to take them of); NaN entries are skipped by the minimum, the maximum
+//! and the nearest, and carried by the sum and the mean.
+
+use rayon::prelude::*;
+
+use crate::error::{GeomError, Result};
+
+/// Rows from which a reduction runs on every thread (below, the thread pool costs more).
+const PARALLEL_ROWS: usize = 4096;
+
+/// What a row's entries become.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reduce {
+    Sum,
+    Mean,
+    Min,
+    Max,
+}
+
+/// Checks that `offsets` is a CSR of some rows over `entries` entries: starts at 0, never
+/// decreases, ends at `entries`.
+///
+/// # Errors
+/// [`GeomError::InvalidCsr`] saying what is wrong.
+pub fn check_offsets(arg: &'static str, offsets: &[i64], entries: usize) -> Result<()> {
+    let rows = offsets.len().saturating_sub(1);
+    let fail = |reason: String| Err(GeomError::InvalidCsr { arg, rows, reason });
+    if offsets.first() != Some(&0) {
+        return fail("offsets must start at 0".into());
+    }
+    if let Some(r) = offsets.windows(2).position(|w| w[1] < w[0]) {
+        return fail(format!("offsets decrease at row {r}"));
+    }
+    if offsets[rows] as usize != entries {
+        return fail(format!("offsets end at {}, but there are {entries} entries", offsets[rows]));
+    }
+    Ok(())
+}
+
+fn rows_of<T: Send>(rows: usize, row: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
+    if rows >= PARALLEL_ROWS {
+        (0..rows).into_par_iter().with_min_len(PARALLEL_ROWS / 4).map(row).collect()
+    } else {
+        (0..rows).map(row).collect()
+    }
+}
+
+/// `op` of each row's entries, column by column: `(m, width)` row-major.
+///
+/// # Errors
+/// `values` not a whole number of entries of `width`, or an invalid CSR.
+pub fn reduce(values: &[f64], width: usize, offsets: &[i64], op: Reduce) -> Result<Vec<f64>> {
+    if width == 0 || values.len() % width != 0 {
+        return Err(GeomError::LengthMismatch {
+            arg: "values",
+            expected: width * (values.len() / width.max(1)),
+            got: values.len(),
+        });
+    }
+    check_offsets("offsets", offsets, values.len() / width)?;
+    let row = |r: usize| {
+        let (start, end) = (offsets[r] as usize, offsets[r + 1] as usize);
+        let mut out = vec![0.0; width];
+        for (c, slot) in out.iter_mut().enumerate() {
+            let column = (start..end).map(|e| values[e * width + c]);
+            *slot = match op {
+                Reduce::Sum => column.sum(),
+                Reduce::Mean if end > start => column.sum::<f64>() / (end - start) as f64,
+                Reduce::Min => column.fold(f64::NAN, f64::min),
+                Reduce::Max => column.fold(f64::NAN, f64::max),
+                Reduce::Mean => f64::NAN,
+            };
+        }
+        out
+    };
+    Ok(rows_of(offsets.len() - 1, row).into_iter().flatten().collect())
+}
+
+/// Whether any entry of each row is set.
+///
+/// # Errors
+/// An invalid CSR.
+pub fn any(flags: &[bool], offsets: &[i64]) -> Result<Vec<bool>> {
+    check_offsets("offsets", offsets, flags.len())?;
+    Ok(rows_of(offsets.len() - 1, |r| {
+        flags[offsets[r] as usize..offsets[r + 1] as usize].iter().any(|&f| f)
+    }))
+}
+
+/// The entry of each row with the smallest `key` (the first of equals), as an index into the
+/// entries; -1 for a row that is empty or all NaN.
+///
+/// # Errors
+/// An invalid CSR.
+pub fn nearest(keys: &[f64], offsets: &[i64]) -> Result<Vec<i64>> {
+    check_offsets("offsets", offsets, keys.len())?;
+    Ok(rows_of(offsets.len() - 1, |r| {
+        let mut best = -1i64;
+        let mut least = f64::INFINITY;
+        for e in offsets[r] as usize..offsets[r + 1] as usize {
+            if !keys[e].is_nan() && (best < 0 || keys[e] < least) {
+                least = keys[e];
+                best = e as i64;
+            }
+        }
+        best
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn empty_rows_and_nan() {
+        let values = [1.0, 2.0, f64::NAN, 4.0];
+        let offsets = [0, 0, 3, 4];
+        let sums = reduce(&values, 1, &offsets, Reduce::Sum).unwrap();
+        assert_eq!(sums[0], 0.0);
+        assert!(sums[1].is_nan());
+        assert_eq!(sums[2], 4.0);
+        let mins = reduce(&values, 1, &offsets, Reduce::Min).unwrap();
+        assert!(mins[0].is_nan());
+        assert_eq!(mins[1], 1.0);
+        assert_eq!(nearest(&values, &offsets).unwrap(), vec![-1, 0, 3]);
+        assert_eq!(any(&[false, true, false, false], &offsets).unwrap(), vec![false, true, false]);
+    }
+
+    #[test]
+    fn bad_offsets_are_named() {
+        assert!(reduce(&[1.0], 1, &[0, 2], Reduce::Sum).is_err());
+        assert!(reduce(&[1.0, 2.0], 1, &[0, 2, 1, 2], Reduce::Sum).is_err());
+        assert!(reduce(&[1.0, 2.0, 3.0], 2, &[0, 1], Reduce::Sum).is_err());
+    }
+}

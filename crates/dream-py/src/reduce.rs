@@ -1,0 +1,55 @@
+//! Bindings of `dream_core::reduce`: a robot's neighbourhood summed, averaged, searched.
+
+use dream_core::reduce::{self as core, Reduce};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
+use pyo3::prelude::*;
+
+use crate::arrays::{flags_of, indices_of, matrix_of, vector_of};
+use crate::errors::{value_error, PyDreamResult};
+
+/// `op` ("sum", "mean", "min" or "max") of each row's entries of `values` `(k, w)`: `(m, w)`.
+#[pyfunction]
+pub fn segment_reduce<'py>(
+    py: Python<'py>,
+    values: Bound<'py, PyAny>,
+    offsets: Bound<'py, PyAny>,
+    op: &str,
+) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
+    let op = match op {
+        "sum" => Reduce::Sum,
+        "mean" => Reduce::Mean,
+        "min" => Reduce::Min,
+        "max" => Reduce::Max,
+        _ => return Err(value_error(format!("`op` must be sum, mean, min or max, got {op:?}"))),
+    };
+    let (values, width) = matrix_of("values", &values)?;
+    let offsets = indices_of("offsets", &offsets)?;
+    let out = py.detach(|| core::reduce(&values, width.max(1), &offsets, op))?;
+    let rows = offsets.len().saturating_sub(1);
+    Ok(out.into_pyarray(py).reshape([rows, width])?)
+}
+
+/// Whether any entry of each row of `flags` `(k,)` is set: `(m,)` bool.
+#[pyfunction]
+pub fn segment_any<'py>(
+    py: Python<'py>,
+    flags: Bound<'py, PyAny>,
+    offsets: Bound<'py, PyAny>,
+) -> PyDreamResult<Bound<'py, PyArray1<bool>>> {
+    let offsets = indices_of("offsets", &offsets)?;
+    let total = offsets.last().copied().unwrap_or(0).max(0) as usize;
+    let flags = flags_of("flags", &flags, total)?;
+    Ok(py.detach(|| core::any(&flags, &offsets))?.into_pyarray(py))
+}
+
+/// The entry of each row with the smallest of `keys` `(k,)`, as an index into them; -1 for none.
+#[pyfunction]
+pub fn segment_nearest<'py>(
+    py: Python<'py>,
+    keys: Bound<'py, PyAny>,
+    offsets: Bound<'py, PyAny>,
+) -> PyDreamResult<Bound<'py, PyArray1<i64>>> {
+    let keys = vector_of("keys", &keys, None)?;
+    let offsets = indices_of("offsets", &offsets)?;
+    Ok(py.detach(|| core::nearest(&keys, &offsets))?.into_pyarray(py))
+}

@@ -1,0 +1,50 @@
+"""Reductions over ragged rows (CSR): sums, means, extremes and nearest entries of each row.
+
+Row r of a neighbourhood holds entries ``offsets[r]:offsets[r + 1]``. Empty rows give 0 for a
+sum and NaN for a mean, a minimum or a maximum; the minimum, the maximum and the nearest skip
+NaN entries, the sum and the mean carry them. One row at a time, for clarity.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from dream._checks import FloatArray
+
+_OPS: dict[str, Callable[..., Any]] = {"sum": np.sum, "mean": np.mean, "min": np.nanmin, "max": np.nanmax}
+
+
+def segment_reduce(values: FloatArray, offsets: np.ndarray, op: str) -> FloatArray:
+    """``op`` ("sum", "mean", "min", "max") of each row's entries of ``values`` ``(k, w)``: ``(m, w)``."""
+    if op not in _OPS:
+        raise ValueError(f"`op` must be sum, mean, min or max, got {op!r}")
+    rows, width = len(offsets) - 1, values.shape[1]
+    out = np.full((rows, width), 0.0 if op == "sum" else np.nan)
+    for r in range(rows):
+        row = values[offsets[r] : offsets[r + 1]]
+        for c in range(width):
+            column = row[:, c]
+            if op in ("min", "max"):
+                column = column[~np.isnan(column)]
+            if len(column):
+                out[r, c] = _OPS[op](column)
+    return out
+
+
+def segment_any(flags: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Whether any entry of each row of ``flags`` ``(k,)`` is set: ``(m,)`` bool."""
+    return np.array([bool(flags[offsets[r] : offsets[r + 1]].any()) for r in range(len(offsets) - 1)], dtype=bool)
+
+
+def segment_nearest(keys: FloatArray, offsets: np.ndarray) -> np.ndarray:
+    """The entry of each row with the smallest of ``keys`` ``(k,)`` (the first of equals), as an
+    index into them; -1 for a row that is empty or all NaN."""
+    out = np.full(len(offsets) - 1, -1, dtype=np.int64)
+    for r in range(len(offsets) - 1):
+        row = keys[offsets[r] : offsets[r + 1]]
+        if len(row) and not np.isnan(row).all():
+            out[r] = offsets[r] + int(np.nanargmin(row))
+    return out

@@ -1,0 +1,51 @@
+"""Reductions over ragged rows (CSR): what each robot makes of its neighbourhood, rows in parallel."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from dream._checks import FloatArray, as_offsets
+from dream.kernels._dispatch import implementation
+
+REDUCTIONS = ("sum", "mean", "min", "max")
+
+
+def _values(values: Any, name: str) -> FloatArray:
+    array = np.ascontiguousarray(values, dtype=np.float64)
+    if array.ndim not in (1, 2):
+        raise ValueError(f"`{name}` must have shape (k,) or (k, w), got {array.shape}")
+    return array
+
+
+def segment_reduce(values: Any, offsets: Any, op: str) -> FloatArray:
+    """``op`` of each row's entries: ``(m,)`` for values ``(k,)``, ``(m, w)`` for ``(k, w)``.
+
+    ``op`` is one of "sum", "mean", "min", "max". Row r holds the entries
+    ``offsets[r]:offsets[r + 1]``. Empty rows give 0 for a sum, NaN for the others; the minimum
+    and maximum skip NaN entries, the sum and the mean carry them.
+    """
+    if op not in REDUCTIONS:
+        raise ValueError(f"`op` must be one of {', '.join(REDUCTIONS)}, got {op!r}")
+    array = _values(values, "values")
+    cuts = as_offsets(offsets, "offsets", len(array))
+    out = implementation("segment_reduce")(array.reshape(-1, 1) if array.ndim == 1 else array, cuts, op)
+    return out[:, 0] if array.ndim == 1 else out
+
+
+def segment_any(flags: Any, offsets: Any) -> np.ndarray:
+    """Whether any entry of each row of ``flags`` ``(k,)`` is set: ``(m,)`` bool."""
+    array = np.ascontiguousarray(flags, dtype=np.bool_)
+    if array.ndim != 1:
+        raise ValueError(f"`flags` must have shape (k,), got {array.shape}")
+    return implementation("segment_any")(array, as_offsets(offsets, "offsets", len(array)))
+
+
+def segment_nearest(keys: Any, offsets: Any) -> np.ndarray:
+    """The entry of each row with the smallest key (the first of equals, NaN skipped), as an index
+    into ``keys`` ``(k,)``; -1 for a row that is empty or all NaN: ``(m,)`` int64."""
+    array = _values(keys, "keys")
+    if array.ndim != 1:
+        raise ValueError(f"`keys` must have shape (k,), got {array.shape}")
+    return implementation("segment_nearest")(array, as_offsets(offsets, "offsets", len(array)))

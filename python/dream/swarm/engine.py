@@ -1,0 +1,365 @@
+"""The engine: the world of a :class:`~dream.swarm.robot.SwarmRobot`, applied to arrays.
+
+Every step, for the robots whose clocks say they decide (``period`` steps on each robot's own
+clock, after its start-up delay; crashed robots never), the engine reads their odometry, their
+movement sensor and the messages their radio delivers, with the world's faults, calls
+:meth:`~dream.swarm.robot.SwarmRobot.decide` and carries the wished velocities through the
+HRVO safety layer, the unicycle conversion, the actuator limits and the motion guard. The robots
+that do not decide keep their last command.
+
+What a robot perceives comes from one neighbour index of the true positions per step, within
+the longest of its ranges; every random draw (noise, dropout, loss, bursts, jitter, lies) is a
+counter-based hash of who, when and what (:mod:`dream.swarm.draws`). So the engine runs the
+deciding robots one at a time (``one_by_one=True``: robot by robot) or all at once (the swarm)
+with the same poses at every step.
+
+Messages are fixed-width records of the radio's declared fields. A message sent at step t is
+heard from step ``t + 1 + latency`` on (latency: the radio's, the fault's, its jitter), and a
+robot hears the newest message of each sender in range that has arrived; a crashed robot's
+messages leave the air.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from dream import kernels, rules
+from dream._csr import spans
+from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
+from dream.robot import guard_distance, stopping
+from dream.sensors import seen_velocity
+from dream.specs import ArenaSpec, SimulatorSpec
+from dream.swarm import draws
+from dream.swarm.neighbourhood import Neighbourhood
+from dream.swarm.robot import SwarmRobot, View
+
+#: The columns of a detection, in the order of their noise keys.
+DETECTION = ("distance", "bearing", "vx", "vy")
+
+
+class Engine:
+    """Runs ``n`` robots of one :class:`SwarmRobot` (see the module docs).
+
+    Parameters
+    ----------
+    robot : SwarmRobot
+        The robots' declarations and decision rule.
+    n : int
+        Number of robots.
+    seed : int
+        Keys every random draw.
+    arena : ArenaSpec
+        The arena HRVO keeps the robots in.
+    one_by_one : bool
+        Robot by robot (each deciding robot on its own view) instead of the whole swarm at once.
+    """
+
+    def __init__(self, robot: SwarmRobot, n: int, seed: int, arena: ArenaSpec, *, one_by_one: bool = False) -> None:
+        self.robot, self.n, self.seed, self.arena, self.one_by_one = robot, n, seed, arena, one_by_one
+        name = type(robot).__name__
+        period = robot.period
+        if isinstance(period, bool) or not isinstance(period, (int, np.integer)) or period < 0:
+            raise ValueError(f"{name}.period must be a whole number of steps >= 0, got {period!r}")
+        self.start = np.asarray(robot.start(np.arange(n)), dtype=np.int64)
+        if self.start.shape != (n,):
+            raise ValueError(f"{name}.start(ids) returned shape {self.start.shape}, expected (n,) = ({n},)")
+        self.limits = robot.spec
+        self.last = np.zeros(n)  #: each robot's clock at its last decision
+        self.belief = np.full((n, 3), np.nan)  #: each robot's odometry, NaN until its first reading
+        self.dxi = np.zeros((n, 2))  #: each robot's last chosen velocity (m/s)
+        self.memory = {key: np.full(n, value) for key, value in robot.memory.items()}
+        self.sidestep = np.zeros(n, dtype=np.int64)
+        self.side = np.ones(n)
+        kinds = {} if robot.radio is None else robot.radio.kinds
+        self.kinds = {key: np.dtype(np.float64 if kind is float else np.int64) for key, kind in kinds.items()}
+        self.board = {key: np.zeros(n, dtype=kind) for key, kind in self.kinds.items()}
+        self.sent_at = np.full(n, -1, dtype=np.int64)  #: step of each sender's message on the board
+        # Messages in the air: when each is heard, its sender, when it was sent, and its fields.
+        self.air: dict[str, np.ndarray] = {
+            "visible": np.zeros(0, dtype=np.int64),
+            "sender": np.zeros(0, dtype=np.int64),
+            "sent": np.zeros(0, dtype=np.int64),
+            **{key: np.zeros(0, dtype=kind) for key, kind in self.kinds.items()},
+        }
+        self.lossy = np.zeros(0, dtype=np.int64)  #: links (receiver * n + sender) in a loss burst
+
+    def attach(self, simulator: SimulatorSpec) -> None:
+        """Keep to the limits of the simulator the robots run on."""
+        self.limits = self.robot.spec.within(simulator)
+
+    # -- the step --------------------------------------------------------------------------
+    def step(self, t: int, x: np.ndarray, commands: np.ndarray, faults: FaultState | None = None) -> np.ndarray:
+        """Decide at step ``t`` from the poses ``x`` ``(3, n)``: ``commands`` ``(2, n)`` (the last
+        ones, which the movement sensors see) with the deciding robots' columns replaced."""
+        if faults is not None and faults.crashed.any():
+            self._silence(faults.crashed)
+        self._deliver(t)
+        clock = self._clock(t, faults)
+        due = (clock > self.start) & (clock - self.last >= self.robot.period)
+        if faults is not None:
+            due &= ~faults.crashed
+        self.last[due] = clock[due]
+        rows = np.flatnonzero(due)
+        if not len(rows):
+            return commands
+        reach = max((part.range for part in (self.robot.movement, self.robot.radio) if part is not None), default=0.0)
+        index = kernels.neighbours(x[:2].T, reach, rows=due)
+        batches = [rows[k : k + 1] for k in range(len(rows))] if self.one_by_one else [rows]
+        moving = commands.copy()  # what the sensors see: the commands before anyone decides now
+        said = [self._decide(t, b, x, moving, index, faults, commands) for b in batches]
+        if self.robot.radio is not None:
+            self._publish(t, [s for s in said if s is not None], faults)
+        return commands
+
+    def _decide(
+        self,
+        t: int,
+        rows: np.ndarray,
+        x: np.ndarray,
+        commands: np.ndarray,
+        index: tuple[np.ndarray, np.ndarray, np.ndarray],
+        faults: FaultState | None,
+        out: np.ndarray,
+    ) -> tuple[np.ndarray, dict[str, np.ndarray]] | None:
+        """Sense (seeing the others move by ``commands``), hear and decide for the robots ``rows``;
+        write their commands into ``out``. Returns what they said (their ids and fields), if anything."""
+        robot = self.robot
+        rows = rows[self._odometry(t, rows, x, faults)]
+        if not len(rows):
+            return None
+        indptr, indices, distances = index
+        counts = indptr[rows + 1] - indptr[rows]
+        entries = spans(indptr[rows], counts)
+        me = np.repeat(rows, counts)
+        others, gaps = indices[entries], distances[entries]
+        offsets = np.concatenate(([0], np.cumsum(counts)))
+        seen = self._sense(t, me, others, gaps, offsets, x, commands, faults)
+        heard = self._hear(t, me, others, gaps, offsets, faults)
+        view = View(
+            rows, t, self.belief[rows].copy(), seen, heard, {key: v[rows].copy() for key, v in self.memory.items()}
+        )
+        wished = np.asarray(robot.decide(view), dtype=np.float64)
+        if wished.shape != (len(rows), 2) or not np.isfinite(wished).all():
+            raise ValueError(
+                f"{type(robot).__name__}.decide must return finite velocities of shape (k, 2) = ({len(rows)}, 2), "
+                f"got shape {wished.shape}" + ("" if wished.shape != (len(rows), 2) else " with NaN or inf")
+            )
+        for key, values in view.memory.items():
+            self.memory[key][rows] = values
+        out[:, rows] = self._drive(rows, wished, view)
+        if view.said is None:
+            return None
+        return rows, self._message(view.said)
+
+    def _drive(self, rows: np.ndarray, wished: np.ndarray, view: View) -> np.ndarray:
+        """The unicycle commands ``(2, k)`` that carry out ``wished`` ``(k, 2)``: through HRVO on the
+        robots' own detections (if they avoid), the conversion, the limits and the motion guard."""
+        robot, avoid, pose = self.robot, self.robot.avoid, view.pose
+        chosen = wished
+        if avoid is not None:
+            asked = wished
+            if avoid.sidestep:
+                asked, self.sidestep[rows] = rules.sidestep_preference(wished, self.sidestep[rows], self.side[rows])
+            seen = view.seen
+            bearing = seen["bearing"]
+            detections = np.column_stack(
+                (seen["distance"], np.where(bearing > 0, bearing - math.pi, bearing + math.pi), seen["vx"], seen["vy"])
+            )
+            margin = robot.spec.radius if avoid.margin is None else avoid.margin
+            chosen = kernels.hrvo_rows(
+                self.dxi[rows],
+                asked,
+                pose[:, :2],
+                seen.offsets,
+                detections,
+                safety=avoid.safety,
+                v_max=robot.spec.v_max,
+                bounds=self.arena.shrunk(margin) if avoid.check_boundaries else None,
+                n_angles=avoid.n_angles,
+                n_speeds=avoid.n_speeds,
+                include_preferred=avoid.include_preferred,
+            )
+            if avoid.sidestep:
+                self.sidestep[rows], self.side[rows] = rules.sidestep_update(
+                    chosen, wished, self.sidestep[rows], self.side[rows], avoid.sidestep
+                )
+        self.dxi[rows] = chosen
+        out = kernels.actuator_limit(kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain), self.limits)
+        if avoid is not None and avoid.guard:
+            near = guard_distance(robot.spec.diameter, avoid.safety)
+            seen = view.seen
+            offsets = -np.column_stack((seen["dx"], seen["dy"]))
+            out[0, stopping(out[0], pose[:, 2], seen.owner, offsets, near)] = 0.0
+        return out
+
+    # -- time --------------------------------------------------------------------------------
+    def _clock(self, t: int, faults: FaultState | None) -> np.ndarray:
+        """Each robot's clock at the world's step ``t``: drifting and jittery under those faults."""
+        if faults is None or not (faults.faults.drift or faults.faults.clock_jitter):
+            return np.full(self.n, float(t))
+        clock = faults.rates * t
+        jitter = faults.faults.clock_jitter
+        if jitter:
+            clock = clock + draws.integers(-jitter, jitter, self.seed, draws.CLOCK_JITTER, t, np.arange(self.n))
+        return np.maximum(clock, 0.0)
+
+    # -- sensors -----------------------------------------------------------------------------
+    def _odometry(self, t: int, rows: np.ndarray, x: np.ndarray, faults: FaultState | None) -> np.ndarray:
+        """Read the odometry of ``rows`` into :attr:`belief`; a dropped reading leaves the belief as
+        it was. Returns which of ``rows`` know their pose (``(k,)`` bool)."""
+        reading = x[:, rows].T.copy()
+        sigma = math.hypot(self.robot.odometry_noise, 0.0 if faults is None else faults.faults.sensor_noise)
+        if sigma > 0:
+            reading += sigma * draws.normal(self.seed, draws.ODOMETRY_NOISE, t, rows[:, None], np.arange(3))
+        kept = self._kept(t, rows, np.full(len(rows), -1), faults)
+        self.belief[rows[kept]] = reading[kept]
+        return np.isfinite(self.belief[rows, 0])
+
+    def _kept(self, t: int, me: np.ndarray, others: np.ndarray, faults: FaultState | None) -> np.ndarray:
+        """Which readings (of robot ``me`` about ``others``; -1: its odometry) the dropout fault keeps."""
+        if faults is None or not faults.faults.sensor_dropout:
+            return np.ones(len(me), dtype=bool)
+        kept = draws.uniform(self.seed, draws.DROPOUT, t, me, others) >= faults.faults.sensor_dropout
+        faults.readings_dropped += int((~kept).sum())
+        return kept
+
+    def _sense(
+        self,
+        t: int,
+        me: np.ndarray,
+        others: np.ndarray,
+        gaps: np.ndarray,
+        offsets: np.ndarray,
+        x: np.ndarray,
+        commands: np.ndarray,
+        faults: FaultState | None,
+    ) -> Neighbourhood:
+        """The movement sensor's detections of ``others`` by ``me`` (one entry per pair within the
+        index's reach, rows cut by ``offsets``), as a neighbourhood."""
+        sensor = self.robot.movement
+        if sensor is None:
+            return Neighbourhood(np.zeros_like(offsets), {name: np.zeros(0) for name in (*DETECTION, "dx", "dy")})
+        keep = gaps <= sensor.range
+        bearing = np.arctan2(x[1, others] - x[1, me], x[0, others] - x[0, me])
+        if sensor.fov < 2 * math.pi:
+            relative = (bearing - (x[2, me] + sensor.direction) + math.pi) % (2 * math.pi) - math.pi
+            keep &= (np.abs(relative) <= sensor.fov / 2) | (gaps == 0)
+        keep[keep] = self._kept(t, me[keep], others[keep], faults)
+        me, others = me[keep], others[keep]
+        vx, vy = seen_velocity(commands[:, others], x[2, others])
+        values = np.column_stack((gaps[keep], bearing[keep], vx, vy))
+        sigma = math.hypot(sensor.noise, 0.0 if faults is None else faults.faults.sensor_noise)
+        if sigma > 0:
+            noise = draws.normal(self.seed, draws.DETECTION_NOISE, t, me[:, None], others[:, None], np.arange(4))
+            values += sigma * noise
+            values[:, 0] = np.maximum(values[:, 0], 0.0)  # a distance is never negative, noisy or not
+        columns = dict(zip(DETECTION, values.T))
+        columns["dx"] = columns["distance"] * np.cos(columns["bearing"])
+        columns["dy"] = columns["distance"] * np.sin(columns["bearing"])
+        return Neighbourhood(np.concatenate(([0], np.cumsum(keep)))[offsets], columns)
+
+    # -- radio -------------------------------------------------------------------------------
+    def _hear(
+        self,
+        t: int,
+        me: np.ndarray,
+        others: np.ndarray,
+        gaps: np.ndarray,
+        offsets: np.ndarray,
+        faults: FaultState | None,
+    ) -> Neighbourhood:
+        """The messages ``me`` hear from ``others`` (pairs as in :meth:`_sense`), with losses."""
+        radio = self.robot.radio
+        if radio is None:
+            return Neighbourhood(np.zeros_like(offsets), {"sender": np.zeros(0, dtype=np.int64)})
+        tried = (gaps <= radio.range) & (self.sent_at[others] >= 0)
+        through = tried.copy()
+        f = None if faults is None else faults.faults
+        keep = (1.0 - radio.loss) * np.ones(len(me))
+        if f is not None:
+            keep = keep * (1.0 - f.loss) * np.maximum(1.0 - f.distance_loss * gaps, 0.0)
+        lossy = tried & (keep < 1.0)
+        if lossy.any():
+            through[lossy] = draws.uniform(self.seed, draws.LOSS, t, me[lossy], others[lossy]) < keep[lossy]
+        if f is not None and f.burst is not None:
+            through[tried] &= ~self._burst(t, me[tried], others[tried], f.burst)
+        if faults is not None:
+            faults.messages_lost += int((tried & ~through).sum())
+        senders = others[through]
+        columns = {"sender": senders, **{key: board[senders] for key, board in self.board.items()}}
+        return Neighbourhood(np.concatenate(([0], np.cumsum(through)))[offsets], columns)
+
+    def _burst(self, t: int, me: np.ndarray, others: np.ndarray, burst: tuple[float, float]) -> np.ndarray:
+        """Each link's Gilbert-Elliott state after this message (True: in a loss burst)."""
+        links = me * self.n + others
+        was = np.isin(links, self.lossy)
+        flip = draws.uniform(self.seed, draws.BURST, t, me, others) < np.where(was, burst[1], burst[0])
+        now = was ^ flip
+        self.lossy = np.union1d(np.setdiff1d(self.lossy, links[was & ~now]), links[now & ~was])
+        return now
+
+    def _message(self, said: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The deciding robots' message, checked against the radio's fields."""
+        name = type(self.robot).__name__
+        if self.robot.radio is None:
+            raise ValueError(f"{name} sent a message but declares no radio")
+        if set(said) != set(self.kinds):
+            raise ValueError(
+                f"{name} sent fields {sorted(said)}, but its radio declares {sorted(self.kinds)}: send every field"
+            )
+        return {key: np.asarray(said[key], dtype=kind) for key, kind in self.kinds.items()}
+
+    def _publish(self, t: int, said: list[tuple[np.ndarray, dict[str, np.ndarray]]], faults: FaultState | None) -> None:
+        """Put what the robots said this step in the air: lies from Byzantine senders, each
+        message heard from ``t + 1 + latency`` on."""
+        if not said:
+            return
+        senders = np.concatenate([rows for rows, _ in said])
+        fields = {key: np.concatenate([message[key] for _, message in said]) for key in self.kinds}
+        delay = np.full(len(senders), self.robot.radio.latency if self.robot.radio else 0)
+        if faults is not None:
+            f = faults.faults
+            liars = faults.byzantine[senders]
+            if liars.any():
+                self._lie(t, senders, liars, fields, f.lie)
+            delay += f.latency
+            if f.jitter:
+                delay += draws.integers(-f.jitter, f.jitter, self.seed, draws.LATENCY_JITTER, t, senders)
+        air = {"visible": t + 1 + np.maximum(delay, 0), "sender": senders, "sent": np.full(len(senders), t), **fields}
+        self.air = {key: np.concatenate((self.air[key], air[key])) for key in self.air}
+
+    def _lie(self, t: int, senders: np.ndarray, liars: np.ndarray, fields: dict[str, np.ndarray], rule: str) -> None:
+        """Replace the float fields of the liars' messages by the adversary ``rule`` (ints kept)."""
+        for number, values in enumerate(fields.values()):
+            if values.dtype.kind != "f":
+                continue
+            if rule == "constant":
+                values[liars] = CONSTANT_LIE
+            elif rule == "random":
+                u = draws.uniform(self.seed, draws.LIE, t, senders[liars], number)
+                values[liars] = (2.0 * u - 1.0) * RANDOM_LIE
+            else:
+                values[liars] += DRIFT_PER_STEP * t
+
+    def _deliver(self, t: int) -> None:
+        """Move the messages heard from step ``t`` on to the board (the newest of each sender)."""
+        air = self.air
+        arrived = air["visible"] <= t
+        if not arrived.any():
+            return
+        newer = arrived & (air["sent"] > self.sent_at[air["sender"]])
+        order = np.flatnonzero(newer)[np.argsort(air["sent"][newer], kind="stable")]
+        senders = air["sender"][order]  # assigned in order of sending: the newest stays
+        self.sent_at[senders] = air["sent"][order]
+        for key in self.kinds:
+            self.board[key][senders] = air[key][order]
+        self.air = {key: values[~arrived] for key, values in air.items()}
+
+    def _silence(self, crashed: np.ndarray) -> None:
+        """A crashed robot's messages leave the board and the air."""
+        self.sent_at[crashed] = -1
+        gone = crashed[self.air["sender"]]
+        if gone.any():
+            self.air = {key: values[~gone] for key, values in self.air.items()}

@@ -1,0 +1,109 @@
+"""A neighbourhood: what each deciding robot perceives of the others, as ragged rows (CSR).
+
+Row r belongs to the r-th robot deciding now and holds its entries ``offsets[r]:offsets[r + 1]``
+of every column: its detections (distance, bearing, offsets, velocities) or the messages its
+radio delivered (sender and the message's fields). Reductions run in the Rust kernels
+(:func:`dream.kernels.segment_reduce` and friends), rows in parallel::
+
+    centre = view.heard.mean(["x", "y"])       # (k, 2): the mean position each robot heard
+    closest = view.seen.nearest()              # (k,): entry of the nearest detection, -1 if none
+    gap = view.seen.pick("distance", closest)  # (k,): its distance, NaN if none
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from dream import kernels
+from dream._checks import FloatArray
+
+
+class Neighbourhood:
+    """Ragged rows of named columns (see the module docs).
+
+    Parameters
+    ----------
+    offsets : (k + 1,) int64
+        Row r's entries are ``offsets[r]:offsets[r + 1]``.
+    columns : mapping of name to (e,) array
+        One value per entry.
+    """
+
+    def __init__(self, offsets: np.ndarray, columns: Mapping[str, np.ndarray]) -> None:
+        self.offsets = offsets
+        self.columns = dict(columns)
+
+    def __len__(self) -> int:
+        """The number of rows (robots deciding now)."""
+        return len(self.offsets) - 1
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        """Column ``name``, one value per entry."""
+        if name not in self.columns:
+            raise KeyError(f"no column {name!r} in this neighbourhood (its columns: {', '.join(self.columns)})")
+        return self.columns[name]
+
+    def __repr__(self) -> str:
+        return f"Neighbourhood({len(self)} rows, {self.offsets[-1]} entries, columns {list(self.columns)})"
+
+    @property
+    def count(self) -> np.ndarray:
+        """``(k,)`` int: each row's number of entries."""
+        return np.diff(self.offsets)
+
+    @property
+    def owner(self) -> np.ndarray:
+        """``(e,)`` int: the row of each entry (to broadcast a robot's own values to its entries)."""
+        return np.repeat(np.arange(len(self)), self.count)
+
+    def _values(self, what: str | Sequence[str] | np.ndarray) -> np.ndarray:
+        if isinstance(what, str):
+            return self[what]
+        if isinstance(what, np.ndarray):
+            return what
+        return np.column_stack([self[name] for name in what])
+
+    def _reduce(self, what: str | Sequence[str] | np.ndarray, op: str) -> FloatArray:
+        return kernels.segment_reduce(self._values(what), self.offsets, op)
+
+    def sum(self, what: str | Sequence[str] | np.ndarray) -> FloatArray:
+        """Each row's sum of a column, of several (``(k, w)``), or of values ``(e,)`` or ``(e, w)``; 0 for none."""
+        return self._reduce(what, "sum")
+
+    def mean(self, what: str | Sequence[str] | np.ndarray) -> FloatArray:
+        """Each row's mean (NaN for an empty row); see :meth:`sum`."""
+        return self._reduce(what, "mean")
+
+    def min(self, what: str | Sequence[str] | np.ndarray) -> FloatArray:
+        """Each row's minimum (NaN entries skipped; NaN for an empty row); see :meth:`sum`."""
+        return self._reduce(what, "min")
+
+    def max(self, what: str | Sequence[str] | np.ndarray) -> FloatArray:
+        """Each row's maximum (NaN entries skipped; NaN for an empty row); see :meth:`sum`."""
+        return self._reduce(what, "max")
+
+    def any(self, flags: Any) -> np.ndarray:
+        """``(k,)`` bool: whether any of a row's entries is flagged (``flags`` ``(e,)`` bool)."""
+        return kernels.segment_any(flags, self.offsets)
+
+    def nearest(self, key: str | np.ndarray = "distance") -> np.ndarray:
+        """``(k,)`` int: the entry of each row with the smallest ``key`` (a column or values
+        ``(e,)``), -1 for an empty row; use it with :meth:`pick`."""
+        return kernels.segment_nearest(self._values(key), self.offsets)
+
+    def pick(self, what: str | Sequence[str] | np.ndarray, entries: np.ndarray, fill: float = np.nan) -> FloatArray:
+        """The values at ``entries`` ``(k,)`` (from :meth:`nearest`), ``fill`` where it is -1."""
+        values = np.asarray(self._values(what), dtype=np.float64)
+        out = np.full((len(entries), *values.shape[1:]), fill)
+        found = entries >= 0
+        out[found] = values[entries[found]]
+        return out
+
+    def where(self, keep: np.ndarray) -> Neighbourhood:
+        """The entries flagged in ``keep`` ``(e,)`` bool, rows kept (some may become empty)."""
+        keep = np.asarray(keep, dtype=bool)
+        kept = np.concatenate(([0], np.cumsum(keep)))
+        return Neighbourhood(kept[self.offsets], {name: column[keep] for name, column in self.columns.items()})

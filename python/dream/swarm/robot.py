@@ -1,0 +1,195 @@
+"""A swarm robot: a robot whose decision is written once, on arrays with a leading robot axis.
+
+A :class:`SwarmRobot` declares what a robot has (a movement sensor, a radio and the fields of its
+messages, a memory, an optional HRVO safety layer) and how often it decides; its :meth:`decide`
+turns what the robots deciding now know (a :class:`View`) into the velocities they want. The
+engine (:mod:`dream.swarm.engine`) runs the same class robot by robot or as one swarm, with the
+world's faults applied to the arrays, and both give the same poses at every step::
+
+    class Meet(SwarmRobot):
+        period = 10
+        movement = Movement(range=0.5)
+        radio = Radio(range=1.0, fields=("x", "y"))
+        avoid = Avoid(safety=0.2)
+
+        def decide(self, view):
+            here = view.pose[:, :2]
+            view.send(x=here[:, 0], y=here[:, 1])
+            heard = view.heard.sum(["x", "y"]) + here
+            centre = heard / (view.heard.count + 1)[:, None]
+            return 0.5 * (centre - here)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+
+from dream.robot import GUARD_HORIZON
+from dream.specs import GRITSBOT, RobotSpec
+from dream.swarm.neighbourhood import Neighbourhood
+
+
+def _nonnegative(value: float, name: str) -> None:
+    if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+
+
+@dataclass(frozen=True)
+class Movement:
+    """A movement sensor: the robots within ``range`` (m) and the field of view ``fov`` (rad,
+    about the heading turned by ``direction``), seen with Gaussian ``noise`` on every value."""
+
+    range: float = 0.5
+    fov: float = 2 * math.pi
+    direction: float = 0.0
+    noise: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("range", "fov", "noise"):
+            _nonnegative(getattr(self, name), f"Movement {name}")
+
+
+@dataclass(frozen=True)
+class Radio:
+    """A range radio: hears the robots within ``range`` (m) that have said something.
+
+    ``fields`` names the message's fields (floats), or maps each to ``float`` or ``int`` (ints,
+    such as ids, are never falsified by a Byzantine sender). ``loss`` drops each message with that
+    probability; ``latency`` delays a message by that many steps beyond the next one.
+    """
+
+    range: float = 1.0
+    fields: tuple[str, ...] | Mapping[str, type] = ()
+    loss: float = 0.0
+    latency: int = 0
+
+    def __post_init__(self) -> None:
+        _nonnegative(self.range, "Radio range")
+        if not 0.0 <= self.loss <= 1.0:
+            raise ValueError(f"Radio loss is a probability in [0, 1], got {self.loss!r}")
+        if isinstance(self.latency, bool) or not isinstance(self.latency, int) or self.latency < 0:
+            raise ValueError(f"Radio latency must be a whole number of steps >= 0, got {self.latency!r}")
+        for name, kind in self.kinds.items():
+            if not name.isidentifier() or name == "sender":
+                raise ValueError(f"Radio field {name!r} must be an identifier other than 'sender'")
+            if kind not in (float, int):
+                raise ValueError(f"Radio field {name!r} must be float or int, got {kind!r}")
+
+    @property
+    def kinds(self) -> dict[str, type]:
+        """Each field's type."""
+        if isinstance(self.fields, Mapping):
+            return dict(self.fields)
+        return {name: float for name in self.fields}
+
+
+@dataclass(frozen=True)
+class Avoid:
+    """The HRVO safety layer between a robot's wish and its wheels (see :class:`dream.RobotHRVO`).
+
+    HRVO picks the velocity closest to the wished one that no detected robot forbids within
+    ``safety`` (m, centre to centre), and that keeps the robot ``margin`` (m, default its radius)
+    inside the arena when ``check_boundaries``; a robot HRVO stops while it wants to move steps
+    aside for ``sidestep`` decisions; the motion guard (``guard``) stops a unicycle whose turn
+    would close in on a detected robot's body.
+    """
+
+    safety: float = 0.24
+    check_boundaries: bool = True
+    margin: float | None = None
+    sidestep: int = 10
+    guard: bool = True
+    n_angles: int = 20
+    n_speeds: int = 10
+    include_preferred: bool = True
+
+    def __post_init__(self) -> None:
+        _nonnegative(self.safety, "Avoid safety")
+
+
+@dataclass
+class View:
+    """What the robots deciding now know, one row per robot (``k`` of them).
+
+    Attributes
+    ----------
+    ids : (k,) int
+        Their ids (a robot knows its own name).
+    step : int
+        The world's step (the robots' clocks may drift from it).
+    pose : (k, 3)
+        Their odometry ``[x, y, theta]`` (m, m, rad), as noisy as the sensor.
+    seen : Neighbourhood
+        The movement sensor's detections, columns ``distance``, ``bearing`` (world frame, from the
+        robot towards the other), ``dx``, ``dy`` (the other's position less the robot's), ``vx``,
+        ``vy`` (the other's velocity); empty rows without a movement sensor.
+    heard : Neighbourhood
+        The messages the radio delivered: ``sender`` and the declared fields.
+    memory : dict of (k,) arrays
+        The robots' memory (:attr:`SwarmRobot.memory`); change it in place or assign new arrays.
+    """
+
+    ids: np.ndarray
+    step: int
+    pose: np.ndarray
+    seen: Neighbourhood
+    heard: Neighbourhood
+    memory: dict[str, np.ndarray]
+    said: dict[str, np.ndarray] | None = field(default=None, repr=False)
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    def send(self, **fields: Any) -> None:
+        """Broadcast a message from every robot deciding now: one ``(k,)`` array (or a scalar)
+        per declared field of the radio. A later call replaces an earlier one."""
+        self.said = {name: np.broadcast_to(np.asarray(value), (len(self),)) for name, value in fields.items()}
+
+
+class SwarmRobot:
+    """Base class of a robot written on arrays (see the module docs).
+
+    Class attributes (or instance attributes set in ``__init__``)
+    --------------------------------------------------------------
+    period : int
+        Steps between two decisions of a robot, on its own clock.
+    movement : Movement or None
+        The movement sensor.
+    radio : Radio or None
+        The radio and its message fields.
+    avoid : Avoid or None
+        The HRVO safety layer on the wished velocities.
+    memory : dict
+        Each memory field's initial value (a float or an int), kept per robot between decisions.
+    odometry_noise : float
+        Standard deviation of the noise on every odometry value.
+    vel_gain, ang_gain : float
+        The single-integrator to unicycle conversion's gains (:meth:`dream.Robot.dxi_to_dxu`).
+    spec : RobotSpec
+        The robot's limits (default: GRITSbot).
+    """
+
+    period: int = 10
+    movement: Movement | None = None
+    radio: Radio | None = None
+    avoid: Avoid | None = None
+    memory: ClassVar[dict[str, float | int]] = {}
+    odometry_noise: float = 0.0
+    vel_gain: float = 0.8
+    ang_gain: float = 3.0
+    spec: RobotSpec = GRITSBOT
+    guard_horizon: float = GUARD_HORIZON
+
+    def start(self, ids: np.ndarray) -> np.ndarray:
+        """Each robot's start-up delay (steps, ``(n,)`` ints): it decides first after it (default 0)."""
+        return np.zeros(len(ids), dtype=np.int64)
+
+    def decide(self, view: View) -> np.ndarray:
+        """The velocities ``(k, 2)`` (m/s, world frame) the deciding robots want; call
+        ``view.send(...)`` to broadcast and change ``view.memory`` to remember."""
+        raise NotImplementedError(f"{type(self).__name__} must define decide(self, view)")
