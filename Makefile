@@ -13,7 +13,7 @@ test:  ## what CI runs: the README's test command, then .ci/package (wheel, sdis
 test-pure:  ## the Python suite on the NumPy reference kernels only
 	DREAM_PURE_PYTHON=1 python -m pytest
 
-bench:  ## benchmark figures for the README (medians and ratios, one run)
+bench:  ## benchmark figures for docs/benchmarks.md (medians and ratios, one run)
 	cd benches && python bench_kernels.py && python bench_experiments.py
 
 stubs:  ## check python/dream/_core.pyi against the compiled module

@@ -6,7 +6,7 @@ the experiments) unless said otherwise. The easy lattice alone flatters a kernel
 spread evenly, preferred velocities are mostly free); the other three are the hard cases:
 
 - ``lattice``: a jittered square lattice (robots stay >= 0.28 m apart), random velocities and
-  preferred directions. The README's historical figures use it.
+  preferred directions. The oldest figures of docs/benchmarks.md use it.
 - ``uniform``: robots uniformly at random in a square, so some are closer than the safety
   radius (0.24 m) to each other or overlap; random velocities and preferred directions.
 - ``crossing``: a disc twice as dense (about 20 within RANGE), every robot heading for its

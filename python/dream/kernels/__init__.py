@@ -36,7 +36,7 @@ from dream.kernels._voronoi import VoronoiCells, heard_cells, voronoi_cell, voro
 Bounds = _checks.Bounds
 """``tuple[float, float, float, float]``: ``(xmin, xmax, ymin, ymax)`` (m), the type of ``bounds`` arguments."""
 
-# In the API page's order (docs/api/kernels.md sorts by it): by family, as the sections of the README.
+# In the API page's order (docs/api/kernels.md sorts by it): by family, as the table of docs/kernels.md.
 __all__ = [
     "IMPLEMENTATION",
     "GeometryError",
