@@ -21,7 +21,7 @@ def test_rendezvous_example_succeeds_with_20_robots(tmp_path, capsys):
     metrics = json.loads(out.read_text())
     assert metrics["experiment"] == "rendezvous" and metrics["n"] == 20
     assert metrics["success"] and metrics["collisions"] == 0
-    assert metrics["measures"]["spread"] <= metrics["params"]["safety"] * 4  # the met radius, 0.75 m
+    assert metrics["measures"]["spread"] <= metrics["params"]["radius"]  # the met radius, 0.85 m
     assert re.search(r"^success\s+yes$", capsys.readouterr().out, re.M)
 
 

@@ -1,0 +1,134 @@
+"""Neighbourhood reductions and HRVO on a robot's own detections: the Rust kernels against their
+NumPy reference on random ragged rows (empty rows, NaN entries, one row, many rows), and bad
+input named in a ValueError."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose, assert_array_equal
+
+from dream import _core, _reference, kernels
+from dream.kernels._hrvo import _grid
+
+OPS = ("sum", "mean", "min", "max")
+
+
+def ragged(rng, rows, width, nan=0.0):
+    counts = rng.integers(0, 6, rows)
+    counts[rng.random(rows) < 0.2] = 0  # empty rows
+    offsets = np.concatenate(([0], np.cumsum(counts))).astype(np.int64)
+    values = rng.normal(0, 3, (offsets[-1], width))
+    values[rng.random(values.shape) < nan] = np.nan
+    return values, offsets
+
+
+@pytest.mark.parametrize("rows", [0, 1, 7, 5000])
+@pytest.mark.parametrize("op", OPS)
+def test_segment_reduce_matches_the_reference(rng, rows, op):
+    for width, nan in ((1, 0.0), (3, 0.0), (2, 0.3)):
+        values, offsets = ragged(rng, rows, width, nan)
+        got = _core.segment_reduce(values, offsets, op)
+        want = _reference.segment_reduce(values, offsets, op)
+        assert got.shape == want.shape == (rows, width)
+        assert_allclose(got, want, rtol=1e-12, atol=1e-12, equal_nan=True)
+
+
+def test_segment_reduce_empty_rows_and_nan():
+    values = np.array([1.0, np.nan, 3.0, 4.0])
+    offsets = [0, 0, 3, 4]
+    assert_array_equal(kernels.segment_reduce(values, offsets, "sum")[[0, 2]], [0.0, 4.0])
+    assert math.isnan(kernels.segment_reduce(values, offsets, "sum")[1])  # the sum carries NaN
+    assert_array_equal(kernels.segment_reduce(values, offsets, "min")[1:], [1.0, 4.0])  # extremes skip it
+    assert_array_equal(kernels.segment_reduce(values, offsets, "max")[1:], [3.0, 4.0])
+    assert np.isnan(kernels.segment_reduce(values, offsets, "mean")[0])  # nothing to average
+    assert kernels.segment_reduce(values[:, None], offsets, "max").shape == (3, 1)
+
+
+@pytest.mark.parametrize("rows", [0, 1, 9, 5000])
+def test_segment_any_and_nearest_match_the_reference(rng, rows):
+    values, offsets = ragged(rng, rows, 1, nan=0.2)
+    keys = values[:, 0]
+    flags = rng.random(len(keys)) < 0.2
+    assert_array_equal(_core.segment_any(flags, offsets), _reference.segment_any(flags, offsets))
+    nearest = _core.segment_nearest(keys, offsets)
+    assert_array_equal(nearest, _reference.segment_nearest(keys, offsets))
+    for r in range(rows):  # the smallest non-NaN key of its row, or -1
+        row = keys[offsets[r] : offsets[r + 1]]
+        if np.isnan(row).all():
+            assert nearest[r] == -1
+        else:
+            assert offsets[r] <= nearest[r] < offsets[r + 1] and keys[nearest[r]] == np.nanmin(row)
+
+
+def test_nearest_takes_the_first_of_equals():
+    assert_array_equal(kernels.segment_nearest([2.0, 1.0, 1.0, np.inf], [0, 3, 4]), [1, 3])
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda: kernels.segment_reduce([1.0, 2.0], [0, 3], "sum"), "`offsets` must be offsets"),
+        (lambda: kernels.segment_reduce([1.0, 2.0], [0, 2, 1, 2], "sum"), "`offsets` must be offsets"),
+        (lambda: kernels.segment_reduce([1.0], [0, 1], "median"), "`op` must be one of sum, mean, min, max"),
+        (lambda: kernels.segment_any([True], [0.0, 1.0]), "integer offsets"),
+        (lambda: kernels.segment_nearest(np.zeros((2, 2)), [0, 2]), "`keys` must have shape (k,)"),
+        (lambda: _core.segment_reduce(np.zeros((2, 1)), np.array([0, 3]), "sum"), "not a valid CSR"),
+        (lambda: _core.segment_reduce(np.zeros((2, 1)), np.array([0, 2]), "avg"), "`op` must be"),
+    ],
+)
+def test_bad_input_is_named(call, message):
+    with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        call()
+
+
+def detections_scene(rng, rows):
+    """Random robots deciding now, each with its own detections [distance, angle, vx, vy]."""
+    counts = rng.integers(0, 8, rows)
+    offsets = np.concatenate(([0], np.cumsum(counts))).astype(np.int64)
+    k = offsets[-1]
+    seen = np.column_stack(
+        (rng.uniform(0, 0.8, k), rng.uniform(-np.pi, np.pi, k), rng.normal(0, 0.1, k), rng.normal(0, 0.1, k))
+    )
+    seen[rng.random(k) < 0.05, 0] = 0.0  # robots at the same spot
+    positions = rng.uniform(-1.5, 1.5, (rows, 2))
+    return rng.normal(0, 0.1, (rows, 2)), rng.normal(0, 0.3, (rows, 2)), positions, offsets, seen
+
+
+@pytest.mark.parametrize("rows", [0, 1, 30, 5000])
+def test_hrvo_rows_is_the_planner_row_by_row(rng, rows):
+    velocities, preferred, positions, offsets, seen = detections_scene(rng, rows)
+    options = dict(safety=0.24, v_max=0.2, bounds=(-1.6, 1.6, -1.0, 1.0), include_preferred=True)
+    grid = _grid(0.2, 20, 10)
+    got = _core.hrvo_rows(velocities, preferred, positions, offsets, seen, candidates=grid, **options)
+    want = _reference.hrvo_rows(velocities, preferred, positions, offsets, seen, candidates=grid, **options)
+    assert_allclose(got, want, atol=1e-12)
+    planner = _core.HrvoPlanner(grid, **options)
+    for r in range(0, rows, max(rows // 40, 1)):  # exactly the per-robot planner's answer
+        row = seen[offsets[r] : offsets[r + 1]]
+        assert_array_equal(got[r], planner.velocity(row, velocities[r], preferred[r], positions[r]))
+
+
+def test_hrvo_rows_bad_input_is_named(rng):
+    velocities, preferred, positions, offsets, seen = detections_scene(rng, 3)
+    with pytest.raises(ValueError, match="`offsets`"):
+        kernels.hrvo_rows(velocities, preferred, positions, offsets[:-1], seen)
+    bad = seen.copy()
+    bad[0, 0] = -0.1
+    with pytest.raises(ValueError, match="detection distance"):
+        kernels.hrvo_rows(velocities, preferred, positions, offsets, bad)
+    with pytest.raises(ValueError, match="detection distance"):
+        _core.hrvo_rows(
+            velocities,
+            preferred,
+            positions,
+            offsets,
+            bad,
+            safety=0.2,
+            v_max=0.2,
+            bounds=None,
+            candidates=_grid(0.2, 20, 10),
+            include_preferred=True,
+        )

@@ -1,0 +1,263 @@
+"""The swarm engine: one robot class, written on arrays, runs robot by robot and as one swarm
+with the same poses at every step (with and without faults), and the world's rules (clocks,
+sensors, radio, faults) hold on the arrays."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dream
+from dream import Faults, timers
+from dream.experiments.files import load_file
+from dream.swarm import Movement, Radio, SwarmRobot, View, draws
+
+ROOT = Path(__file__).resolve().parents[2]
+EVERY_FAULT = Faults(
+    loss=0.2,
+    burst=(0.05, 0.3),
+    distance_loss=0.2,
+    latency=3,
+    jitter=2,
+    crash=0.1,
+    crash_at=40,
+    stuck=0.1,
+    stuck_at=60,
+    byzantine=2,
+    lie="random",
+    sensor_dropout=0.05,
+    sensor_noise=0.01,
+    drift=0.05,
+    clock_jitter=1,
+    actuator_noise=0.01,
+)
+
+
+def rendezvous():
+    spec = importlib.util.spec_from_file_location("rendezvous_example", ROOT / "examples" / "rendezvous.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.Rendezvous
+
+
+def both_ways(experiment, n, faults=None, steps=300, seed=1, **options):
+    """The traces of a run robot by robot and of the same run as one swarm."""
+    runs = [
+        dream.run(
+            experiment, n=n, seed=seed, steps=steps, backend="fast", trace=True, swarm=swarm, faults=faults, **options
+        )
+        for swarm in (False, True)
+    ]
+    return runs
+
+
+@pytest.mark.parametrize("faults", [None, EVERY_FAULT], ids=["no faults", "every fault"])
+def test_rendezvous_is_the_same_robot_by_robot_and_as_a_swarm(faults):
+    one, swarm = both_ways(rendezvous(), 20, faults)
+    assert one.trace.shape == swarm.trace.shape and len(one.trace) > 100
+    assert np.array_equal(one.trace, swarm.trace)  # bit for bit, every step
+    assert one.faults == swarm.faults
+    assert np.ptp(one.trace[:, :2], axis=0).max() > 0.1  # the robots did move
+    if faults is not None:
+        assert one.faults["messages_lost"] > 0 and one.faults["readings_dropped"] > 0
+
+
+FLOCK = '''
+import numpy as np
+from dream import Experiment, param
+from dream.swarm import Avoid, Movement, Radio, SwarmRobot
+
+
+class Flocker(SwarmRobot):
+    """Aligns its heading with the headings it hears, keeps away from the robots it sees."""
+
+    period = 3
+    memory = {"decisions": 0}
+
+    def __init__(self, speed):
+        self.speed = speed
+        self.movement = Movement(range=0.4, fov=4.0, noise=0.002)
+        self.radio = Radio(range=0.8, fields={"id": int, "heading": float}, latency=1)
+        self.avoid = Avoid(safety=0.18)
+
+    def start(self, ids):
+        return ids % 7
+
+    def decide(self, view):
+        heading = view.pose[:, 2]
+        heard = view.heard
+        mean = np.arctan2(heard.sum(np.sin(heard["heading"])), heard.sum(np.cos(heard["heading"])))
+        aim = np.where(heard.count > 0, mean, heading)
+        close = view.seen.nearest()
+        away = -view.seen.pick(["dx", "dy"], close, fill=0.0)
+        view.memory["decisions"] += 1
+        view.send(id=view.ids, heading=aim)
+        return self.speed * np.column_stack((np.cos(aim), np.sin(aim))) + 0.2 * away
+
+
+class Flock(Experiment):
+    name = "flock"
+    speed: float = param(0.05, "cruise speed (m/s)")
+
+    def swarm_robot(self, n):
+        return Flocker(self.speed)
+'''
+
+
+@pytest.mark.parametrize("faults", [None, EVERY_FAULT], ids=["no faults", "every fault"])
+def test_an_experiment_file_is_the_same_both_ways(tmp_path, faults):
+    path = tmp_path / "flock.py"
+    path.write_text(FLOCK)
+    flock = load_file(path)
+    one, swarm = both_ways(flock, 16, faults, steps=200)
+    assert np.array_equal(one.trace, swarm.trace)
+    assert one.collisions == swarm.collisions == 0
+
+
+def test_rendezvous_succeeds_as_a_swarm_of_300_under_faults():
+    faults = Faults(loss=0.3, latency=5, crash=0.1, crash_at=50, byzantine=3)
+    result = dream.run(rendezvous(), n=300, seed=0, backend="fast", swarm=True, faults=faults)
+    assert result.success and result.completed_step is not None
+    assert (result.collisions, result.boundary, result.actuator) == (0, 0, 0)
+    assert len([e for e in result.faults["events"] if e["kind"] == "crash"]) == 30
+
+
+# -- the world's rules on the arrays --------------------------------------------------------------
+class Recorder(SwarmRobot):
+    """Stands still and keeps what it was given, for the tests to look at."""
+
+    def __init__(self, period=4, radio=None, movement=None, starts=None):
+        self.period, self.radio, self.movement, self.starts = period, radio, movement, starts
+        self.views: list[tuple[int, np.ndarray, dict]] = []
+
+    def start(self, ids):
+        return np.zeros(len(ids), dtype=np.int64) if self.starts is None else self.starts[ids]
+
+    def decide(self, view: View) -> np.ndarray:
+        self.views.append((view.step, view.ids.copy(), {k: v.copy() for k, v in view.heard.columns.items()}))
+        if self.radio is not None:
+            view.send(**{key: view.ids * 1.0 + view.step / 1000 for key in self.radio.kinds})
+        return np.zeros((len(view), 2))
+
+
+def drive(robot, n, steps, faults=None, seed=0, one_by_one=False, poses=None):
+    engine = dream.swarm.Engine(robot, n, seed, dream.specs.ROBOTARIUM, one_by_one=one_by_one)
+    state = None
+    if faults is not None:
+        state = dream.World(seed).inject(faults, n)
+    x = np.zeros((3, n)) if poses is None else poses
+    x[0] = np.linspace(-0.5, 0.5, n) if poses is None else x[0]
+    commands = np.zeros((2, n))
+    for t in range(steps):
+        if state is not None:
+            state.advance(t)
+        engine.step(t, x, commands, state)
+    return engine, state
+
+
+def test_decisions_follow_the_timer_rule():
+    starts = np.array([0, 3, 7, 12, 2])
+    robot = Recorder(period=4, starts=starts)
+    drive(robot, 5, 40)
+    for i in range(5):
+        decided = [t for t, ids, _ in robot.views if i in ids]
+        expected = [t for t in range(40) if timers.due(t, starts[i : i + 1], 4)[0]]
+        assert decided == expected
+
+
+def test_a_message_is_heard_from_the_step_after_its_latency():
+    robot = Recorder(period=1, radio=Radio(range=5.0, fields=("value",), latency=2))
+    drive(robot, 2, 8)
+    for t, _ids, heard in robot.views:
+        if t >= 4:  # sent at t - 3 (one step on the air, two of latency)
+            assert set(heard["sender"]) == {0, 1}
+            assert np.allclose(heard["value"] % 1, (t - 3) / 1000)
+        elif t < 3:
+            assert len(heard["sender"]) == 0
+
+
+def test_lost_crashed_and_lying_senders():
+    n = 12
+    radio = Radio(range=5.0, fields={"value": float, "id": int})
+    robot = Recorder(period=1, radio=radio)
+    _, state = drive(robot, n, 30, Faults(crash=0.25, crash_at=10, byzantine=2, lie="constant"))
+    crashed, liars = np.flatnonzero(state.crashed), np.flatnonzero(state.byzantine)
+    late = [heard for t, _, heard in robot.views if t >= 12]
+    assert late and all(not np.isin(heard["sender"], crashed).any() for heard in late)  # silenced
+    for heard in late:
+        lying = np.isin(heard["sender"], liars)
+        assert (heard["value"][lying] == 0.0).all() and (heard["value"][~lying] != 0.0).all()
+        assert np.array_equal(heard["id"], heard["sender"])  # ints are never falsified
+    robot = Recorder(period=1, radio=Radio(range=5.0, fields=("value",), loss=1.0))
+    drive(robot, 4, 10)
+    assert all(len(heard["sender"]) == 0 for _, _, heard in robot.views)
+
+
+def test_a_sensor_sees_only_within_its_range_and_field_of_view():
+    seen = []
+
+    class Looker(SwarmRobot):
+        period = 1
+        movement = Movement(range=0.3, fov=np.pi / 2)
+
+        def decide(self, view):
+            seen.append(
+                {int(i): sorted(view.seen["dx"][view.seen.owner == r].round(3)) for r, i in enumerate(view.ids)}
+            )
+            return np.zeros((len(view), 2))
+
+    poses = np.array([[0.0, 0.2, -0.2, 0.5], [0.0, 0.0, 0.0, 0.0], [0.0, np.pi, 0.0, 0.0]])
+    drive(Looker(), 4, 2, poses=poses)  # the first decision is at step 1 (the timer rule)
+    # robot 0 faces +x: sees robot 1 (0.2 ahead), not robot 2 (behind) nor robot 3 (0.5 away)
+    assert seen[0][0] == [0.2] and seen[0][1] == [-0.2] and seen[0][3] == []
+
+
+def test_the_decision_gets_rows_never_the_swarm():
+    robot = Recorder(period=2, radio=Radio(range=1.0, fields=("value",)))
+    engine, _ = drive(robot, 6, 3)
+    view_fields = set(View.__dataclass_fields__)
+    assert view_fields == {"ids", "step", "pose", "seen", "heard", "memory", "said"}
+    assert all(len(ids) == 6 for _, ids, _ in robot.views)
+
+
+def test_draws_depend_on_keys_not_on_order():
+    keys = np.arange(1000)
+    together = draws.uniform(5, draws.LOSS, 7, keys, keys[::-1])
+    apart = np.array([draws.uniform(5, draws.LOSS, 7, k, 999 - k) for k in keys])
+    assert np.array_equal(together, apart.ravel())
+    assert 0.0 <= together.min() and together.max() < 1.0 and abs(together.mean() - 0.5) < 0.05
+    normal = draws.normal(5, draws.DETECTION_NOISE, 7, keys)
+    assert abs(normal.mean()) < 0.1 and abs(normal.std() - 1) < 0.1
+    assert not np.array_equal(together, draws.uniform(6, draws.LOSS, 7, keys, keys[::-1]))  # the seed counts
+
+
+@pytest.mark.parametrize(
+    ("decide", "message"),
+    [
+        (lambda view: np.zeros((len(view), 3)), r"decide must return finite velocities of shape \(k, 2\)"),
+        (lambda view: np.full((len(view), 2), np.nan), "with NaN or inf"),
+    ],
+)
+def test_a_bad_decision_is_named(decide, message):
+    class Bad(SwarmRobot):
+        period = 1
+
+    Bad.decide = lambda self, view: decide(view)
+    with pytest.raises(ValueError, match=message):
+        drive(Bad(), 3, 2)
+
+
+def test_a_message_must_have_every_declared_field():
+    class Partial(SwarmRobot):
+        period = 1
+        radio = Radio(range=1.0, fields=("x", "y"))
+
+        def decide(self, view):
+            view.send(x=view.pose[:, 0])
+            return np.zeros((len(view), 2))
+
+    with pytest.raises(ValueError, match=r"sent fields \['x'\], but its radio declares \['x', 'y'\]"):
+        drive(Partial(), 3, 2)
