@@ -28,9 +28,8 @@ use std::f64::consts::TAU;
 use rayon::prelude::*;
 
 use crate::dynamics::Arena;
-use crate::error::{check_finite, check_len, GeomError, Result};
+use crate::error::{check_finite, check_len, check_offsets, GeomError, Result};
 use crate::neighbours::Near;
-use crate::reduce::check_offsets;
 
 /// A 2-D vector `[x, y]`.
 pub type Vec2 = [f64; 2];
@@ -560,7 +559,7 @@ pub fn hrvo_rows(
     check_len("velocities", m, velocities.len())?;
     check_len("preferred", m, preferred.len())?;
     check_len("offsets", m + 1, offsets.len())?;
-    check_offsets("offsets", offsets, detections.len())?;
+    check_offsets("offsets", offsets, detections.len(), "detections")?;
     check_vec2s("velocities", velocities)?;
     check_vec2s("preferred", preferred)?;
     check_vec2s("positions", positions)?;

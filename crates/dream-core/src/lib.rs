@@ -10,6 +10,7 @@
 //! - [`grid`]: the uniform grid behind neighbour queries.
 //! - [`heard`]: Voronoi cells of robots that know the others by range radio, in one pass.
 //! - [`reduce`]: sums, means, extremes and nearest entries of ragged rows (a robot's neighbourhood).
+//! - [`perceive`]: who the robots deciding now see and hear, in one pass over the neighbours.
 //! - [`raycast`]: the GRITSbot's infrared distance sensors for the whole swarm (rps 2.1's model).
 
 pub mod dynamics;
@@ -19,6 +20,7 @@ pub mod heard;
 pub mod hrvo;
 pub mod neighbours;
 pub mod obstacles;
+pub mod perceive;
 pub mod raycast;
 pub mod reduce;
 pub mod voronoi;

@@ -8,7 +8,7 @@
 
 use rayon::prelude::*;
 
-use crate::error::{GeomError, Result};
+use crate::error::{check_offsets, GeomError, Result};
 
 /// Rows from which a reduction runs on every thread (below, the thread pool costs more).
 const PARALLEL_ROWS: usize = 4096;
@@ -22,29 +22,13 @@ pub enum Reduce {
     Max,
 }
 
-/// Checks that `offsets` is a CSR of some rows over `entries` entries: starts at 0, never
-/// decreases, ends at `entries`.
-///
-/// # Errors
-/// [`GeomError::InvalidCsr`] saying what is wrong.
-pub fn check_offsets(arg: &'static str, offsets: &[i64], entries: usize) -> Result<()> {
-    let rows = offsets.len().saturating_sub(1);
-    let fail = |reason: String| Err(GeomError::InvalidCsr { arg, rows, reason });
-    if offsets.first() != Some(&0) {
-        return fail("offsets must start at 0".into());
-    }
-    if let Some(r) = offsets.windows(2).position(|w| w[1] < w[0]) {
-        return fail(format!("offsets decrease at row {r}"));
-    }
-    if offsets[rows] as usize != entries {
-        return fail(format!("offsets end at {}, but there are {entries} entries", offsets[rows]));
-    }
-    Ok(())
-}
-
 fn rows_of<T: Send>(rows: usize, row: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
     if rows >= PARALLEL_ROWS {
-        (0..rows).into_par_iter().with_min_len(PARALLEL_ROWS / 4).map(row).collect()
+        (0..rows)
+            .into_par_iter()
+            .with_min_len(PARALLEL_ROWS / 4)
+            .map(row)
+            .collect()
     } else {
         (0..rows).map(row).collect()
     }
@@ -62,7 +46,7 @@ pub fn reduce(values: &[f64], width: usize, offsets: &[i64], op: Reduce) -> Resu
             got: values.len(),
         });
     }
-    check_offsets("offsets", offsets, values.len() / width)?;
+    check_offsets("offsets", offsets, values.len() / width, "entries")?;
     let row = |r: usize| {
         let (start, end) = (offsets[r] as usize, offsets[r + 1] as usize);
         let mut out = vec![0.0; width];
@@ -86,7 +70,7 @@ pub fn reduce(values: &[f64], width: usize, offsets: &[i64], op: Reduce) -> Resu
 /// # Errors
 /// An invalid CSR.
 pub fn any(flags: &[bool], offsets: &[i64]) -> Result<Vec<bool>> {
-    check_offsets("offsets", offsets, flags.len())?;
+    check_offsets("offsets", offsets, flags.len(), "flags")?;
     Ok(rows_of(offsets.len() - 1, |r| {
         flags[offsets[r] as usize..offsets[r + 1] as usize].iter().any(|&f| f)
     }))
@@ -98,14 +82,15 @@ pub fn any(flags: &[bool], offsets: &[i64]) -> Result<Vec<bool>> {
 /// # Errors
 /// An invalid CSR.
 pub fn nearest(keys: &[f64], offsets: &[i64]) -> Result<Vec<i64>> {
-    check_offsets("offsets", offsets, keys.len())?;
+    check_offsets("offsets", offsets, keys.len(), "keys")?;
     Ok(rows_of(offsets.len() - 1, |r| {
+        let (start, end) = (offsets[r] as usize, offsets[r + 1] as usize);
         let mut best = -1i64;
         let mut least = f64::INFINITY;
-        for e in offsets[r] as usize..offsets[r + 1] as usize {
-            if !keys[e].is_nan() && (best < 0 || keys[e] < least) {
-                least = keys[e];
-                best = e as i64;
+        for (e, &key) in keys[start..end].iter().enumerate() {
+            if !key.is_nan() && (best < 0 || key < least) {
+                least = key;
+                best = (start + e) as i64;
             }
         }
         best
@@ -128,7 +113,10 @@ mod tests {
         assert!(mins[0].is_nan());
         assert_eq!(mins[1], 1.0);
         assert_eq!(nearest(&values, &offsets).unwrap(), vec![-1, 0, 3]);
-        assert_eq!(any(&[false, true, false, false], &offsets).unwrap(), vec![false, true, false]);
+        assert_eq!(
+            any(&[false, true, false, false], &offsets).unwrap(),
+            vec![false, true, false]
+        );
     }
 
     #[test]

@@ -1,11 +1,12 @@
 //! Bindings of `dream_core::neighbours`: range and field-of-view queries as CSR arrays.
 
 use dream_core::neighbours::{self as core, FieldOfView, RowsOf};
+use dream_core::perceive::{perceive as core_perceive, Perceived, Sight};
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 
 use crate::arrays::{count_of, flags_of, indices_of, points_of, vector_of};
-use crate::errors::PyDreamResult;
+use crate::errors::{value_error, PyDreamResult};
 
 type CsrArrays<'py> = (
     Bound<'py, PyArray1<i64>>,
@@ -81,3 +82,46 @@ pub fn far_from<'py>(
     })?;
     Ok(far.into_pyarray(py))
 }
+
+/// Who the robots `rows` see and hear: `(seen, heard)`, each `(offsets, ids, distances, bearings)`.
+#[pyfunction]
+#[pyo3(signature = (positions, headings, rows, *, sight=None, radio_range=None, talking=None))]
+pub fn perceive<'py>(
+    py: Python<'py>,
+    positions: Bound<'py, PyAny>,
+    headings: Bound<'py, PyAny>,
+    rows: Bound<'py, PyAny>,
+    sight: Option<(f64, f64, f64)>,
+    radio_range: Option<f64>,
+    talking: Option<Bound<'py, PyAny>>,
+) -> PyDreamResult<(Perception<'py>, Perception<'py>)> {
+    let p = points_of::<2>("positions", &positions)?;
+    let n = p.len();
+    let headings = vector_of("headings", &headings, Some(n))?;
+    let rows = indices_of("rows", &rows)?;
+    let talking = talking.map(|t| flags_of("talking", &t, n)).transpose()?;
+    let radio = match (radio_range, talking.as_deref()) {
+        (Some(range), Some(talking)) => Some((range, talking)),
+        (None, None) => None,
+        _ => return Err(value_error("give both `radio_range` and `talking`, or neither".into())),
+    };
+    let sight = sight.map(|(range, fov, direction)| Sight { range, fov, direction });
+    let (xs, ys): (Vec<f64>, Vec<f64>) = p.iter().map(|q| (q[0], q[1])).unzip();
+    let (seen, heard) = py.detach(|| core_perceive(&xs, &ys, &headings, &rows, sight, radio))?;
+    let out = |c: Perceived| {
+        (
+            c.offsets.into_pyarray(py),
+            c.ids.into_pyarray(py),
+            c.distances.into_pyarray(py),
+            c.bearings.into_pyarray(py),
+        )
+    };
+    Ok((out(seen), out(heard)))
+}
+
+type Perception<'py> = (
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+);

@@ -25,13 +25,14 @@ from dream._reference.hrvo import (
     hrvo_velocity,
     unit_directions,
 )
-from dream._reference.neighbours import far_from, neighbours, neighbours_of
+from dream._reference.neighbours import far_from, neighbours, neighbours_of, perceive
 from dream._reference.obstacles import agents_from_closest, mirrored, virtual_agents
 from dream._reference.raycast import distance_rays
 from dream._reference.reduce import segment_any, segment_nearest, segment_reduce
 from dream._reference.voronoi import heard_cells, voronoi_cell, voronoi_cells
 
 __all__ = [
+    "perceive",
     "segment_any",
     "segment_nearest",
     "segment_reduce",

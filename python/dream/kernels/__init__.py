@@ -27,7 +27,7 @@ from dream.kernels._dynamics import (
     wheel_speeds,
 )
 from dream.kernels._hrvo import HrvoPlanner, hrvo, hrvo_rows
-from dream.kernels._neighbours import far_from, neighbours, neighbours_of
+from dream.kernels._neighbours import Perceived, far_from, neighbours, neighbours_of, perceive
 from dream.kernels._obstacles import obstacle_agents, virtual_agents
 from dream.kernels._raycast import distance_rays
 from dream.kernels._reduce import REDUCTIONS, segment_any, segment_nearest, segment_reduce
@@ -50,6 +50,7 @@ __all__ = [
     "neighbours",
     "neighbours_of",
     "far_from",
+    "perceive",
     "HrvoPlanner",
     "hrvo",
     "hrvo_rows",

@@ -106,3 +106,43 @@ def far_from(points: Any, others: Any, distance: float, *, offsets: tuple[Any, A
     cuts = as_offsets(offsets[0], "offsets", len(p), part="[0] (of the points)")
     theirs = as_offsets(offsets[1], "offsets", len(q), len(cuts) - 1, part="[1] (of the others)")
     return implementation("far_from")(p, q, distance, cuts, theirs)
+
+
+#: One perceived neighbourhood: ``(offsets, ids, distances, bearings)`` over the asked rows.
+Perceived = tuple[np.ndarray, np.ndarray, FloatArray, FloatArray]
+
+
+def perceive(
+    positions: Any,
+    headings: Any,
+    rows: Any,
+    *,
+    sight: tuple[float, float, float] | None = None,
+    radio_range: float | None = None,
+    talking: Any = None,
+) -> tuple[Perceived, Perceived]:
+    """Who the robots ``rows`` ``(m,)`` (ids) see and hear, in one pass over their neighbours.
+
+    Robot j is seen by robot i when it is within ``sight = (range, fov, direction)`` (m, rad,
+    rad: the field of view about i's heading turned by ``direction``; a co-located robot is
+    always seen), and heard when it is within ``radio_range`` (m) and ``talking[j]``. Returns
+    ``(seen, heard)``, each ``(offsets (m + 1,), ids, distances, bearings)``: row r's entries
+    are ``offsets[r]:offsets[r + 1]``, ids increasing; bearings are world-frame directions from
+    the perceiving robot towards the other. A row does not depend on which other rows are asked.
+    """
+    p = as_array(positions, "positions", (None, 2))
+    n = p.shape[0]
+    h = as_array(headings, "headings", (n,))
+    asked = np.ascontiguousarray(rows, dtype=np.int64)
+    if asked.ndim != 1 or (len(asked) and (asked.min() < 0 or asked.max() >= n)):
+        raise ValueError(f"`rows` must be robot ids in [0, {n}), shape (m,)")
+    if sight is not None:
+        check_nonnegative(sight[0], "sensor range")
+        check_nonnegative(sight[1], "fov")
+    if (radio_range is None) != (talking is None):
+        raise ValueError("give both `radio_range` and `talking`, or neither")
+    flags = None
+    if radio_range is not None:
+        check_nonnegative(radio_range, "radio range")
+        flags = as_flags(talking, "talking", n)
+    return implementation("perceive")(p, h, asked, sight=sight, radio_range=radio_range, talking=flags)

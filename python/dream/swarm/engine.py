@@ -7,8 +7,8 @@ movement sensor and the messages their radio delivers, with the world's faults, 
 HRVO safety layer, the unicycle conversion, the actuator limits and the motion guard. The robots
 that do not decide keep their last command.
 
-What a robot perceives comes from one neighbour index of the true positions per step, within
-the longest of its ranges; every random draw (noise, dropout, loss, bursts, jitter, lies) is a
+What the robots deciding now perceive comes from one pass over their neighbours in the true
+poses (:func:`dream.kernels.perceive`, parallel in Rust); every random draw (noise, dropout, loss, bursts, jitter, lies) is a
 counter-based hash of who, when and what (:mod:`dream.swarm.draws`). So the engine runs the
 deciding robots one at a time (``one_by_one=True``: robot by robot) or all at once (the swarm)
 with the same poses at every step.
@@ -26,7 +26,6 @@ import math
 import numpy as np
 
 from dream import kernels, rules
-from dream._csr import spans
 from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
 from dream.robot import guard_distance, stopping
 from dream.sensors import seen_velocity
@@ -102,44 +101,36 @@ class Engine:
             due &= ~faults.crashed
         self.last[due] = clock[due]
         rows = np.flatnonzero(due)
-        if not len(rows):
-            return commands
-        reach = max((part.range for part in (self.robot.movement, self.robot.radio) if part is not None), default=0.0)
-        index = kernels.neighbours(x[:2].T, reach, rows=due)
-        batches = [rows[k : k + 1] for k in range(len(rows))] if self.one_by_one else [rows]
-        moving = commands.copy()  # what the sensors see: the commands before anyone decides now
-        said = [self._decide(t, b, x, moving, index, faults, commands) for b in batches]
-        if self.robot.radio is not None:
-            self._publish(t, [s for s in said if s is not None], faults)
-        return commands
-
-    def _decide(
-        self,
-        t: int,
-        rows: np.ndarray,
-        x: np.ndarray,
-        commands: np.ndarray,
-        index: tuple[np.ndarray, np.ndarray, np.ndarray],
-        faults: FaultState | None,
-        out: np.ndarray,
-    ) -> tuple[np.ndarray, dict[str, np.ndarray]] | None:
-        """Sense (seeing the others move by ``commands``), hear and decide for the robots ``rows``;
-        write their commands into ``out``. Returns what they said (their ids and fields), if anything."""
-        robot = self.robot
         rows = rows[self._odometry(t, rows, x, faults)]
         if not len(rows):
-            return None
-        indptr, indices, distances = index
-        counts = indptr[rows + 1] - indptr[rows]
-        entries = spans(indptr[rows], counts)
-        me = np.repeat(rows, counts)
-        others, gaps = indices[entries], distances[entries]
-        offsets = np.concatenate(([0], np.cumsum(counts)))
-        seen = self._sense(t, me, others, gaps, offsets, x, commands, faults)
-        heard = self._hear(t, me, others, gaps, offsets, faults)
-        view = View(
-            rows, t, self.belief[rows].copy(), seen, heard, {key: v[rows].copy() for key, v in self.memory.items()}
+            return commands
+        movement, radio = self.robot.movement, self.robot.radio
+        seen, heard = kernels.perceive(
+            x[:2].T,
+            x[2],
+            rows,
+            sight=None if movement is None else (movement.range, movement.fov, movement.direction),
+            radio_range=None if radio is None else radio.range,
+            talking=None if radio is None else self.sent_at >= 0,
         )
+        # What the sensors see of the others' motion: the commands before anyone decides now.
+        detections = self._sense(t, rows, seen, x, commands, faults)
+        inboxes = self._hear(t, rows, heard, faults)
+        batches = [(r, r + 1) for r in range(len(rows))] if self.one_by_one else [(0, len(rows))]
+        out = commands.copy()
+        said = [self._decide(t, rows[a:b], detections.rows(a, b), inboxes.rows(a, b), out) for a, b in batches]
+        if radio is not None:
+            self._publish(t, [s for s in said if s is not None], faults)
+        return out
+
+    def _decide(
+        self, t: int, rows: np.ndarray, seen: Neighbourhood, heard: Neighbourhood, out: np.ndarray
+    ) -> tuple[np.ndarray, dict[str, np.ndarray]] | None:
+        """The robots ``rows`` decide from what they perceive; their commands go into ``out``.
+        Returns what they said (their ids and fields), if anything."""
+        robot = self.robot
+        memory = {key: values[rows].copy() for key, values in self.memory.items()}
+        view = View(rows, t, self.belief[rows].copy(), seen, heard, memory)
         wished = np.asarray(robot.decide(view), dtype=np.float64)
         if wished.shape != (len(rows), 2) or not np.isfinite(wished).all():
             raise ValueError(
@@ -228,68 +219,61 @@ class Engine:
     def _sense(
         self,
         t: int,
-        me: np.ndarray,
-        others: np.ndarray,
-        gaps: np.ndarray,
-        offsets: np.ndarray,
+        rows: np.ndarray,
+        seen: kernels.Perceived,
         x: np.ndarray,
         commands: np.ndarray,
         faults: FaultState | None,
     ) -> Neighbourhood:
-        """The movement sensor's detections of ``others`` by ``me`` (one entry per pair within the
-        index's reach, rows cut by ``offsets``), as a neighbourhood."""
+        """The movement sensor's detections (what :func:`dream.kernels.perceive` found ``rows``
+        see), with the sensor's noise and the world's sensor faults, as a neighbourhood."""
         sensor = self.robot.movement
+        offsets, others, gaps, bearing = seen
         if sensor is None:
-            return Neighbourhood(np.zeros_like(offsets), {name: np.zeros(0) for name in (*DETECTION, "dx", "dy")})
-        keep = gaps <= sensor.range
-        bearing = np.arctan2(x[1, others] - x[1, me], x[0, others] - x[0, me])
-        if sensor.fov < 2 * math.pi:
-            relative = (bearing - (x[2, me] + sensor.direction) + math.pi) % (2 * math.pi) - math.pi
-            keep &= (np.abs(relative) <= sensor.fov / 2) | (gaps == 0)
-        keep[keep] = self._kept(t, me[keep], others[keep], faults)
-        me, others = me[keep], others[keep]
+            return Neighbourhood(offsets, {name: np.zeros(0) for name in (*DETECTION, "dx", "dy")})
+        me = np.repeat(rows, np.diff(offsets))
+        kept = self._kept(t, me, others, faults)
+        if not kept.all():
+            offsets = np.concatenate(([0], np.cumsum(kept)))[offsets]
+            me, others, gaps, bearing = me[kept], others[kept], gaps[kept], bearing[kept]
         vx, vy = seen_velocity(commands[:, others], x[2, others])
-        values = np.column_stack((gaps[keep], bearing[keep], vx, vy))
+        columns = {"distance": gaps, "bearing": bearing, "vx": vx, "vy": vy}
         sigma = math.hypot(sensor.noise, 0.0 if faults is None else faults.faults.sensor_noise)
         if sigma > 0:
             noise = draws.normal(self.seed, draws.DETECTION_NOISE, t, me[:, None], others[:, None], np.arange(4))
-            values += sigma * noise
-            values[:, 0] = np.maximum(values[:, 0], 0.0)  # a distance is never negative, noisy or not
-        columns = dict(zip(DETECTION, values.T))
+            columns = {name: columns[name] + sigma * noise[:, k] for k, name in enumerate(DETECTION)}
+            columns["distance"] = np.maximum(columns["distance"], 0.0)  # never negative, noisy or not
         columns["dx"] = columns["distance"] * np.cos(columns["bearing"])
         columns["dy"] = columns["distance"] * np.sin(columns["bearing"])
-        return Neighbourhood(np.concatenate(([0], np.cumsum(keep)))[offsets], columns)
+        return Neighbourhood(offsets, columns)
 
     # -- radio -------------------------------------------------------------------------------
-    def _hear(
-        self,
-        t: int,
-        me: np.ndarray,
-        others: np.ndarray,
-        gaps: np.ndarray,
-        offsets: np.ndarray,
-        faults: FaultState | None,
-    ) -> Neighbourhood:
-        """The messages ``me`` hear from ``others`` (pairs as in :meth:`_sense`), with losses."""
+    def _hear(self, t: int, rows: np.ndarray, heard: kernels.Perceived, faults: FaultState | None) -> Neighbourhood:
+        """The messages delivered to ``rows`` by the talking robots in range (what
+        :func:`dream.kernels.perceive` found), with the radio's and the world's losses."""
+        offsets, senders, gaps, _ = heard
         radio = self.robot.radio
         if radio is None:
-            return Neighbourhood(np.zeros_like(offsets), {"sender": np.zeros(0, dtype=np.int64)})
-        tried = (gaps <= radio.range) & (self.sent_at[others] >= 0)
-        through = tried.copy()
+            return Neighbourhood(offsets, {"sender": senders})
         f = None if faults is None else faults.faults
-        keep = (1.0 - radio.loss) * np.ones(len(me))
+        keep = 1.0 - radio.loss
         if f is not None:
             keep = keep * (1.0 - f.loss) * np.maximum(1.0 - f.distance_loss * gaps, 0.0)
-        lossy = tried & (keep < 1.0)
-        if lossy.any():
-            through[lossy] = draws.uniform(self.seed, draws.LOSS, t, me[lossy], others[lossy]) < keep[lossy]
-        if f is not None and f.burst is not None:
-            through[tried] &= ~self._burst(t, me[tried], others[tried], f.burst)
-        if faults is not None:
-            faults.messages_lost += int((tried & ~through).sum())
-        senders = others[through]
-        columns = {"sender": senders, **{key: board[senders] for key, board in self.board.items()}}
-        return Neighbourhood(np.concatenate(([0], np.cumsum(through)))[offsets], columns)
+        lossy = np.broadcast_to(keep < 1.0, senders.shape)
+        bursty = f is not None and f.burst is not None
+        if lossy.any() or bursty:
+            me = np.repeat(rows, np.diff(offsets))
+            through = np.ones(len(senders), dtype=bool)
+            if lossy.any():
+                chance = np.broadcast_to(keep, senders.shape)[lossy]
+                through[lossy] = draws.uniform(self.seed, draws.LOSS, t, me[lossy], senders[lossy]) < chance
+            if f is not None and f.burst is not None:
+                through &= ~self._burst(t, me, senders, f.burst)
+            if faults is not None:
+                faults.messages_lost += int((~through).sum())
+            offsets = np.concatenate(([0], np.cumsum(through)))[offsets]
+            senders = senders[through]
+        return Neighbourhood(offsets, {"sender": senders, **{key: board[senders] for key, board in self.board.items()}})
 
     def _burst(self, t: int, me: np.ndarray, others: np.ndarray, burst: tuple[float, float]) -> np.ndarray:
         """Each link's Gilbert-Elliott state after this message (True: in a loss burst)."""

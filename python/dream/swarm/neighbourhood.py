@@ -107,3 +107,10 @@ class Neighbourhood:
         keep = np.asarray(keep, dtype=bool)
         kept = np.concatenate(([0], np.cumsum(keep)))
         return Neighbourhood(kept[self.offsets], {name: column[keep] for name, column in self.columns.items()})
+
+    def rows(self, first: int, last: int) -> Neighbourhood:
+        """Rows ``first:last`` alone (the neighbourhood of some of the robots)."""
+        start, end = self.offsets[first], self.offsets[last]
+        return Neighbourhood(
+            self.offsets[first : last + 1] - start, {name: column[start:end] for name, column in self.columns.items()}
+        )
