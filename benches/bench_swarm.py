@@ -12,6 +12,7 @@ from __future__ import annotations
 import resource
 import sys
 import time
+from collections.abc import Callable
 
 import numpy as np
 
@@ -51,26 +52,36 @@ def scene(n: int) -> tuple[Engine, np.ndarray, np.ndarray]:
     return engine, x, commands
 
 
-def kernels_alone(engine: Engine, x: np.ndarray, commands: np.ndarray) -> float:
-    """The median time of the step's kernels on this step's inputs, called directly."""
+def kernels_alone(engine: Engine, x: np.ndarray) -> float:
+    """The median time of one step's kernels (perception, the radio mean's reductions, HRVO, the
+    unicycle conversion and limits) called directly on this step's inputs."""
     n = engine.n
-    positions = x[:2].T.copy()
-    index = kernels.neighbours(positions, 1.0)
-    indptr, indices, distances = index
-    seen = distances <= 0.5
-    offsets = np.concatenate(([0], np.cumsum(np.bincount(np.repeat(np.arange(n), np.diff(indptr))[seen], minlength=n))))
-    detections = np.column_stack((distances[seen], np.zeros(seen.sum()), np.zeros(seen.sum()), np.zeros(seen.sum())))
-    values = positions[indices]
+    positions, everyone = x[:2].T.copy(), np.arange(n)
+    talking = np.ones(n, dtype=bool)
+    (offsets, _, distances, bearings), heard = kernels.perceive(
+        positions, x[2], everyone, sight=(0.5, 2 * np.pi, 0.0), radio_range=1.0, talking=talking
+    )
+    detections = np.column_stack((distances, bearings, np.zeros(len(distances)), np.zeros(len(distances))))
+    bounds = engine.arena.shrunk(0.055)
 
     def run() -> None:
-        kernels.neighbours(positions, 1.0, rows=np.ones(n, dtype=bool))
-        kernels.segment_reduce(values, indptr, "sum")
-        kernels.hrvo_rows(
-            engine.dxi, np.zeros((n, 2)), positions, offsets, detections, safety=0.2, bounds=engine.arena.shrunk(0.055)
-        )
+        kernels.perceive(positions, x[2], everyone, sight=(0.5, 2 * np.pi, 0.0), radio_range=1.0, talking=talking)
+        for column in positions.T:
+            kernels.segment_reduce(column, heard[0], "sum", index=heard[1])
+        kernels.hrvo_rows(engine.dxi, np.zeros((n, 2)), positions, offsets, detections, safety=0.2, bounds=bounds)
         kernels.actuator_limit(kernels.dxi_to_dxu(engine.dxi.T, x, 0.8, 3.0))
 
     return median_seconds(run, repeat=5, min_time=0.0)
+
+
+def stepper(engine: Engine, x: np.ndarray, commands: np.ndarray) -> Callable[[], None]:
+    """One engine step per call, the clock going on."""
+    clock = iter(range(2, 10**9))
+
+    def step() -> None:
+        engine.step(next(clock), x, commands)
+
+    return step
 
 
 def main() -> None:
@@ -79,20 +90,13 @@ def main() -> None:
     print(f"{'robots':>9} {'step (ms)':>10} {'kernels (ms)':>13} {'engine per robot (us)':>22} {'robot-steps/s':>14}")
     for n in sizes:
         engine, x, commands = scene(n)
-        t = [2]
-
-        def step() -> None:
-            engine.step(t[0], x, commands)
-            t[0] += 1
-
-        whole = median_seconds(step, repeat=5, min_time=0.0)
-        alone = kernels_alone(engine, x, commands)
+        whole = median_seconds(stepper(engine, x, commands), repeat=5, min_time=0.0)
+        alone = kernels_alone(engine, x)
         own = (whole - alone) / n * 1e6
         print(f"{n:>9,} {whole * 1e3:>10.1f} {alone * 1e3:>13.1f} {own:>22.2f} {n / whole:>14,.0f}")
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    print(
-        f"peak RSS {rss:,.0f} MiB; {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; kernels: {dream.kernels.IMPLEMENTATION}"
-    )
+    when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    print(f"peak RSS {rss:,.0f} MiB; {when}; kernels: {dream.kernels.IMPLEMENTATION}")
 
 
 if __name__ == "__main__":

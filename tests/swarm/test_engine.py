@@ -137,7 +137,7 @@ class Recorder(SwarmRobot):
         return np.zeros(len(ids), dtype=np.int64) if self.starts is None else self.starts[ids]
 
     def decide(self, view: View) -> np.ndarray:
-        self.views.append((view.step, view.ids.copy(), {k: v.copy() for k, v in view.heard.columns.items()}))
+        self.views.append((view.step, view.ids.copy(), {k: view.heard[k].copy() for k in view.heard.names}))
         if self.radio is not None:
             view.send(**{key: view.ids * 1.0 + view.step / 1000 for key in self.radio.kinds})
         return np.zeros((len(view), 2))

@@ -27,7 +27,8 @@ pub struct Sight {
 }
 
 /// Ragged rows of seen or heard robots: row r is `ids[offsets[r]..offsets[r + 1]]`, with the
-/// distance and the bearing (world frame, from the perceiving robot towards the other) of each.
+/// distance of each and, for the seen ones, the bearing (world frame, from the perceiving robot
+/// towards the other; empty for the heard ones, whom no one needs the direction of).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Perceived {
     pub offsets: Vec<i64>,
@@ -37,26 +38,32 @@ pub struct Perceived {
 }
 
 impl Perceived {
-    fn from_rows(rows: Vec<Vec<(i64, f64, f64)>>) -> Self {
-        let total = rows.iter().map(Vec::len).sum();
-        let mut out = Perceived {
-            offsets: Vec::with_capacity(rows.len() + 1),
-            ids: Vec::with_capacity(total),
-            distances: Vec::with_capacity(total),
-            bearings: Vec::with_capacity(total),
-        };
-        out.offsets.push(0);
-        for row in rows {
-            for (j, distance, bearing) in row {
-                out.ids.push(j);
-                out.distances.push(distance);
-                out.bearings.push(bearing);
+    /// Appends one row, sorted by id, from `row` (which it empties).
+    fn push_row(&mut self, row: &mut Vec<(i64, f64, f64)>, bearings: bool) {
+        row.sort_unstable_by_key(|e| e.0);
+        for &(j, distance, bearing) in row.iter() {
+            self.ids.push(j);
+            self.distances.push(distance);
+            if bearings {
+                self.bearings.push(bearing);
             }
-            out.offsets.push(out.ids.len() as i64);
         }
-        out
+        self.offsets.push(self.ids.len() as i64);
+        row.clear();
+    }
+
+    /// Appends the rows of `part` (whose offsets start at 0 without the leading 0).
+    fn extend(&mut self, part: Perceived) {
+        let base = self.ids.len() as i64;
+        self.offsets.extend(part.offsets.iter().map(|o| o + base));
+        self.ids.extend_from_slice(&part.ids);
+        self.distances.extend_from_slice(&part.distances);
+        self.bearings.extend_from_slice(&part.bearings);
     }
 }
+
+/// Rows one task perceives for: enough to amortise a task, few enough to balance the cores.
+const CHUNK_ROWS: usize = 256;
 
 fn check_range(arg: &'static str, value: f64) -> Result<()> {
     if value.is_finite() && value >= 0.0 {
@@ -107,38 +114,48 @@ pub fn perceive(
     }
     let reach = sight.map_or(0.0, |s| s.range).max(radio.map_or(0.0, |r| r.0));
     let near = Near::new(xs, ys, reach);
-    let row = |scratch: &mut Vec<(usize, f64)>, i: usize| {
-        let (mut seen, mut heard) = (Vec::new(), Vec::new());
-        near.for_each(i, scratch, |j, offset, distance| {
-            let bearing = offset[1].atan2(offset[0]);
-            if let Some(s) = sight {
-                let ahead = s.fov >= TAU || distance == 0.0 || {
-                    wrap_angle(bearing - (headings[i] + s.direction)).abs() <= s.fov / 2.0
-                };
-                if distance <= s.range && ahead {
-                    seen.push((j as i64, distance, bearing));
+    // One task's rows, each row sorted by id; the offsets leave out the leading 0.
+    let chunk = |rows: &[i64]| {
+        let (mut seen, mut heard) = (Perceived::default(), Perceived::default());
+        let (mut scratch, mut seen_row, mut heard_row) = (Vec::new(), Vec::new(), Vec::new());
+        for &i in rows {
+            let i = i as usize;
+            near.for_each(i, &mut scratch, |j, offset, distance| {
+                if let Some(s) = sight {
+                    if distance <= s.range {
+                        let bearing = offset[1].atan2(offset[0]);
+                        let ahead = s.fov >= TAU
+                            || distance == 0.0
+                            || wrap_angle(bearing - (headings[i] + s.direction)).abs() <= s.fov / 2.0;
+                        if ahead {
+                            seen_row.push((j as i64, distance, bearing));
+                        }
+                    }
                 }
-            }
-            if let Some((range, talking)) = radio {
-                if distance <= range && talking[j] {
-                    heard.push((j as i64, distance, bearing));
+                if let Some((range, talking)) = radio {
+                    if distance <= range && talking[j] {
+                        heard_row.push((j as i64, distance, 0.0));
+                    }
                 }
-            }
-        });
-        seen.sort_unstable_by_key(|e| e.0);
-        heard.sort_unstable_by_key(|e| e.0);
+            });
+            seen.push_row(&mut seen_row, true);
+            heard.push_row(&mut heard_row, false);
+        }
         (seen, heard)
     };
-    let both: Vec<_> = if rows.len() >= PARALLEL_ROWS {
-        rows.par_iter()
-            .map_init(Vec::new, |scratch, &i| row(scratch, i as usize))
-            .collect()
+    let parts: Vec<(Perceived, Perceived)> = if rows.len() >= PARALLEL_ROWS {
+        rows.par_chunks(CHUNK_ROWS).map(chunk).collect()
     } else {
-        let mut scratch = Vec::new();
-        rows.iter().map(|&i| row(&mut scratch, i as usize)).collect()
+        vec![chunk(rows)]
     };
-    let (seen, heard): (Vec<_>, Vec<_>) = both.into_iter().unzip();
-    Ok((Perceived::from_rows(seen), Perceived::from_rows(heard)))
+    let (mut seen, mut heard) = (Perceived::default(), Perceived::default());
+    seen.offsets.push(0);
+    heard.offsets.push(0);
+    for (s, h) in parts {
+        seen.extend(s);
+        heard.extend(h);
+    }
+    Ok((seen, heard))
 }
 
 #[cfg(test)]

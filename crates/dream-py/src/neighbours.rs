@@ -83,7 +83,8 @@ pub fn far_from<'py>(
     Ok(far.into_pyarray(py))
 }
 
-/// Who the robots `rows` see and hear: `(seen, heard)`, each `(offsets, ids, distances, bearings)`.
+/// Who the robots `rows` see and hear: `(seen, heard)`, `(offsets, ids, distances, bearings)` and
+/// `(offsets, ids, distances)`.
 #[pyfunction]
 #[pyo3(signature = (positions, headings, rows, *, sight=None, radio_range=None, talking=None))]
 pub fn perceive<'py>(
@@ -94,7 +95,7 @@ pub fn perceive<'py>(
     sight: Option<(f64, f64, f64)>,
     radio_range: Option<f64>,
     talking: Option<Bound<'py, PyAny>>,
-) -> PyDreamResult<(Perception<'py>, Perception<'py>)> {
+) -> PyDreamResult<(Perception<'py>, CsrArrays<'py>)> {
     let p = points_of::<2>("positions", &positions)?;
     let n = p.len();
     let headings = vector_of("headings", &headings, Some(n))?;
@@ -108,15 +109,25 @@ pub fn perceive<'py>(
     let sight = sight.map(|(range, fov, direction)| Sight { range, fov, direction });
     let (xs, ys): (Vec<f64>, Vec<f64>) = p.iter().map(|q| (q[0], q[1])).unzip();
     let (seen, heard) = py.detach(|| core_perceive(&xs, &ys, &headings, &rows, sight, radio))?;
-    let out = |c: Perceived| {
+    let Perceived {
+        offsets,
+        ids,
+        distances,
+        bearings,
+    } = seen;
+    Ok((
         (
-            c.offsets.into_pyarray(py),
-            c.ids.into_pyarray(py),
-            c.distances.into_pyarray(py),
-            c.bearings.into_pyarray(py),
-        )
-    };
-    Ok((out(seen), out(heard)))
+            offsets.into_pyarray(py),
+            ids.into_pyarray(py),
+            distances.into_pyarray(py),
+            bearings.into_pyarray(py),
+        ),
+        (
+            heard.offsets.into_pyarray(py),
+            heard.ids.into_pyarray(py),
+            heard.distances.into_pyarray(py),
+        ),
+    ))
 }
 
 type Perception<'py> = (

@@ -108,8 +108,8 @@ def perceive(
     talking: np.ndarray | None = None,
 ) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
     """Who the robots ``rows`` see (``sight``: range, fov, direction) and hear (within
-    ``radio_range``, among the ``talking``): ``(seen, heard)``, each ``(offsets, ids, distances,
-    bearings)`` over those rows, ids increasing in each row."""
+    ``radio_range``, among the ``talking``): ``(seen, heard)``, ``(offsets, ids, distances,
+    bearings)`` and ``(offsets, ids, distances)`` over those rows, ids increasing in each row."""
     n = len(positions)
     reach = max(0.0 if sight is None else sight[0], 0.0 if radio_range is None else radio_range)
     asked = np.zeros(n, dtype=bool)
@@ -130,11 +130,11 @@ def perceive(
             keep = (d <= radio_range) & talking[js]
             heard.append((js[keep], d[keep], bearing[keep]))
 
-    def csr(parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]]) -> tuple[np.ndarray, ...]:
+    def csr(parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]], columns: int) -> tuple[np.ndarray, ...]:
         counts = [len(p[0]) for p in parts] if parts else [0] * len(rows)
         offsets = np.concatenate(([0], np.cumsum(counts))).astype(np.int64)
         if not parts:
-            return offsets, np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0)
-        return (offsets, *(np.concatenate([p[k] for p in parts]) for k in range(3)))
+            return offsets, np.zeros(0, dtype=np.int64), *(np.zeros(0) for _ in range(columns - 1))
+        return (offsets, *(np.concatenate([p[k] for p in parts]) for k in range(columns)))
 
-    return csr(seen), csr(heard)
+    return csr(seen, 3), csr(heard, 2)

@@ -17,10 +17,13 @@ from dream._checks import FloatArray
 _OPS: dict[str, Callable[..., Any]] = {"sum": np.sum, "mean": np.mean, "min": np.nanmin, "max": np.nanmax}
 
 
-def segment_reduce(values: FloatArray, offsets: np.ndarray, op: str) -> FloatArray:
-    """``op`` ("sum", "mean", "min", "max") of each row's entries of ``values`` ``(k, w)``: ``(m, w)``."""
+def segment_reduce(values: FloatArray, offsets: np.ndarray, op: str, index: np.ndarray | None = None) -> FloatArray:
+    """``op`` ("sum", "mean", "min", "max") of each row's entries of ``values`` ``(k, w)``, or of
+    its rows ``index`` ``(k,)`` (entry e is ``values[index[e]]``): ``(m, w)``."""
     if op not in _OPS:
         raise ValueError(f"`op` must be sum, mean, min or max, got {op!r}")
+    if index is not None:
+        values = values[index]
     rows, width = len(offsets) - 1, values.shape[1]
     out = np.full((rows, width), 0.0 if op == "sum" else np.nan)
     for r in range(rows):

@@ -27,7 +27,7 @@ from dream.kernels._dynamics import (
     wheel_speeds,
 )
 from dream.kernels._hrvo import HrvoPlanner, hrvo, hrvo_rows
-from dream.kernels._neighbours import Perceived, far_from, neighbours, neighbours_of, perceive
+from dream.kernels._neighbours import Heard, Perceived, far_from, neighbours, neighbours_of, perceive
 from dream.kernels._obstacles import obstacle_agents, virtual_agents
 from dream.kernels._raycast import distance_rays
 from dream.kernels._reduce import REDUCTIONS, segment_any, segment_nearest, segment_reduce
@@ -51,6 +51,8 @@ __all__ = [
     "neighbours_of",
     "far_from",
     "perceive",
+    "Perceived",
+    "Heard",
     "HrvoPlanner",
     "hrvo",
     "hrvo_rows",

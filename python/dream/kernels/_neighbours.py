@@ -108,8 +108,10 @@ def far_from(points: Any, others: Any, distance: float, *, offsets: tuple[Any, A
     return implementation("far_from")(p, q, distance, cuts, theirs)
 
 
-#: One perceived neighbourhood: ``(offsets, ids, distances, bearings)`` over the asked rows.
+#: What the asked robots see: ``(offsets, ids, distances, bearings)`` over their rows.
 Perceived = tuple[np.ndarray, np.ndarray, FloatArray, FloatArray]
+#: What they hear: ``(offsets, ids, distances)``.
+Heard = tuple[np.ndarray, np.ndarray, FloatArray]
 
 
 def perceive(
@@ -120,15 +122,15 @@ def perceive(
     sight: tuple[float, float, float] | None = None,
     radio_range: float | None = None,
     talking: Any = None,
-) -> tuple[Perceived, Perceived]:
+) -> tuple[Perceived, Heard]:
     """Who the robots ``rows`` ``(m,)`` (ids) see and hear, in one pass over their neighbours.
 
     Robot j is seen by robot i when it is within ``sight = (range, fov, direction)`` (m, rad,
     rad: the field of view about i's heading turned by ``direction``; a co-located robot is
     always seen), and heard when it is within ``radio_range`` (m) and ``talking[j]``. Returns
-    ``(seen, heard)``, each ``(offsets (m + 1,), ids, distances, bearings)``: row r's entries
-    are ``offsets[r]:offsets[r + 1]``, ids increasing; bearings are world-frame directions from
-    the perceiving robot towards the other. A row does not depend on which other rows are asked.
+    ``(seen, heard)``: ``(offsets (m + 1,), ids, distances, bearings)`` and ``(offsets, ids,
+    distances)``; row r's entries are ``offsets[r]:offsets[r + 1]``, ids increasing; bearings
+    are world-frame directions from the perceiving robot towards the other. A row does not depend on which other rows are asked.
     """
     p = as_array(positions, "positions", (None, 2))
     n = p.shape[0]

@@ -8,8 +8,9 @@ HRVO safety layer, the unicycle conversion, the actuator limits and the motion g
 that do not decide keep their last command.
 
 What the robots deciding now perceive comes from one pass over their neighbours in the true
-poses (:func:`dream.kernels.perceive`, parallel in Rust); every random draw (noise, dropout, loss, bursts, jitter, lies) is a
-counter-based hash of who, when and what (:mod:`dream.swarm.draws`). So the engine runs the
+poses (:func:`dream.kernels.perceive`, parallel in Rust); every random draw (noise, dropout,
+loss, bursts, jitter, lies) is a counter-based hash of who, when and what
+(:mod:`dream.swarm.draws`). So the engine runs the
 deciding robots one at a time (``one_by_one=True``: robot by robot) or all at once (the swarm)
 with the same poses at every step.
 
@@ -248,15 +249,15 @@ class Engine:
         return Neighbourhood(offsets, columns)
 
     # -- radio -------------------------------------------------------------------------------
-    def _hear(self, t: int, rows: np.ndarray, heard: kernels.Perceived, faults: FaultState | None) -> Neighbourhood:
+    def _hear(self, t: int, rows: np.ndarray, heard: kernels.Heard, faults: FaultState | None) -> Neighbourhood:
         """The messages delivered to ``rows`` by the talking robots in range (what
         :func:`dream.kernels.perceive` found), with the radio's and the world's losses."""
-        offsets, senders, gaps, _ = heard
+        offsets, senders, gaps = heard
         radio = self.robot.radio
         if radio is None:
             return Neighbourhood(offsets, {"sender": senders})
         f = None if faults is None else faults.faults
-        keep = 1.0 - radio.loss
+        keep: float | np.ndarray = 1.0 - radio.loss
         if f is not None:
             keep = keep * (1.0 - f.loss) * np.maximum(1.0 - f.distance_loss * gaps, 0.0)
         lossy = np.broadcast_to(keep < 1.0, senders.shape)
@@ -273,7 +274,7 @@ class Engine:
                 faults.messages_lost += int((~through).sum())
             offsets = np.concatenate(([0], np.cumsum(through)))[offsets]
             senders = senders[through]
-        return Neighbourhood(offsets, {"sender": senders, **{key: board[senders] for key, board in self.board.items()}})
+        return Neighbourhood(offsets, {"sender": senders}, senders, self.board)
 
     def _burst(self, t: int, me: np.ndarray, others: np.ndarray, burst: tuple[float, float]) -> np.ndarray:
         """Each link's Gilbert-Elliott state after this message (True: in a loss burst)."""
