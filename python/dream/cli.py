@@ -7,6 +7,7 @@
     dream run hrvo-circle -n 2000 --swarm --backend fast   # the whole swarm decides in one call
     dream run hrvo-circle -n 10000 --swarm --checkpoint big.ckpt   # saved as it goes...
     dream resume big.ckpt                                # ...and resumed where it stopped
+    dream resume theirs.ckpt --trust                     # a colleague's: loading a checkpoint runs its code
     dream new my_experiment                              # a starter file that runs as is
     dream bench                                          # the repository's benches/
 
@@ -97,6 +98,11 @@ def _parser() -> argparse.ArgumentParser:
     resumer = commands.add_parser("resume", help="go on with a run saved by `dream run --checkpoint PATH`")
     resumer.add_argument("checkpoint", metavar="PATH", help="the checkpoint (it is saved again as the run goes on)")
     resumer.add_argument("--steps", type=_whole(1), default=None, help="a new step cap (default: the run's own)")
+    resumer.add_argument(
+        "--trust",
+        action="store_true",
+        help="resume a checkpoint not signed with your key (a colleague's): loading it runs its code",
+    )
     for sub in (runner, resumer):  # what a run prints, records and saves
         sub.add_argument("--json", metavar="PATH", help="also write the metrics as JSON")
         sub.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -305,14 +311,15 @@ def _resume(args: argparse.Namespace) -> int:
     if args.json:
         _writable(args.json, "--json")
     try:
-        n = None if args.focus is None else load(args.checkpoint).stepper.exp.n  # for --focus's check
+        n = None if args.focus is None else load(args.checkpoint, trust=args.trust).stepper.exp.n  # for --focus
         return _drive(
             args,
             n,
             lambda recorder, progress: resume(
-                args.checkpoint, args.steps, record=recorder, progress=progress, checkpoint_every=args.checkpoint_every
+                args.checkpoint, args.steps, record=recorder, progress=progress,
+                checkpoint_every=args.checkpoint_every, trust=args.trust,
             ),
-        )
+        )  # fmt: skip
     except ValueError as err:  # the checkpoint, read for --focus
         raise UsageError(str(err)) from None
     except OSError as err:
