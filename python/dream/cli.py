@@ -158,7 +158,9 @@ def _parser() -> argparse.ArgumentParser:
         "export", help="write a folder the Robotarium lab runs: main.py in its loop shape + pure-Python DREAM"
     )
     exporter.add_argument("experiment", help=f"one of {', '.join(sorted(EXPERIMENTS))}, or a .py file")
-    exporter.add_argument("-o", "--output", metavar="DIR", required=True, help="the bundle's folder (new or empty)")
+    exporter.add_argument(
+        "-o", "--output", metavar="DIR", required=True, help="the bundle's folder (new, empty, or a previous export)"
+    )
     exporter.add_argument(
         "-n", type=_whole(1), default=None, help=f"number of robots, at most {export.LAB_MAX_ROBOTS} (the lab's)"
     )
@@ -166,7 +168,9 @@ def _parser() -> argparse.ArgumentParser:
     exporter.add_argument(
         "--param", action="append", default=[], metavar="NAME=VALUE", help="set a parameter (repeatable)"
     )
-    exporter.add_argument("--force", action="store_true", help="replace DIR if it is not empty")
+    exporter.add_argument(
+        "--force", action="store_true", help=f"replace DIR if it holds a previous export (a {export.MARKER} file)"
+    )
     exporter.set_defaults(handler=export.command)
     return parser
 
