@@ -7,6 +7,7 @@
     dream run hrvo-circle -n 2000 --swarm --backend fast   # the whole swarm decides in one call
     dream run hrvo-circle -n 10000 --swarm --checkpoint big.ckpt   # saved as it goes...
     dream resume big.ckpt                                # ...and resumed where it stopped
+    dream resume theirs.ckpt --trust                     # a colleague's: loading a checkpoint runs its code
     dream new my_experiment                              # a starter file that runs as is
     dream bench                                          # the repository's benches/
 
@@ -97,6 +98,11 @@ def _parser() -> argparse.ArgumentParser:
     resumer = commands.add_parser("resume", help="go on with a run saved by `dream run --checkpoint PATH`")
     resumer.add_argument("checkpoint", metavar="PATH", help="the checkpoint (it is saved again as the run goes on)")
     resumer.add_argument("--steps", type=_whole(1), default=None, help="a new step cap (default: the run's own)")
+    resumer.add_argument(
+        "--trust",
+        action="store_true",
+        help="resume a checkpoint not signed with your key (a colleague's): loading it runs its code",
+    )
     for sub in (runner, resumer):  # what a run prints, records and saves
         sub.add_argument("--json", metavar="PATH", help="also write the metrics as JSON")
         sub.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -152,7 +158,9 @@ def _parser() -> argparse.ArgumentParser:
         "export", help="write a folder the Robotarium lab runs: main.py in its loop shape + pure-Python DREAM"
     )
     exporter.add_argument("experiment", help=f"one of {', '.join(sorted(EXPERIMENTS))}, or a .py file")
-    exporter.add_argument("-o", "--output", metavar="DIR", required=True, help="the bundle's folder (new or empty)")
+    exporter.add_argument(
+        "-o", "--output", metavar="DIR", required=True, help="the bundle's folder (new, empty, or a previous export)"
+    )
     exporter.add_argument(
         "-n", type=_whole(1), default=None, help=f"number of robots, at most {export.LAB_MAX_ROBOTS} (the lab's)"
     )
@@ -160,7 +168,9 @@ def _parser() -> argparse.ArgumentParser:
     exporter.add_argument(
         "--param", action="append", default=[], metavar="NAME=VALUE", help="set a parameter (repeatable)"
     )
-    exporter.add_argument("--force", action="store_true", help="replace DIR if it is not empty")
+    exporter.add_argument(
+        "--force", action="store_true", help=f"replace DIR if it holds a previous export (a {export.MARKER} file)"
+    )
     exporter.set_defaults(handler=export.command)
     return parser
 
@@ -305,14 +315,15 @@ def _resume(args: argparse.Namespace) -> int:
     if args.json:
         _writable(args.json, "--json")
     try:
-        n = None if args.focus is None else load(args.checkpoint).stepper.exp.n  # for --focus's check
+        n = None if args.focus is None else load(args.checkpoint, trust=args.trust).stepper.exp.n  # for --focus
         return _drive(
             args,
             n,
             lambda recorder, progress: resume(
-                args.checkpoint, args.steps, record=recorder, progress=progress, checkpoint_every=args.checkpoint_every
+                args.checkpoint, args.steps, record=recorder, progress=progress,
+                checkpoint_every=args.checkpoint_every, trust=args.trust,
             ),
-        )
+        )  # fmt: skip
     except ValueError as err:  # the checkpoint, read for --focus
         raise UsageError(str(err)) from None
     except OSError as err:

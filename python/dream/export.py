@@ -64,6 +64,8 @@ LEFT_OUT = {
 #: Public names of left-out modules that ``from dream import *`` brings into a script.
 LEFT_OUT_NAMES = {"DistanceSensor": "onboard", "EncoderSensor": "onboard", "ImuSensor": "onboard", "sweep": "sweep"}
 
+#: The file every bundle holds: ``--force`` replaces only a folder with it, a previous export.
+MARKER = ".dream-export"
 PACKAGE = Path(__file__).resolve().parent
 DREAM_FILES = "DREAM's pure-Python package (without the compiled extension: its kernels run on NumPy)"
 
@@ -295,7 +297,8 @@ def export(
     params : mapping, optional
         Parameter values (Python values, or text as on the command line).
     force : bool
-        Replace ``output`` if it is a folder that is not empty.
+        Replace ``output`` if it holds a previous export (its :data:`MARKER` file). Whatever
+        ``force``, the working folder, a folder above it and the home folder are never replaced.
 
     Returns
     -------
@@ -371,6 +374,10 @@ def export(
     folder = Path(tempfile.mkdtemp(prefix=f".{target.name}-", dir=target.parent))
     try:
         (folder / "main.py").write_text(text, encoding="utf-8")
+        (folder / MARKER).write_text(
+            f"A bundle written by DREAM {_version()}'s `dream export`: `--force` replaces this folder.\n",
+            encoding="utf-8",
+        )
         if script is not None:
             shutil.copyfile(script, folder / _bundled_name(script))
         _copy_package(folder / "dream")
@@ -393,16 +400,30 @@ def _bundled_name(script: Path) -> str:
 
 
 def _target(output: Path, force: bool) -> Path:
+    """The bundle's folder, ``output`` resolved, once it is sure that replacing it loses nothing:
+    a new or empty folder, or with ``force`` a previous export, never the working folder, a
+    folder above it or the home folder."""
     if output.exists() and not output.is_dir():
         raise ExportError(f"-o {output}: is a file; give a folder")
-    if output.is_dir() and any(output.iterdir()) and not force:
-        raise ExportError(f"-o {output}: exists and is not empty; choose another folder or pass --force")
-    parent = output.resolve().parent
+    target = output.resolve()
+    if target.is_dir():
+        if Path.cwd().resolve().is_relative_to(target):
+            raise ExportError(f"-o {output}: is the working folder or one above it; give a new folder's name")
+        if target == Path.home().resolve():
+            raise ExportError(f"-o {output}: is the home folder; give a new folder's name")
+        if any(target.iterdir()) and not (target / MARKER).is_file():
+            raise ExportError(
+                f"-o {output}: exists and is not empty, and holds no previous export (no {MARKER} file); choose "
+                "another folder"
+            )
+        if any(target.iterdir()) and not force:
+            raise ExportError(f"-o {output}: holds a previous export; pass --force to replace it")
+    parent = target.parent
     if not parent.is_dir():
         raise ExportError(f"-o {output}: the folder {parent} does not exist")
     if not os.access(parent, os.W_OK):
         raise ExportError(f"-o {output}: the folder {parent} is not writable")
-    return output.resolve()
+    return target
 
 
 def _replace(folder: Path, target: Path) -> None:

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import hashlib
+import hmac
 import json
 import os
 import pickle
+import re
 import signal
+import stat
 import subprocess
 import sys
 import threading
@@ -14,6 +18,7 @@ import numpy as np
 import pytest
 
 import dream
+from dream.cli import main
 from dream.experiments import checkpoint as checkpoints
 from dream.experiments.checkpoint import CheckpointError
 
@@ -139,25 +144,160 @@ def test_bad_checkpoints_are_refused_with_what_is_wrong(tmp_path):
     other.write_bytes(b"hello\n")
     with pytest.raises(CheckpointError, match="other.ckpt is not a DREAM checkpoint"):
         dream.resume(other)
+    other.write_bytes(b"DREAM-CHECKPOINT 1\n{}\n")  # the unsigned format of DREAM before 30
+    with pytest.raises(CheckpointError, match="other.ckpt: an unsigned checkpoint of an older DREAM"):
+        dream.resume(other)
     path = tmp_path / "run.ckpt"
     dream.run("hrvo-circle", n=4, backend="fast", steps=5, checkpoint=path)
-    magic, _, body = path.read_bytes().partition(b"\n")
-    header, _, data = body.partition(b"\n")
-    path.write_bytes(magic + b"\n" + header.replace(b'"version": "', b'"version": "0.0.0-old') + b"\n" + data)
-    with pytest.raises(CheckpointError, match=r"written by DREAM 0\.0\.0-old.*; this is DREAM"):
-        dream.resume(path)
-    path.write_bytes(magic + b"\n" + header + b"\n" + data[: len(data) // 2])
-    with pytest.raises(CheckpointError, match="cannot read the checkpoint"):
-        dream.resume(path)
-    path.write_bytes(magic + b"\n" + header + b"\n" + pickle.dumps({"not": "a run"}))
-    with pytest.raises(CheckpointError, match="is not a DREAM checkpoint"):
-        dream.resume(path)
+    magic, signature, header, data = path.read_bytes().split(b"\n", 3)
+    # Each file changed after its save, resumed as trusted: the checks after the signature's.
+    old = header.replace(b'"version": "', b'"version": "0.0.0-old')
+    for changed, pickled, message in (
+        (old, data, r"written by DREAM 0\.0\.0-old.*; this is DREAM"),
+        (b"{not json", data, "damaged checkpoint header"),
+        (header, data[: len(data) // 2], "cannot read the checkpoint"),
+        (header, pickle.dumps({"not": "a run"}), "is not a DREAM checkpoint"),
+    ):
+        path.write_bytes(b"\n".join([magic, signature, changed, pickled]))
+        with pytest.raises(CheckpointError, match=message), pytest.warns(RuntimeWarning, match="resumed as trusted"):
+            dream.resume(path, trust=True)
     with pytest.raises(ValueError, match="is a folder"):
         dream.run("hrvo-circle", n=4, backend="fast", checkpoint=tmp_path)
     with pytest.raises(ValueError, match="nowhere does not exist"):
         dream.run("hrvo-circle", n=4, backend="fast", checkpoint=tmp_path / "nowhere" / "run.ckpt")
     with pytest.raises(ValueError, match="checkpoint_every must be an integer >= 1"):
         dream.run("hrvo-circle", n=4, backend="fast", checkpoint=path, checkpoint_every=0)
+
+
+# -- signatures: a checkpoint is code, so only the user's own (or a trusted file) is loaded ------
+class Marker:
+    """Unpickled, it writes its marker file: what a crafted checkpoint could do."""
+
+    def __init__(self, marker):
+        self.marker = str(marker)
+
+    def __reduce__(self):
+        return exec, (f"open({self.marker!r}, 'w').write('ran')",)
+
+
+def _crafted(path, source=None, data=b"", magic=checkpoints.MAGIC, signature=b"0" * 64, key=None):
+    """A checkpoint file as an attacker writes it: a header naming ``source``, the pickle ``data``,
+    and a made-up signature (or one by another ``key``, or none)."""
+    header = json.dumps({"version": dream.__version__, "source": source, "digest": None}).encode() + b"\n"
+    if key is not None:
+        signature = hmac.new(key, magic + header + data, hashlib.sha256).hexdigest().encode()
+    path.write_bytes(magic + (b"" if signature is None else signature + b"\n") + header + data)
+    return path
+
+
+def test_a_crafted_pickle_is_refused_before_it_runs(tmp_path, capsys):
+    marker = tmp_path / "marker"
+    data = pickle.dumps(Marker(marker))
+    for name, extra, said in (
+        (
+            "old-format.ckpt",
+            {"magic": b"DREAM-CHECKPOINT 1\n", "signature": None},
+            "an unsigned checkpoint",
+        ),  # no signature
+        ("made-up.ckpt", {}, "resume only a file you trust, with --trust"),  # a signature that is no HMAC
+        ("other-key.ckpt", {"key": os.urandom(32)}, "with --trust"),  # an HMAC, with a key not the user's
+    ):
+        path = _crafted(tmp_path / name, data=data, **extra)
+        with pytest.raises(CheckpointError, match=re.escape(said)):
+            dream.resume(path)
+        assert main(["resume", str(path), "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and err.startswith(f"dream: error: {path}") and said in err
+        assert not marker.exists()
+
+
+def test_a_header_naming_a_python_file_is_refused_before_the_import(tmp_path, capsys):
+    marker, evil = tmp_path / "marker", tmp_path / "evil_experiment.py"
+    evil.write_text(f"open({str(marker)!r}, 'w').write('ran')\n")
+    path = _crafted(tmp_path / "run.ckpt", source=str(evil), data=pickle.dumps(None))
+    with pytest.raises(CheckpointError, match="signature does not match your checkpoint key .*, with --trust"):
+        dream.resume(path)
+    assert main(["resume", str(path), "--no-progress"]) == 2
+    assert "signature does not match" in capsys.readouterr().err
+    assert not marker.exists() and dream.experiments.files.module_name(evil) not in sys.modules
+
+
+def test_a_checkpoint_changed_by_one_byte_is_refused(tmp_path):
+    path = tmp_path / "run.ckpt"
+    dream.run("hrvo-circle", n=4, backend="fast", steps=5, checkpoint=path)
+    saved = path.read_bytes()
+    header = saved.index(b"\n", len(checkpoints.MAGIC)) + 1
+    for at in (len(checkpoints.MAGIC), header + 3, header + 100, (header + len(saved)) // 2, len(saved) - 1):
+        changed = bytearray(saved)
+        changed[at] ^= 0x01
+        path.write_bytes(changed)
+        with pytest.raises(CheckpointError, match="signature does not match"):
+            checkpoints.load(path)
+    for changed in (saved + b"\0", saved[:-1]):
+        path.write_bytes(changed)
+        with pytest.raises(CheckpointError, match="signature does not match"):
+            checkpoints.load(path)
+    path.write_bytes(saved)
+    assert checkpoints.load(path).step == 5
+
+
+def test_a_colleagues_checkpoint_resumes_only_with_trust_and_a_warning(tmp_path, monkeypatch, capsys):
+    path, metrics = tmp_path / "theirs.ckpt", tmp_path / "m.json"
+    common = dict(n=10, seed=3, backend="fast", trace=True)
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "colleague"))
+    dream.run("hrvo-circle", steps=100, checkpoint=path, **common)
+    theirs = path.read_bytes()
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "me"))
+    with pytest.raises(CheckpointError, match="signature does not match"):
+        dream.resume(path, steps=250)
+    assert main(["resume", str(path), "--steps", "250", "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "resume only a file you trust, with --trust" in err
+    whole = dream.run("hrvo-circle", steps=250, **common)
+    with pytest.warns(RuntimeWarning, match=r"theirs\.ckpt: its signature does not match .* resumed as trusted"):
+        rest = dream.resume(path, steps=250, trust=True)
+    np.testing.assert_array_equal(rest.trace, whole.trace)  # the same steps as the uninterrupted run
+    assert checkpoints.load(path).step == 250  # saved again, with the user's own key
+    path.write_bytes(theirs)
+    with pytest.warns(RuntimeWarning, match="resumed as trusted"):
+        assert main(["resume", str(path), "--trust", "--steps", "250", "--no-progress", "--json", str(metrics)]) == 0
+    assert json.loads(metrics.read_text())["measures"] == whole.measures
+
+
+def test_the_key_is_made_once_with_mode_0600_in_the_config_folder(tmp_path, monkeypatch):
+    monkeypatch.setenv("HOME", str(tmp_path))
+    monkeypatch.setenv("XDG_CONFIG_HOME", "relative/ignored")  # XDG: only an absolute path counts
+    key = tmp_path / ".config" / "dream" / "checkpoint.key"
+    previous = os.umask(0)  # the key's mode is 0600 whatever the umask
+    try:
+        dream.run("hrvo-circle", n=4, backend="fast", steps=2, checkpoint=tmp_path / "run.ckpt")
+    finally:
+        os.umask(previous)
+    assert checkpoints.key_path() == key and stat.S_IMODE(key.stat().st_mode) == 0o600
+    made = key.read_text()
+    assert re.fullmatch(r"[0-9a-f]{64}\n", made)
+    dream.run("hrvo-circle", n=4, backend="fast", steps=2, checkpoint=tmp_path / "run.ckpt")
+    assert key.read_text() == made and checkpoints.load(tmp_path / "run.ckpt").step == 2
+    assert os.listdir(key.parent) == ["checkpoint.key"]  # no temporary left
+    key.write_text("not a key\n")
+    with pytest.raises(CheckpointError, match="checkpoint.key is not a checkpoint key"):
+        dream.run("hrvo-circle", n=4, backend="fast", steps=2, checkpoint=tmp_path / "run.ckpt")
+
+
+def test_processes_making_the_key_at_once_all_get_the_one_key(tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path))
+    code = "from dream.experiments.checkpoint import _key; print(flush=True); input(); print(_key().hex())"
+    racers = [subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+              for _ in range(4)]  # fmt: skip
+    for racer in racers:  # each has imported DREAM and waits for a line
+        assert racer.stdout.readline() == "\n"
+    for racer in racers:  # then they make the key at once
+        racer.stdin.write("go\n")
+        racer.stdin.close()
+    keys = {racer.stdout.read() for racer in racers}
+    assert [racer.wait() for racer in racers] == [0] * 4
+    assert len(keys) == 1 and (tmp_path / "dream" / "checkpoint.key").read_text() == keys.pop()
+    assert os.listdir(tmp_path / "dream") == ["checkpoint.key"]
 
 
 STARTER = """
@@ -214,8 +354,6 @@ def test_a_changed_experiment_file_is_resumed_with_a_warning(tmp_path):
 
 def test_dream_resume_records_the_rest_of_the_run_to_a_video(tmp_path):
     path, video = tmp_path / "run.ckpt", tmp_path / "rest.gif"
-    from dream.cli import main
-
     assert main(["run", "hrvo-circle", "-n", "4", "--backend", "fast", "--steps", "20", "--checkpoint", str(path),
                  "--no-progress"]) == 0  # fmt: skip
     assert main(["resume", str(path), "--steps", "30", "--video", str(video), "--no-progress"]) == 0

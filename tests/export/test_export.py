@@ -188,14 +188,23 @@ def test_export_refuses_bad_input_in_one_line(tmp_path, capsys, args, message):
 
 
 @pytest.mark.filterwarnings("ignore::dream.export.ExportWarning")
-def test_export_keeps_a_non_empty_folder_unless_forced_and_leaves_nothing_half_written(tmp_path, capsys, monkeypatch):
-    out = tmp_path / "out"
-    out.mkdir()
-    (out / "notes.txt").write_text("mine")
-    assert cli.main(["export", "hrvo-circle", "-o", str(out)]) == 2
-    assert "exists and is not empty" in capsys.readouterr().err
-    assert cli.main(["export", "hrvo-circle", "-o", str(out / "notes.txt")]) == 2
+def test_force_replaces_only_a_previous_export_and_a_failed_export_keeps_it(tmp_path, capsys, monkeypatch):
+    notes = tmp_path / "notes"
+    notes.mkdir()
+    (notes / "notes.txt").write_text("mine")
+    for force in ([], ["--force"]):
+        assert cli.main(["export", "hrvo-circle", "-o", str(notes), *force]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "exists and is not empty, and holds no previous export (no .dream-export" in err
+    assert [p.name for p in notes.iterdir()] == ["notes.txt"]
+    assert cli.main(["export", "hrvo-circle", "-o", str(notes / "notes.txt")]) == 2
     assert "is a file" in capsys.readouterr().err
+    out = tmp_path / "out"
+    assert cli.main(["export", "hrvo-circle", "-o", str(out)]) == 0
+    assert (out / export.MARKER).is_file()
+    assert cli.main(["export", "hrvo-circle", "-o", str(out)]) == 2
+    assert "holds a previous export; pass --force to replace it" in capsys.readouterr().err
+    (out / "stale.py").write_text("")
 
     def broken(destination):
         (destination / "half.py").parent.mkdir()
@@ -205,11 +214,41 @@ def test_export_keeps_a_non_empty_folder_unless_forced_and_leaves_nothing_half_w
     monkeypatch.setattr(export, "_copy_package", broken)
     with pytest.raises(OSError, match="disk full"):
         export.export("hrvo-circle", out, force=True)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"] and [p.name for p in out.iterdir()] == ["notes.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes", "out"] and (out / "stale.py").exists()
     monkeypatch.undo()
     assert cli.main(["export", "hrvo-circle", "-o", str(out), "--force", "-n", "12", "--seed", "4"]) == 0
     assert "dream: warning: hrvo-circle's robots start 0.20 m apart" in capsys.readouterr().err
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"] and not (out / "notes.txt").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes", "out"] and not (out / "stale.py").exists()
     main = (out / "main.py").read_text()
     assert "\nN = 12\nSEED = 4\n" in main and "EXPERIMENT = 'hrvo-circle'" in main
     assert "number_of_robots=N, show_figure=SHOW" in main
+
+
+@pytest.mark.parametrize(
+    ("output", "said"),
+    [
+        (".", "is the working folder or one above it"),
+        ("..", "is the working folder or one above it"),
+        ("{tmp}", "is the working folder or one above it"),
+        ("/", "is the working folder or one above it"),
+        ("{tmp}/home", "is the home folder"),
+    ],
+    ids=["dot", "dot-dot", "above", "root", "home"],
+)
+def test_export_never_replaces_the_working_folder_a_folder_above_it_or_home(
+    tmp_path, monkeypatch, capsys, output, said
+):
+    home, work = tmp_path / "home", tmp_path / "work" / "here"
+    work.mkdir(parents=True)
+    home.mkdir()
+    for folder in (work, work.parent, tmp_path, home):  # a marker does not make them bundles
+        (folder / export.MARKER).write_text("")
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.chdir(work)
+    before = sorted(tmp_path.rglob("*"))
+    output = output.format(tmp=tmp_path)
+    for force in ([], ["--force"]):
+        assert cli.main(["export", "hrvo-circle", "-o", output, *force]) == 2
+        err = capsys.readouterr().err
+        assert err == f"dream: error: -o {output}: {said}; give a new folder's name\n"
+    assert sorted(tmp_path.rglob("*")) == before

@@ -126,6 +126,7 @@ def resume(
     record: Callable[[Frame], None] | None = None,
     progress: Progress | None = None,
     checkpoint_every: int | None = None,
+    trust: bool = False,
 ) -> ExperimentResult:
     """Go on with the run saved in ``checkpoint`` (see :func:`run`), saving to the same file.
 
@@ -134,14 +135,19 @@ def resume(
     a new interval between saves (default: the run's own); ``record`` and ``progress`` are as
     in :func:`run` (a video of the resumed part starts at its first step).
 
+    A checkpoint is code (loading it runs it): only a file signed with the user's key is
+    resumed, unless ``trust`` (a colleague's file, resumed with a warning); see
+    :mod:`dream.experiments.checkpoint`.
+
     Raises
     ------
     FileNotFoundError, dream.experiments.checkpoint.CheckpointError
-        No such file, or not a checkpoint this DREAM can resume.
+        No such file, or not a checkpoint this DREAM can resume (not signed with the user's key
+        and not ``trust``, another version's, ...).
     ValueError
         ``steps`` fewer than the run has taken already.
     """
-    state = load(checkpoint)
+    state = load(checkpoint, trust=trust)
     if checkpoint_every is not None:
         state.every = _count(checkpoint_every, "checkpoint_every", 1)
     if steps is not None:
