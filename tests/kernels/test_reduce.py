@@ -132,3 +132,52 @@ def test_hrvo_rows_bad_input_is_named(rng):
             candidates=_grid(0.2, 20, 10),
             include_preferred=True,
         )
+
+
+def perceive_scene(rng, n):
+    positions = rng.uniform(-2, 2, (n, 2))
+    positions[1::7] = positions[::7][: len(positions[1::7])]  # some robots on the same spot
+    return positions, rng.uniform(-np.pi, np.pi, n), rng.random(n) < 0.7
+
+
+@pytest.mark.parametrize("n", [1, 2, 40, 3000])
+@pytest.mark.parametrize("fov", [2 * np.pi, 1.5])
+def test_perceive_matches_the_reference(rng, n, fov):
+    positions, headings, talking = perceive_scene(rng, n)
+    rows = rng.choice(n, size=max(n // 2, 1), replace=False)
+    options = dict(sight=(0.4, fov, 0.3), radio_range=0.7, talking=talking)
+    got = _core.perceive(positions, headings, rows, **options)
+    want = _reference.perceive(positions, headings, rows, **options)
+    for mine, theirs in zip(got, want):
+        assert len(mine) == len(theirs)
+        for a, b in zip(mine[:3], theirs[:3]):  # offsets, ids, distances: the same arithmetic
+            assert_array_equal(a, b)
+    assert_allclose(got[0][3], want[0][3], rtol=0, atol=1e-15)  # bearings: Rust's atan2 and NumPy's, to an ulp
+    (offsets, seen, distances, _), (h_offsets, heard, h_distances) = got
+    assert (distances <= 0.4).all() and (h_distances <= 0.7).all() and talking[heard].all()
+    assert len(offsets) == len(h_offsets) == len(rows) + 1
+
+
+def test_a_perceived_row_does_not_depend_on_the_other_rows(rng):
+    positions, headings, talking = perceive_scene(rng, 500)
+    options = dict(sight=(0.5, 2.0, 0.0), radio_range=1.0, talking=talking)
+    rows = np.arange(0, 500, 3)
+    (offsets, seen, *_), (h_offsets, heard, _) = kernels.perceive(positions, headings, rows, **options)
+    for r in range(0, len(rows), 17):
+        (o1, s1, *_), (h1, r1, _) = kernels.perceive(positions, headings, rows[r : r + 1], **options)
+        assert_array_equal(s1, seen[offsets[r] : offsets[r + 1]])
+        assert_array_equal(r1, heard[h_offsets[r] : h_offsets[r + 1]])
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (dict(rows=[5]), r"`rows` must be robot ids in \[0, 3\)"),
+        (dict(rows=[0], sight=(-1.0, 1.0, 0.0)), "sensor range"),
+        (dict(rows=[0], radio_range=1.0), "give both `radio_range` and `talking`"),
+        (dict(rows=[0], radio_range=1.0, talking=[True]), "`talking` must"),
+    ],
+)
+def test_perceive_bad_input_is_named(options, message):
+    with pytest.raises(ValueError, match=message):
+        kernels.perceive(np.zeros((3, 2)), np.zeros(3), **options)
