@@ -16,13 +16,18 @@ __all__ = [
     "actuator_limit",
     "neighbours",
     "far_from",
+    "perceive",
     "hrvo",
+    "hrvo_rows",
     "HrvoPlanner",
     "voronoi_cells",
     "voronoi_cell",
     "heard_cells",
     "virtual_agents",
     "distance_rays",
+    "segment_reduce",
+    "segment_any",
+    "segment_nearest",
 ]
 
 _Bounds = tuple[float, float, float, float]
@@ -106,6 +111,41 @@ def hrvo(
     include_preferred: bool,
 ) -> _Floats:
     """HRVO velocities (n, 2) of the whole swarm; neighbours from CSR or within radius."""
+
+def hrvo_rows(
+    velocities: _Floats,
+    preferred: _Floats,
+    positions: _Floats,
+    offsets: _Ints,
+    detections: _Floats,
+    *,
+    safety: float,
+    v_max: float,
+    bounds: _Bounds | None,
+    candidates: _Floats,
+    include_preferred: bool,
+) -> _Floats:
+    """HRVO velocities (m, 2) of the deciding robots, each from its own detections (k, 4) cut by offsets (m+1,)."""
+
+def perceive(
+    positions: _Floats,
+    headings: _Floats,
+    rows: _Ints,
+    *,
+    sight: tuple[float, float, float] | None = None,
+    radio_range: float | None = None,
+    talking: NDArray[np.bool_] | None = None,
+) -> tuple[tuple[_Ints, _Ints, _Floats, _Floats], tuple[_Ints, _Ints, _Floats]]:
+    """(seen (offsets, ids, distances, bearings), heard (offsets, ids, distances)) of the robots `rows`."""
+
+def segment_reduce(values: _Floats, offsets: _Ints, op: str, index: _Ints | None = None) -> _Floats:
+    """op (sum, mean, min, max) of each row's entries of values (k, w), or of its rows `index`: (m, w)."""
+
+def segment_any(flags: NDArray[np.bool_], offsets: _Ints) -> NDArray[np.bool_]:
+    """(m,) bool: whether any entry of each row is set."""
+
+def segment_nearest(keys: _Floats, offsets: _Ints) -> _Ints:
+    """(m,) int: the entry of each row with the smallest key, -1 for none."""
 
 @final
 class HrvoPlanner:

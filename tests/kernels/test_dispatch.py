@@ -63,4 +63,12 @@ def test_every_public_kernel_goes_through_the_dispatch(monkeypatch):
     square = (np.array([[1.0, 0.5], [1.2, 0.5], [1.2, 0.7], [1.0, 0.7]]), np.array([0, 4]))
     kernels.virtual_agents(points, square)
     kernels.distance_rays(poses)
+    offsets = np.array([0, 1, 2])
+    kernels.perceive(
+        points, np.zeros(2), np.array([0, 1]), sight=(1.0, 6.0, 0.0), radio_range=1.0, talking=[True, True]
+    )
+    kernels.hrvo_rows(points, points, points, np.array([0, 0, 0]), np.zeros((0, 4)))
+    kernels.segment_reduce(points, offsets, "sum")
+    kernels.segment_any(np.array([True, False]), offsets)
+    kernels.segment_nearest(points[:, 0], offsets)
     assert recorder.asked == set(CORE_KERNELS)
