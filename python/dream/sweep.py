@@ -5,8 +5,12 @@
 
 Every (n, parameter values, seed) of the cartesian product is one task; by default the tasks run on
 a ``LocalCluster`` of worker processes on this machine, with ``scheduler`` on an existing Dask
-cluster. Rows reach the CSV as runs finish, so an interrupted sweep keeps what it has done, and
-running it again with the same file only runs what is missing (or failed).
+cluster. The local cluster's scheduler, workers and HTTP endpoints listen on 127.0.0.1 only, and
+its dashboard is off unless asked for (``--dashboard``: at http://127.0.0.1:8787/status, or
+another port if that one is taken; the address is printed).
+
+Rows reach the CSV as runs finish, so an interrupted sweep keeps what it has done, and running it
+again with the same file only runs what is missing (or failed).
 """
 
 from __future__ import annotations
@@ -165,6 +169,7 @@ def sweep(
     faults: Mapping[str, Iterable[Any]] | None = None,
     swarm: bool = False,
     progress: bool = True,
+    dashboard: bool = False,
 ) -> list[Row]:
     """Run ``experiment`` for every (n, parameter values, seed) on Dask, one task per run.
 
@@ -197,6 +202,8 @@ def sweep(
         Run the experiment's swarm mode (as :func:`dream.run`), for sweeps of thousands of robots.
     progress : bool
         A progress bar on stderr (only when stderr is a terminal).
+    dashboard : bool
+        Serve the local cluster's Dask dashboard on 127.0.0.1 (its address goes to stderr).
 
     Returns
     -------
@@ -215,13 +222,15 @@ def sweep(
     """
     if workers is not None and scheduler is not None:
         raise ValueError("workers: sizes the local cluster; with scheduler, the cluster's own workers run the tasks")
+    if dashboard and scheduler is not None:
+        raise ValueError("dashboard: serves the local cluster's; with scheduler, open the cluster's own dashboard")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
     sweep_plan = plan(experiment, seeds, n, params, backend, steps, faults, swarm)
     with Table(out, sweep_plan) as table:
         todo = [task for task in sweep_plan.tasks if task.key() not in table.done]
         if todo:
-            _execute(sweep_plan.source, todo, workers, scheduler, progress, table.add)
+            _execute(sweep_plan.source, todo, workers, scheduler, progress, dashboard, table.add)
         rows = [table.done[task.key()] for task in sweep_plan.tasks]
     # The same columns in every row (a run that raised has no metrics; the file may hold other sweeps' columns).
     found = (column for row in rows for column, value in row.items() if value is not None)
@@ -333,9 +342,15 @@ def _execute(
     workers: int | None,
     scheduler: str | None,
     progress: bool,
+    dashboard: bool,
     record: Callable[[Row], None],
 ) -> None:
-    """Submit every task and record each row as its run finishes; the cluster closes on any exit."""
+    """Submit every task and record each row as its run finishes; the cluster closes on any exit.
+
+    A local cluster listens on 127.0.0.1 only (scheduler, workers, nannies and their HTTP
+    endpoints: Dask's default for the dashboard is every interface), with the dashboard off
+    unless ``dashboard``.
+    """
     from distributed import Client, LocalCluster, as_completed
     from tqdm import tqdm
 
@@ -347,15 +362,18 @@ def _execute(
                     n_workers=count,
                     threads_per_worker=1,  # a run holds the GIL: parallel runs need processes
                     processes=True,
+                    host="127.0.0.1",
                     # Every failure reaches its run's row (the exception, or the worker's death): the logs
                     # would only add the noise of a close that stops running tasks (Ctrl-C).
                     silence_logs=logging.CRITICAL,
-                    dashboard_address=":0",  # any free port: the default 8787 clashes with a second sweep
+                    dashboard_address="127.0.0.1:8787" if dashboard else None,  # taken: Dask picks another port
                     # K single-threaded processes fill the cores already; a rayon pool in each would oversubscribe them.
                     env={"RAYON_NUM_THREADS": os.environ.get("RAYON_NUM_THREADS", "1")},
                 )
             stack.enter_context(cluster)
             client = stack.enter_context(Client(cluster))
+            if dashboard:
+                print(f"dashboard: {cluster.dashboard_link}", file=sys.stderr)
         else:
             try:
                 client = stack.enter_context(Client(scheduler, timeout="10s"))
@@ -406,7 +424,7 @@ def command(args: argparse.Namespace) -> int:
         rows = sweep(
             args.experiment, args.seeds, args.n, grid, workers=args.workers, scheduler=args.scheduler,
             out=args.out, plot=args.plot, backend=args.backend, steps=args.steps, faults=fault_grid,
-            swarm=args.swarm, progress=not args.no_progress,
+            swarm=args.swarm, progress=not args.no_progress, dashboard=args.dashboard,
         )  # fmt: skip
     except ValueError as err:  # bad values or parameters, an unreachable scheduler, --out not a sweep table
         raise UsageError(str(err)) from None

@@ -8,9 +8,12 @@ import os
 import socket
 import subprocess
 import sys
+import urllib.error
+import urllib.request
 from pathlib import Path
 
 import distributed
+import psutil
 import pytest
 from PIL import Image
 
@@ -106,6 +109,43 @@ def test_sweep_on_local_cluster_writes_rows_error_rows_resumes_and_plots(drift, 
     monkeypatch.setattr(distributed, "LocalCluster", no_cluster)
     assert main([*argv, "--seeds", "0,1"]) == 0
     assert read(out) == rows
+
+
+def listening() -> set[str]:
+    """The addresses on which this process and its children (the cluster's) accept connections."""
+    processes = [psutil.Process(), *psutil.Process().children(recursive=True)]
+    return {c.laddr.ip for p in processes for c in p.net_connections("tcp") if c.status == psutil.CONN_LISTEN}
+
+
+@pytest.mark.parametrize("dashboard", [False, True])
+def test_local_cluster_listens_on_loopback_with_the_dashboard_off_unless_asked(
+    drift, tmp_path, monkeypatch, capsys, dashboard
+):
+    seen = {}
+
+    class Watched(distributed.LocalCluster):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            port = self.scheduler_info["services"]["dashboard"]  # Dask's HTTP server, with or without a dashboard
+            try:
+                status = urllib.request.urlopen(f"http://127.0.0.1:{port}/status", timeout=10).status
+            except urllib.error.HTTPError as err:
+                status = err.code
+            seen.update(scheduler=self.scheduler_address, status=status, listening=listening())
+
+    monkeypatch.setattr(distributed, "LocalCluster", Watched)
+    argv = ["sweep", drift, "--seeds", "0", "--workers", "1", "--out", str(tmp_path / "x.csv"), "--no-progress"]
+    assert main([*argv, *(["--dashboard"] if dashboard else [])]) == 0
+    assert seen["scheduler"].startswith("tcp://127.0.0.1:")
+    assert seen["listening"] == {"127.0.0.1"}  # scheduler, worker, nanny and their HTTP servers
+    assert seen["status"] == (200 if dashboard else 404)
+    assert ("dashboard: http://127.0.0.1:" in capsys.readouterr().err) is dashboard
+
+
+def test_dashboard_with_a_scheduler_is_refused(drift, tmp_path, capsys):
+    argv = ["sweep", drift, "--scheduler", "tcp://127.0.0.1:1", "--dashboard", "--out", str(tmp_path / "x.csv")]
+    assert main(argv) == 2
+    assert "dashboard: serves the local cluster's" in capsys.readouterr().err
 
 
 def free_port() -> int:
