@@ -247,6 +247,104 @@ def test_out_that_is_not_a_sweep_table_is_refused(drift, tmp_path, monkeypatch, 
     assert other.read_text() == "a,b\n1,2\n"
 
 
+def written(drift: str, out: Path, seeds: list[int]):
+    """A table of drift's runs for ``seeds`` as a sweep writes it (each row added as it comes), no cluster."""
+    sweep_plan = plan(drift, seeds=seeds, backend="fast")
+    metrics = {"simulator": "fast", "steps": 4, "completed_step": 4, "collisions": 0, "boundary": 0, "actuator": 0}
+    with Table(out, sweep_plan) as table:
+        for task in sweep_plan.tasks:
+            table.add({**task.inputs(), **metrics, "success": True, "wall_time": 0.25, "worker": "tcp://x:1"})
+    return sweep_plan
+
+
+def test_a_second_sweep_on_the_same_out_refuses_in_one_line(drift, tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(distributed, "LocalCluster", no_cluster)
+    out = tmp_path / "runs.csv"
+    sweep_plan = written(drift, out, [0])
+    before = out.read_bytes()
+    with Table(out, sweep_plan):  # a sweep at work on the file
+        assert main(["sweep", drift, "--seeds", "0:3", "--backend", "fast", "--out", str(out), "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert err == f"dream: error: out: {out} is in use by another sweep (it holds runs.csv.lock); let it finish\n"
+        with pytest.raises(ValueError, match="in use by another sweep"):
+            Table(out, sweep_plan).__enter__()
+    assert out.read_bytes() == before
+    with Table(out, sweep_plan) as table:  # the first sweep has ended: the lock is free again
+        assert len(table.done) == 1
+
+
+@pytest.mark.parametrize("cut", [2, 5], ids=["line end", "into the last cells"])
+def test_a_last_row_cut_short_is_dropped_with_a_warning_and_run_again(drift, tmp_path, cut):
+    out = tmp_path / "runs.csv"
+    sweep_plan = written(drift, out, [0, 1])
+    out.write_bytes(out.read_bytes()[:-cut])  # killed while writing seed 1's row
+    with (
+        pytest.warns(RuntimeWarning, match=f"out: {out}:3: the last row is cut short"),
+        Table(out, sweep_plan) as table,
+    ):
+        assert list(table.done) == [sweep_plan.tasks[0].key()]
+    if cut == 2:  # the sweep runs seed 1 again and writes its row whole
+        with pytest.warns(RuntimeWarning, match="cut short"):
+            rows = dream.sweep(drift, seeds=[0, 1], backend="fast", workers=1, out=out, progress=False)
+        assert [(r["seed"], r["success"], r["worker"] == "tcp://x:1") for r in rows] == [
+            (0, True, True),
+            (1, True, False),
+        ]
+        assert len(read(out)) == 2 and out.read_bytes().endswith(b"\r\n")
+
+
+def bad_line(change: str, header: list[str], fields: list[str]) -> str:
+    """Seed 1's row of a drift table made bad by ``change``, as a line of the CSV."""
+    row = dict(zip(header, fields))
+    if change == "garbage":
+        return "garbage\r\n"
+    if change == "quote":
+        return '"drift"x,' + ",".join(fields[1:]) + "\r\n"
+    if change == "extra field":
+        return ",".join([*fields, "surprise"]) + "\r\n"
+    column, value = change.split("=")
+    row[column] = value
+    if column == "success":
+        row["error"] = ""
+    return ",".join(row[c] for c in header) + "\r\n"
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ("garbage", "1 fields, the header has"),
+        ("extra field", "fields, the header has"),
+        ("quote", "not a CSV row"),
+        ("n=ten", "n 'ten' is not a whole number"),
+        ("success=maybe", "success 'maybe' is not True or False"),
+        ("success=", "neither a result (success) nor an error"),
+        ("wall_time=fast", "wall_time 'fast' is not a number"),
+        ("seed=", "no seed"),
+    ],
+)
+def test_a_bad_row_stops_the_sweep_before_any_run_naming_file_and_line(
+    drift, tmp_path, monkeypatch, capsys, change, message
+):
+    monkeypatch.setattr(distributed, "LocalCluster", no_cluster)
+    out = tmp_path / "runs.csv"
+    written(drift, out, [0, 1])
+    header, first, second = out.read_text().splitlines()
+    out.write_text(f"{header}\r\n{first}\r\n" + bad_line(change, header.split(","), second.split(",")), newline="")
+    before = out.read_bytes()
+    assert main(["sweep", drift, "--seeds", "0:3", "--backend", "fast", "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"dream: error: out: {out}:3: ") and message in err and err.count("\n") == 1
+    assert out.read_bytes() == before  # the researcher's to mend
+
+
+def test_a_table_that_is_not_utf8_is_refused_naming_the_line(drift, tmp_path):
+    out = tmp_path / "runs.csv"
+    sweep_plan = written(drift, out, [0, 1])
+    out.write_bytes(out.read_bytes().replace(b"drift,3,1", b"drift,\xff,1"))
+    with pytest.raises(ValueError, match=f"out: {out}:3: not UTF-8 text"):
+        Table(out, sweep_plan).__enter__()
+
+
 def test_plan_is_the_cartesian_product_with_converted_values(drift):
     sweep_plan = plan(drift, seeds=range(3), n=[2, 4], params={"speed": ["0.1", 0.2, 0.1]}, steps=7)
     keys = [(t.n, dict(t.params)["speed"], t.seed) for t in sweep_plan.tasks]
