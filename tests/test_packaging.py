@@ -40,6 +40,16 @@ def test_version_is_written_only_in_cargo():
     assert _cargo_version() not in (ROOT / "python" / "dream" / "__init__.py").read_text()
 
 
+def test_tests_read_nothing_outside_the_repository():
+    # A fresh clone has nothing beside it: every folder a test reaches from its own file is in the
+    # checkout (golden data lives in tests/data, with the script that records it).
+    reach = re.compile(r"Path\(__file__\)(?:\.resolve\(\))?\.parents\[(\d+)\]")
+    for path in (ROOT / "tests").rglob("*.py"):
+        for depth in reach.findall(path.read_text()):
+            base = path.resolve().parents[int(depth)]
+            assert base == ROOT or ROOT in base.parents, f"{path.relative_to(ROOT)} reads from {base}"
+
+
 def test_distribution_name_is_dream_robotics():
     assert re.search(r'(?m)^name = "dream-robotics"$', _project_table())
     assert _version.DISTRIBUTION == "dream-robotics"

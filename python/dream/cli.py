@@ -151,6 +151,9 @@ def _parser() -> argparse.ArgumentParser:
     sweeper.add_argument("--out", metavar="PATH", required=True, help="CSV of one row per run (resumes what it holds)")
     sweeper.add_argument("--plot", metavar="PATH", help="PNG of success rate and measures against the swept values")
     sweeper.add_argument("--no-progress", action="store_true", help="no progress bar")
+    sweeper.add_argument(
+        "--dashboard", action="store_true", help="serve the local cluster's Dask dashboard on 127.0.0.1 (default: off)"
+    )
     sweeper.set_defaults(handler=command)
     from dream import export
 

@@ -101,7 +101,7 @@ class MovementSensor(Sensor):
     wide : float
         Full aperture (rad); ``2 pi`` sees all around.
     noise : float
-        Standard deviation of the noise added to every value.
+        Standard deviation of the noise added to every value (a distance is clamped at 0).
 
     Notes
     -----
@@ -147,6 +147,13 @@ class MovementSensor(Sensor):
         detections[:, 1] = np.arctan2(self.pos_y - seen[1], self.pos_x - seen[0])
         detections[:, 2], detections[:, 3] = seen_velocity(commands[:, found], seen[2])
         self._report(detections)
+
+    def add_noise(self, values: Any, noise: float) -> FloatArray:
+        """Detections ``(k, 4)`` plus Gaussian noise, their distances clamped at 0: noise on a robot
+        close by must not report it at a negative distance (which HRVO refuses)."""
+        noisy = super().add_noise(values, noise)
+        np.maximum(noisy[:, 0], 0.0, out=noisy[:, 0])
+        return noisy
 
 
 class OdometrySensor(Sensor):

@@ -5,8 +5,19 @@
 
 Every (n, parameter values, seed) of the cartesian product is one task; by default the tasks run on
 a ``LocalCluster`` of worker processes on this machine, with ``scheduler`` on an existing Dask
-cluster. Rows reach the CSV as runs finish, so an interrupted sweep keeps what it has done, and
-running it again with the same file only runs what is missing (or failed).
+cluster. The local cluster's scheduler, workers and HTTP endpoints listen on 127.0.0.1 only, and
+its dashboard is off unless asked for (``--dashboard``: at http://127.0.0.1:8787/status, or
+another port if that one is taken; the address is printed).
+
+Rows reach the CSV as runs finish, so an interrupted sweep keeps what it has done, and running it
+again with the same file only runs what is missing (or failed). While a sweep runs it holds a lock
+on ``OUT.lock`` beside the CSV, and a second sweep on the same file refuses to start. The rows read
+back are checked: a last row cut short (no line end: its sweep was killed while writing it) is
+dropped with a warning and its run is done again; any other row that does not parse (wrong number
+of fields, a value of the wrong kind, a row without result or error) stops the sweep before any
+run with one line naming the file and line. Such a row is someone's data, or the sign of a file
+mixed up with another: the sweep would drop it at its first rewrite, so it leaves the file as it
+is and the researcher mends or deletes the line.
 """
 
 from __future__ import annotations
@@ -14,17 +25,21 @@ from __future__ import annotations
 import argparse
 import contextlib
 import csv
+import fcntl
+import io
 import itertools
 import logging
 import os
 import signal
+import stat
 import sys
 import threading
 import time
+import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import numpy as np
 
@@ -165,6 +180,7 @@ def sweep(
     faults: Mapping[str, Iterable[Any]] | None = None,
     swarm: bool = False,
     progress: bool = True,
+    dashboard: bool = False,
 ) -> list[Row]:
     """Run ``experiment`` for every (n, parameter values, seed) on Dask, one task per run.
 
@@ -185,7 +201,8 @@ def sweep(
         Address of a running Dask scheduler (``tcp://HOST:8786``) to use instead.
     out : path, optional
         CSV that receives a row per run as it finishes. Runs it already holds without an error
-        (same input columns) are not run again; rows of other sweeps in it are kept.
+        (same input columns) are not run again; rows of other sweeps in it are kept. Locked while
+        the sweep runs (``OUT.lock``); its rows are checked as the module docstring says.
     plot : path, optional
         PNG of the success rate and the measures against the swept values.
     backend, steps
@@ -197,6 +214,8 @@ def sweep(
         Run the experiment's swarm mode (as :func:`dream.run`), for sweeps of thousands of robots.
     progress : bool
         A progress bar on stderr (only when stderr is a terminal).
+    dashboard : bool
+        Serve the local cluster's Dask dashboard on 127.0.0.1 (its address goes to stderr).
 
     Returns
     -------
@@ -211,17 +230,20 @@ def sweep(
     Raises
     ------
     ValueError
-        Bad arguments (see :func:`plan`), or a CSV that is not a sweep table; before any run.
+        Bad arguments (see :func:`plan`), a CSV that is not a sweep table or holds a row that does
+        not parse (naming the file and line), or a CSV another sweep is writing; before any run.
     """
     if workers is not None and scheduler is not None:
         raise ValueError("workers: sizes the local cluster; with scheduler, the cluster's own workers run the tasks")
+    if dashboard and scheduler is not None:
+        raise ValueError("dashboard: serves the local cluster's; with scheduler, open the cluster's own dashboard")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
     sweep_plan = plan(experiment, seeds, n, params, backend, steps, faults, swarm)
     with Table(out, sweep_plan) as table:
         todo = [task for task in sweep_plan.tasks if task.key() not in table.done]
         if todo:
-            _execute(sweep_plan.source, todo, workers, scheduler, progress, table.add)
+            _execute(sweep_plan.source, todo, workers, scheduler, progress, dashboard, table.add)
         rows = [table.done[task.key()] for task in sweep_plan.tasks]
     # The same columns in every row (a run that raised has no metrics; the file may hold other sweeps' columns).
     found = (column for row in rows for column, value in row.items() if value is not None)
@@ -261,43 +283,92 @@ def run_task(source: str | type[Experiment], task: Task) -> Row:
 class Table:
     """The rows of a sweep: those already in the CSV ``path`` (if any) and those added as runs finish.
 
-    The first row rewrites the file (header for this sweep's columns, failed runs of this sweep
-    dropped since they run again), so a sweep that runs nothing leaves it as it was; then each row
-    is appended and flushed, and the file is rewritten only when a row brings a new column.
+    Entering the table locks the CSV for this sweep (:func:`_locked`) and reads it
+    (:meth:`_read`, which refuses a row that does not parse). The first row added rewrites the file
+    (header for this sweep's columns, failed runs of this sweep dropped since they run again), so
+    a sweep that runs nothing leaves it as it was; then each row is appended and flushed, and the
+    file is rewritten only when a row brings a new column.
     """
 
     def __init__(self, path: str | Path | None, sweep_plan: Plan) -> None:
         self.path = None if path is None else Path(path)
+        self.plan = sweep_plan
         self.inputs = sweep_plan.inputs
         self.rows: list[Row] = []  # what the file holds: rows read (as text) and rows added
         self.done: dict[tuple[str, ...], Row] = {}  # finished runs by their inputs, as Python values
-        columns: list[str] = [*INPUTS, *self.inputs, *METRICS, *TAIL]
-        if self.path is not None and self.path.is_file() and self.path.stat().st_size:
-            with self.path.open(newline="", encoding="utf-8") as file:
-                reader = csv.DictReader(file)
-                header = list(reader.fieldnames or [])
-                missing = [column for column in INPUTS if column not in header and column != "swarm"]
-                if missing:
-                    raise ValueError(f"out: {self.path} is not a sweep table (no column {missing[0]!r})")
-                ours = {task.key() for task in sweep_plan.tasks}
-                for row in reader:
-                    row.setdefault("swarm", "False")  # a table from before sweeps had --swarm: robot by robot
-                    key = self._key(row)
-                    if not row.get("error"):
-                        self.done[key] = {column: _value(text) for column, text in row.items()}
-                    elif key in ours:
-                        continue  # a failed run of this sweep runs again: its old row goes
-                    self.rows.append(row)
-            columns = header + columns
-        self.columns = _ordered(columns)
+        self.columns = _ordered([*INPUTS, *self.inputs, *METRICS, *TAIL])
         self._file: Any = None
+        self._lock: Any = None
 
     def __enter__(self) -> Table:
+        if self.path is not None:
+            self._lock = _locked(self.path)
+            try:
+                self._read(self.path)
+            except BaseException:
+                self._lock.close()
+                raise
         return self
 
     def __exit__(self, *exc: object) -> None:
         if self._file is not None:
             self._file.close()
+        if self._lock is not None:
+            self._lock.close()  # releases the lock
+
+    def _read(self, path: Path) -> None:
+        """Take in the rows of the CSV at ``path``, if it holds any.
+
+        A last row without its line end was cut short (a sweep stopped while writing it): it is
+        dropped with a warning naming the file and line, and its run is done again. Any other row
+        that does not parse (:func:`_row_problem`) stops the sweep before any run, naming the file
+        and line: dropping it would lose it from the file at the first rewrite.
+        """
+        if not (path.is_file() and path.stat().st_size):
+            return
+        data = path.read_bytes()
+        try:
+            text = data.decode("utf-8")
+        except UnicodeDecodeError as err:
+            line = data[: err.start].count(b"\n") + 1
+            raise ValueError(
+                f"out: {path}:{line}: not UTF-8 text (byte {err.start}); mend or delete the line"
+            ) from None
+        records = _records(text)
+        last_line = len(io.StringIO(text, newline="").readlines())
+        if len(records) > 1 and not text.endswith(("\n", "\r")) and records[-1][0] == last_line:
+            line = records.pop()[0]
+            warnings.warn(
+                f"out: {path}:{line}: the last row is cut short (a sweep stopped while writing it): "
+                "dropped, and its run is done again",
+                RuntimeWarning,
+                stacklevel=4,  # sweep()'s caller
+            )
+        (_, header), *rows = records
+        if isinstance(header, csv.Error):
+            raise ValueError(f"out: {path}:1: not a CSV header ({header})")
+        repeated = [column for column in set(header) if header.count(column) > 1]
+        if repeated:
+            raise ValueError(f"out: {path}:1: the column {repeated[0]!r} comes twice; mend or delete the line")
+        missing = [column for column in INPUTS if column not in header and column != "swarm"]
+        if missing:
+            raise ValueError(f"out: {path} is not a sweep table (no column {missing[0]!r})")
+        ours = {task.key() for task in self.plan.tasks}
+        for line, fields in rows:
+            if fields == []:
+                continue  # a blank line
+            problem = _row_problem(fields, header)
+            if problem:
+                raise ValueError(f"out: {path}:{line}: {problem}; mend or delete the line (a sweep would lose it)")
+            row = dict(zip(header, fields))  # type: ignore[arg-type]  # a list once _row_problem passes it
+            row.setdefault("swarm", "False")  # a table from before sweeps had --swarm: robot by robot
+            key = self._key(row)
+            if not row.get("error"):
+                self.done[key] = {column: _value(cell) for column, cell in row.items()}
+            elif key in ours:
+                continue  # a failed run of this sweep runs again: its old row goes
+            self.rows.append(row)
+        self.columns = _ordered([*header, *self.columns])
 
     def add(self, row: Row) -> None:
         self.rows.append(row)
@@ -327,15 +398,96 @@ class Table:
         self._file = self.path.open("a", newline="", encoding="utf-8")
 
 
+def _locked(path: Path) -> IO[bytes]:
+    """An exclusive lock on ``NAME.lock`` beside the CSV ``path``, held until the returned file is
+    closed: a second sweep on the same file would otherwise rewrite it without the first one's
+    rows. The lock file is left in place (empty); removing it could let two sweeps lock two files.
+
+    Raises
+    ------
+    ValueError
+        Another sweep holds the lock, or the lock's path is not a regular file.
+    """
+    lock = path.with_name(f"{path.name}.lock")
+    try:
+        handle = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_NONBLOCK, 0o666)
+    except OSError as err:
+        raise ValueError(f"out: cannot open the lock {lock}: {err.strerror}") from None
+    file = os.fdopen(handle, "rb")
+    try:
+        if not stat.S_ISREG(os.fstat(handle).st_mode):
+            raise ValueError(f"out: the lock {lock} is not a regular file")
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        file.close()
+        raise ValueError(f"out: {path} is in use by another sweep (it holds {lock.name}); let it finish") from None
+    except BaseException:
+        file.close()
+        raise
+    return file
+
+
+def _records(text: str) -> list[tuple[int, list[str] | csv.Error]]:
+    """The records of CSV ``text``, each with the line it starts on; parsing stops at the first
+    malformed one, which is a :class:`csv.Error` in the list."""
+    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
+    records: list[tuple[int, list[str] | csv.Error]] = []
+    line = 1
+    try:
+        for fields in reader:
+            records.append((line, fields))
+            line = reader.line_num + 1
+    except csv.Error as err:
+        records.append((line, err))
+    return records
+
+
+#: Columns whose cells hold a whole number, a boolean or a number (an empty cell: no value).
+_KINDS = {
+    **dict.fromkeys(("n", "seed", "step_cap", "steps", "completed_step", "collisions", "boundary", "actuator"), int),
+    **dict.fromkeys(("swarm", "success"), bool),
+    "wall_time": float,
+}
+_KIND_NAMES = {int: "a whole number", bool: "True or False", float: "a number"}
+
+
+def _row_problem(fields: list[str] | csv.Error, header: list[str]) -> str | None:
+    """What keeps a CSV record from being a row of a sweep table with ``header``, or ``None``: not
+    CSV, a wrong number of fields, a missing input, a cell that does not parse as its column's
+    kind, or neither a result (``success``) nor an ``error``."""
+    if isinstance(fields, csv.Error):
+        return f"not a CSV row ({fields})"
+    if len(fields) != len(header):
+        return f"{len(fields)} fields, the header has {len(header)}"
+    row = dict(zip(header, fields))
+    for column in ("experiment", "n", "seed", "backend"):
+        if not row.get(column):
+            return f"no {column}"
+    for column, kind in _KINDS.items():
+        text = row.get(column)
+        found = type(_value(text))
+        if text and not (found is kind or (kind is float and found is int)):
+            return f"{column} {text!r} is not {_KIND_NAMES[kind]}"
+    if not row.get("error") and row.get("success") not in ("True", "False"):
+        return "neither a result (success) nor an error"
+    return None
+
+
 def _execute(
     source: str | type[Experiment],
     tasks: Sequence[Task],
     workers: int | None,
     scheduler: str | None,
     progress: bool,
+    dashboard: bool,
     record: Callable[[Row], None],
 ) -> None:
-    """Submit every task and record each row as its run finishes; the cluster closes on any exit."""
+    """Submit every task and record each row as its run finishes; the cluster closes on any exit.
+
+    A local cluster listens on 127.0.0.1 only (scheduler, workers, nannies and their HTTP
+    endpoints: Dask's default for the dashboard is every interface), with the dashboard off
+    unless ``dashboard``.
+    """
     from distributed import Client, LocalCluster, as_completed
     from tqdm import tqdm
 
@@ -347,15 +499,18 @@ def _execute(
                     n_workers=count,
                     threads_per_worker=1,  # a run holds the GIL: parallel runs need processes
                     processes=True,
+                    host="127.0.0.1",
                     # Every failure reaches its run's row (the exception, or the worker's death): the logs
                     # would only add the noise of a close that stops running tasks (Ctrl-C).
                     silence_logs=logging.CRITICAL,
-                    dashboard_address=":0",  # any free port: the default 8787 clashes with a second sweep
+                    dashboard_address="127.0.0.1:8787" if dashboard else None,  # taken: Dask picks another port
                     # K single-threaded processes fill the cores already; a rayon pool in each would oversubscribe them.
                     env={"RAYON_NUM_THREADS": os.environ.get("RAYON_NUM_THREADS", "1")},
                 )
             stack.enter_context(cluster)
             client = stack.enter_context(Client(cluster))
+            if dashboard:
+                print(f"dashboard: {cluster.dashboard_link}", file=sys.stderr)
         else:
             try:
                 client = stack.enter_context(Client(scheduler, timeout="10s"))
@@ -406,7 +561,7 @@ def command(args: argparse.Namespace) -> int:
         rows = sweep(
             args.experiment, args.seeds, args.n, grid, workers=args.workers, scheduler=args.scheduler,
             out=args.out, plot=args.plot, backend=args.backend, steps=args.steps, faults=fault_grid,
-            swarm=args.swarm, progress=not args.no_progress,
+            swarm=args.swarm, progress=not args.no_progress, dashboard=args.dashboard,
         )  # fmt: skip
     except ValueError as err:  # bad values or parameters, an unreachable scheduler, --out not a sweep table
         raise UsageError(str(err)) from None

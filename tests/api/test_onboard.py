@@ -16,7 +16,7 @@ from dream.backends import Fast
 from dream.onboard import DistanceSensor, EncoderSensor, ImuReading, ImuSensor, distance_noise
 from dream.specs import ONBOARD, RPS2
 
-GOLDEN = Path(__file__).parents[3] / "shared" / "rps21"
+GOLDEN = Path(__file__).parents[1] / "data" / "rps21"  # recorded from rps 2.1 by its record.py
 FILES = sorted(path.name for path in GOLDEN.glob("*.npz"))
 EXACT = ONBOARD.noiseless()
 

@@ -148,6 +148,19 @@ def test_movement_sensor_noise_is_seeded_by_the_world():
     assert_allclose(first, exact, atol=0.06)  # 6 standard deviations
 
 
+def test_movement_sensor_noise_never_makes_a_distance_negative():
+    # Robots 0.01 m and 0 m away, noise 0.1: half the draws would be below zero unclamped.
+    x = np.array([[0.0, 0.01, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    readings = _Last()
+    sensor = MovementSensor(0, "movement", readings, noise=0.1)
+    for _ in range(200):
+        sensor.update(x, np.zeros((2, 3)))
+    distances = np.concatenate([reading[:, 0] for reading in readings.readings])
+    assert distances.min() == 0.0 and np.mean(distances == 0.0) > 0.3
+    vx = np.concatenate([reading[:, 2] for reading in readings.readings])
+    assert np.mean(vx < 0) > 0.3  # the other columns keep their noise, of either sign
+
+
 def test_odometry_sensor_reports_own_pose():
     x = np.array([[0.1, 0.2], [0.3, -0.4], [0.5, 1.0]])
     got = _Last()

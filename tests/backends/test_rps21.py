@@ -18,7 +18,7 @@ from dream.backends import Fast, Robotarium, make_robotarium, rps_generation
 from dream.backends.startup import charger_poses
 from dream.specs import ROBOTARIUM, RPS0, RPS2, RULES
 
-GOLDEN = Path(__file__).parents[3] / "shared" / "rps21"
+GOLDEN = Path(__file__).parents[1] / "data" / "rps21"  # recorded from rps 2.1 by its record.py
 CASES = json.loads((GOLDEN / "cases.json").read_text())
 FILES = [case["file"] for case in CASES["random_command_cases"]]
 #: rps 2.1's `_errors` keys in the order of DREAM's Violations.

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import warnings
 
 import numpy as np
 import pytest
@@ -14,6 +15,7 @@ import dream
 from dream import rules
 from dream.cli import main
 from dream.experiments.line_consensus import line_errors
+from dream.kernels import _dispatch
 
 
 def test_wmsr_drops_the_extremes_on_each_side_of_the_own_value():
@@ -83,6 +85,16 @@ def test_circle_survivors_stop_waiting_for_the_crashed(seed):
     assert len(result.faults["events"]) == 2
     assert result.success and result.measures["circles_completed"] == 3
     assert (result.collisions, result.boundary, result.actuator) == (0, 0, 0)
+
+
+@pytest.mark.parametrize("core", [None, _dispatch._core], ids=["numpy", "rust"])
+def test_circle_runs_on_under_heavy_sensor_noise(monkeypatch, core):
+    # Noise of 0.1 m on a neighbour close by once made a negative distance that HRVO refused (step ~113).
+    monkeypatch.setattr(_dispatch, "_core", core)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # noisy poses push robots out of the arena: warned
+        result = dream.run("hrvo-circle", n=10, backend="fast", steps=300, faults=dream.Faults(sensor_noise=0.1))
+    assert result.steps == 300
 
 
 def test_heartbeats_take_a_silent_robot_for_crashed_after_the_silence():

@@ -72,3 +72,25 @@ def test_every_public_kernel_goes_through_the_dispatch(monkeypatch):
     kernels.segment_any(np.array([True, False]), offsets)
     kernels.segment_nearest(points[:, 0], offsets)
     assert recorder.asked == set(CORE_KERNELS)
+
+
+PLANNER_INPUT = {"detections": np.array([[0.5, 0.0, 0.0, 0.0], [0.3, 1.0, 0.0, 0.0]]), "velocity": np.zeros(2)}
+PLANNER_INPUT |= {"preferred": np.array([0.1, 0.0]), "position": np.zeros(2)}
+
+
+@pytest.mark.parametrize(
+    ("name", "row", "bad", "message"),
+    [
+        ("detections", (1, 0), -0.0028, "`detection distance` must be finite and >= 0, got -0.0028"),
+        ("detections", (1, 2), np.nan, r"`detections` contains a non-finite value \(NaN or inf\) at index 1"),
+        ("velocity", 1, np.inf, r"`velocity` contains a non-finite value \(NaN or inf\) at index 1"),
+        ("position", 0, np.nan, r"`position` contains a non-finite value \(NaN or inf\) at index 0"),
+    ],
+)
+def test_hrvo_planner_refuses_bad_input_alike_on_both_paths(monkeypatch, name, row, bad, message):
+    given = {key: value.copy() for key, value in PLANNER_INPUT.items()}
+    given[name][row] = bad
+    for core in (None, _core):
+        monkeypatch.setattr(_dispatch, "_core", core)
+        with pytest.raises(ValueError, match=f"^{message}$"):
+            kernels.HrvoPlanner().velocity(**given)

@@ -8,9 +8,12 @@ import os
 import socket
 import subprocess
 import sys
+import urllib.error
+import urllib.request
 from pathlib import Path
 
 import distributed
+import psutil
 import pytest
 from PIL import Image
 
@@ -106,6 +109,43 @@ def test_sweep_on_local_cluster_writes_rows_error_rows_resumes_and_plots(drift, 
     monkeypatch.setattr(distributed, "LocalCluster", no_cluster)
     assert main([*argv, "--seeds", "0,1"]) == 0
     assert read(out) == rows
+
+
+def listening() -> set[str]:
+    """The addresses on which this process and its children (the cluster's) accept connections."""
+    processes = [psutil.Process(), *psutil.Process().children(recursive=True)]
+    return {c.laddr.ip for p in processes for c in p.net_connections("tcp") if c.status == psutil.CONN_LISTEN}
+
+
+@pytest.mark.parametrize("dashboard", [False, True])
+def test_local_cluster_listens_on_loopback_with_the_dashboard_off_unless_asked(
+    drift, tmp_path, monkeypatch, capsys, dashboard
+):
+    seen = {}
+
+    class Watched(distributed.LocalCluster):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            port = self.scheduler_info["services"]["dashboard"]  # Dask's HTTP server, with or without a dashboard
+            try:
+                status = urllib.request.urlopen(f"http://127.0.0.1:{port}/status", timeout=10).status
+            except urllib.error.HTTPError as err:
+                status = err.code
+            seen.update(scheduler=self.scheduler_address, status=status, listening=listening())
+
+    monkeypatch.setattr(distributed, "LocalCluster", Watched)
+    argv = ["sweep", drift, "--seeds", "0", "--workers", "1", "--out", str(tmp_path / "x.csv"), "--no-progress"]
+    assert main([*argv, *(["--dashboard"] if dashboard else [])]) == 0
+    assert seen["scheduler"].startswith("tcp://127.0.0.1:")
+    assert seen["listening"] == {"127.0.0.1"}  # scheduler, worker, nanny and their HTTP servers
+    assert seen["status"] == (200 if dashboard else 404)
+    assert ("dashboard: http://127.0.0.1:" in capsys.readouterr().err) is dashboard
+
+
+def test_dashboard_with_a_scheduler_is_refused(drift, tmp_path, capsys):
+    argv = ["sweep", drift, "--scheduler", "tcp://127.0.0.1:1", "--dashboard", "--out", str(tmp_path / "x.csv")]
+    assert main(argv) == 2
+    assert "dashboard: serves the local cluster's" in capsys.readouterr().err
 
 
 def free_port() -> int:
@@ -207,6 +247,104 @@ def test_out_that_is_not_a_sweep_table_is_refused(drift, tmp_path, monkeypatch, 
     assert other.read_text() == "a,b\n1,2\n"
 
 
+def written(drift: str, out: Path, seeds: list[int]):
+    """A table of drift's runs for ``seeds`` as a sweep writes it (each row added as it comes), no cluster."""
+    sweep_plan = plan(drift, seeds=seeds, backend="fast")
+    metrics = {"simulator": "fast", "steps": 4, "completed_step": 4, "collisions": 0, "boundary": 0, "actuator": 0}
+    with Table(out, sweep_plan) as table:
+        for task in sweep_plan.tasks:
+            table.add({**task.inputs(), **metrics, "success": True, "wall_time": 0.25, "worker": "tcp://x:1"})
+    return sweep_plan
+
+
+def test_a_second_sweep_on_the_same_out_refuses_in_one_line(drift, tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(distributed, "LocalCluster", no_cluster)
+    out = tmp_path / "runs.csv"
+    sweep_plan = written(drift, out, [0])
+    before = out.read_bytes()
+    with Table(out, sweep_plan):  # a sweep at work on the file
+        assert main(["sweep", drift, "--seeds", "0:3", "--backend", "fast", "--out", str(out), "--no-progress"]) == 2
+        err = capsys.readouterr().err
+        assert err == f"dream: error: out: {out} is in use by another sweep (it holds runs.csv.lock); let it finish\n"
+        with pytest.raises(ValueError, match="in use by another sweep"):
+            Table(out, sweep_plan).__enter__()
+    assert out.read_bytes() == before
+    with Table(out, sweep_plan) as table:  # the first sweep has ended: the lock is free again
+        assert len(table.done) == 1
+
+
+@pytest.mark.parametrize("cut", [2, 5], ids=["line end", "into the last cells"])
+def test_a_last_row_cut_short_is_dropped_with_a_warning_and_run_again(drift, tmp_path, cut):
+    out = tmp_path / "runs.csv"
+    sweep_plan = written(drift, out, [0, 1])
+    out.write_bytes(out.read_bytes()[:-cut])  # killed while writing seed 1's row
+    with (
+        pytest.warns(RuntimeWarning, match=f"out: {out}:3: the last row is cut short"),
+        Table(out, sweep_plan) as table,
+    ):
+        assert list(table.done) == [sweep_plan.tasks[0].key()]
+    if cut == 2:  # the sweep runs seed 1 again and writes its row whole
+        with pytest.warns(RuntimeWarning, match="cut short"):
+            rows = dream.sweep(drift, seeds=[0, 1], backend="fast", workers=1, out=out, progress=False)
+        assert [(r["seed"], r["success"], r["worker"] == "tcp://x:1") for r in rows] == [
+            (0, True, True),
+            (1, True, False),
+        ]
+        assert len(read(out)) == 2 and out.read_bytes().endswith(b"\r\n")
+
+
+def bad_line(change: str, header: list[str], fields: list[str]) -> str:
+    """Seed 1's row of a drift table made bad by ``change``, as a line of the CSV."""
+    row = dict(zip(header, fields))
+    if change == "garbage":
+        return "garbage\r\n"
+    if change == "quote":
+        return '"drift"x,' + ",".join(fields[1:]) + "\r\n"
+    if change == "extra field":
+        return ",".join([*fields, "surprise"]) + "\r\n"
+    column, value = change.split("=")
+    row[column] = value
+    if column == "success":
+        row["error"] = ""
+    return ",".join(row[c] for c in header) + "\r\n"
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ("garbage", "1 fields, the header has"),
+        ("extra field", "fields, the header has"),
+        ("quote", "not a CSV row"),
+        ("n=ten", "n 'ten' is not a whole number"),
+        ("success=maybe", "success 'maybe' is not True or False"),
+        ("success=", "neither a result (success) nor an error"),
+        ("wall_time=fast", "wall_time 'fast' is not a number"),
+        ("seed=", "no seed"),
+    ],
+)
+def test_a_bad_row_stops_the_sweep_before_any_run_naming_file_and_line(
+    drift, tmp_path, monkeypatch, capsys, change, message
+):
+    monkeypatch.setattr(distributed, "LocalCluster", no_cluster)
+    out = tmp_path / "runs.csv"
+    written(drift, out, [0, 1])
+    header, first, second = out.read_text().splitlines()
+    out.write_text(f"{header}\r\n{first}\r\n" + bad_line(change, header.split(","), second.split(",")), newline="")
+    before = out.read_bytes()
+    assert main(["sweep", drift, "--seeds", "0:3", "--backend", "fast", "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"dream: error: out: {out}:3: ") and message in err and err.count("\n") == 1
+    assert out.read_bytes() == before  # the researcher's to mend
+
+
+def test_a_table_that_is_not_utf8_is_refused_naming_the_line(drift, tmp_path):
+    out = tmp_path / "runs.csv"
+    sweep_plan = written(drift, out, [0, 1])
+    out.write_bytes(out.read_bytes().replace(b"drift,3,1", b"drift,\xff,1"))
+    with pytest.raises(ValueError, match=f"out: {out}:3: not UTF-8 text"):
+        Table(out, sweep_plan).__enter__()
+
+
 def test_plan_is_the_cartesian_product_with_converted_values(drift):
     sweep_plan = plan(drift, seeds=range(3), n=[2, 4], params={"speed": ["0.1", 0.2, 0.1]}, steps=7)
     keys = [(t.n, dict(t.params)["speed"], t.seed) for t in sweep_plan.tasks]
@@ -235,9 +373,10 @@ def test_sweep_runs_the_swarm_mode_and_refuses_it_where_there_is_none(drift, tmp
     ]
     assert float(rows[0]["measures.mean_x"]) != 0.0  # the swarm step drove them
     assert not plan(drift, seeds=[0]).tasks[0].swarm
-    rendezvous = str(Path(__file__).resolve().parents[2] / "examples" / "rendezvous.py")
-    with pytest.raises(ValueError, match="swarm: rendezvous has no swarm mode"):
-        plan(rendezvous, seeds=[0], swarm=True)
+    starter = tmp_path / "spread.py"
+    assert main(["new", "spread", "-o", str(starter)]) == 0
+    with pytest.raises(ValueError, match="swarm: spread has no swarm mode"):
+        plan(str(starter), seeds=[0], swarm=True)
 
 
 def test_table_from_before_the_swarm_column_resumes_as_robot_by_robot_runs(drift, tmp_path):

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import functools
+import math
 from typing import Any
 
 import numpy as np
 
 import dream._reference as _reference
-from dream._checks import Bounds, FloatArray, as_array, as_offsets, check_nonnegative, checked_bounds
+from dream._checks import Bounds, FloatArray, all_finite, as_array, as_offsets, check_nonnegative, checked_bounds
 from dream.kernels._dispatch import implementation
 
 #: Preferred speeds above this (m/s) are scaled down to it, keeping their direction: the choice
@@ -42,6 +43,24 @@ def _grid(v_max: float, n_angles: int, n_speeds: int) -> FloatArray:
     grid = _reference.candidate_grid(v_max, n_angles, n_speeds)
     grid.flags.writeable = False  # shared between calls
     return grid
+
+
+def _check_decision(detections: FloatArray, vectors: dict[str, FloatArray]) -> None:
+    """Refuse what the Rust planner refuses, on both paths: a non-finite ``velocity``, ``preferred``
+    or ``position`` ``(2,)``, then the first detection row ``(4,)`` that is not finite or lies at a
+    negative distance (the NumPy reference would decide from it without a word)."""
+    for name, vector in vectors.items():
+        if not all_finite(vector):
+            raise ValueError(
+                f"`{name}` contains a non-finite value (NaN or inf) at index {np.flatnonzero(~np.isfinite(vector))[0]}"
+            )
+    if all_finite(detections) and not (len(detections) and detections[:, 0].min() < 0):
+        return
+    for index, row in enumerate(detections.tolist()):
+        if not all(map(math.isfinite, row)):
+            raise ValueError(f"`detections` contains a non-finite value (NaN or inf) at index {index}")
+        if row[0] < 0:
+            raise ValueError(f"`detection distance` must be finite and >= 0, got {row[0]}")
 
 
 def _checked_csr(csr: tuple[Any, Any], n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -100,9 +119,16 @@ class HrvoPlanner:
 
         ``detections`` ``(k, 4)`` are movement-sensor rows ``[distance, angle, vx, vy]`` (angle
         from the detected robot towards this one); ``velocity`` is the robot's previous
-        velocity, ``preferred`` the one it wants, ``position`` where it is (all ``(2,)``, finite
-        float64: the caller checks).
+        velocity, ``preferred`` the one it wants, ``position`` where it is (all ``(2,)`` float64:
+        the caller checks the shapes).
+
+        Raises
+        ------
+        ValueError
+            A non-finite value, or a detection at a negative distance: the same message from the
+            Rust and the NumPy paths.
         """
+        _check_decision(detections, {"velocity": velocity, "preferred": preferred, "position": position})
         if abs(preferred[0]) + abs(preferred[1]) > PREFERRED_LIMIT:
             preferred = _bounded(preferred.reshape(1, 2))[0]
         return self._planner.velocity(detections, velocity, preferred, position)
