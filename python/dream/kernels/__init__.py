@@ -27,10 +27,10 @@ from dream.kernels._dynamics import (
     wheel_speeds,
 )
 from dream.kernels._hrvo import HrvoPlanner, hrvo, hrvo_rows
-from dream.kernels._neighbours import Heard, Perceived, far_from, neighbours, neighbours_of, perceive
+from dream.kernels._neighbours import far_from, neighbours, neighbours_of, perceive
 from dream.kernels._obstacles import obstacle_agents, virtual_agents
 from dream.kernels._raycast import distance_rays
-from dream.kernels._reduce import REDUCTIONS, segment_any, segment_nearest, segment_reduce
+from dream.kernels._reduce import segment_any, segment_nearest, segment_reduce
 from dream.kernels._voronoi import VoronoiCells, heard_cells, voronoi_cell, voronoi_cells
 
 Bounds = _checks.Bounds

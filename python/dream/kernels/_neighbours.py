@@ -130,7 +130,8 @@ def perceive(
     always seen), and heard when it is within ``radio_range`` (m) and ``talking[j]``. Returns
     ``(seen, heard)``: ``(offsets (m + 1,), ids, distances, bearings)`` and ``(offsets, ids,
     distances)``; row r's entries are ``offsets[r]:offsets[r + 1]``, ids increasing; bearings
-    are world-frame directions from the perceiving robot towards the other. A row does not depend on which other rows are asked.
+    are world-frame directions from the perceiving robot towards the other. A row does not
+    depend on which other rows are asked.
     """
     p = as_array(positions, "positions", (None, 2))
     n = p.shape[0]

@@ -28,6 +28,7 @@ import numpy as np
 
 from dream import kernels, rules
 from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
+from dream.kernels._neighbours import Heard, Perceived
 from dream.robot import guard_distance, stopping
 from dream.sensors import seen_velocity
 from dream.specs import ArenaSpec, SimulatorSpec
@@ -221,7 +222,7 @@ class Engine:
         self,
         t: int,
         rows: np.ndarray,
-        seen: kernels.Perceived,
+        seen: Perceived,
         x: np.ndarray,
         commands: np.ndarray,
         faults: FaultState | None,
@@ -249,7 +250,7 @@ class Engine:
         return Neighbourhood(offsets, columns)
 
     # -- radio -------------------------------------------------------------------------------
-    def _hear(self, t: int, rows: np.ndarray, heard: kernels.Heard, faults: FaultState | None) -> Neighbourhood:
+    def _hear(self, t: int, rows: np.ndarray, heard: Heard, faults: FaultState | None) -> Neighbourhood:
         """The messages delivered to ``rows`` by the talking robots in range (what
         :func:`dream.kernels.perceive` found), with the radio's and the world's losses."""
         offsets, senders, gaps = heard

@@ -88,7 +88,8 @@ class Neighbourhood:
         return kernels.segment_reduce(self[what], self.offsets, op)
 
     def sum(self, what: str | Sequence[str] | np.ndarray) -> FloatArray:
-        """Each row's sum of a column (``(k,)``), of several (``(k, w)``), or of values ``(e,)`` or ``(e, w)``; 0 for none."""
+        """Each row's sum of a column (``(k,)``), of several (``(k, w)``), or of values ``(e,)`` or
+        ``(e, w)``; 0 for an empty row."""
         return self._reduce(what, "sum")
 
     def mean(self, what: str | Sequence[str] | np.ndarray) -> FloatArray:
