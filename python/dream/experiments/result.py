@@ -102,7 +102,7 @@ class ExperimentResult:
             ("robots", self.n),
             ("seed", self.seed),
             ("backend", f"{self.backend} (rules {self.rules})"),
-            *((("mode", "swarm (one decision for the whole swarm per step)"),) if self.swarm else ()),
+            *((("mode", "swarm (the robots deciding in a step decide in one call)"),) if self.swarm else ()),
             *((f"  {key}", value) for key, value in self.params.items()),
             ("steps run", self.steps),
             ("completed at step", "not completed" if self.completed_step is None else self.completed_step),
