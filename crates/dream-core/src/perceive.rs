@@ -52,13 +52,35 @@ impl Perceived {
         row.clear();
     }
 
-    /// Appends the rows of `part` (whose offsets start at 0 without the leading 0).
-    fn extend(&mut self, part: Perceived) {
-        let base = self.ids.len() as i64;
-        self.offsets.extend(part.offsets.iter().map(|o| o + base));
-        self.ids.extend_from_slice(&part.ids);
-        self.distances.extend_from_slice(&part.distances);
-        self.bearings.extend_from_slice(&part.bearings);
+    /// The rows of `parts` (each with offsets from 0, leading 0 left out) put in the order
+    /// `place` gives: `place[r] = (part, row within it)` of output row r.
+    fn gather(parts: &[Perceived], place: &[(usize, usize)], bearings: bool) -> Perceived {
+        let span = |&(p, k): &(usize, usize)| {
+            let offsets = &parts[p].offsets;
+            let start = if k == 0 { 0 } else { offsets[k - 1] as usize };
+            (p, start, offsets[k] as usize)
+        };
+        let spans: Vec<(usize, usize, usize)> = place.iter().map(span).collect();
+        let mut out = Perceived {
+            offsets: Vec::with_capacity(place.len() + 1),
+            ..Perceived::default()
+        };
+        out.offsets.push(0);
+        for &(_, start, end) in &spans {
+            out.offsets
+                .push(out.offsets[out.offsets.len() - 1] + (end - start) as i64);
+        }
+        let total = out.offsets[place.len()] as usize;
+        out.ids.reserve(total);
+        out.distances.reserve(total);
+        for &(p, start, end) in &spans {
+            out.ids.extend_from_slice(&parts[p].ids[start..end]);
+            out.distances.extend_from_slice(&parts[p].distances[start..end]);
+            if bearings {
+                out.bearings.extend_from_slice(&parts[p].bearings[start..end]);
+            }
+        }
+        out
     }
 }
 
@@ -114,12 +136,12 @@ pub fn perceive(
     }
     let reach = sight.map_or(0.0, |s| s.range).max(radio.map_or(0.0, |r| r.0));
     let near = Near::new(xs, ys, reach);
-    // One task's rows, each row sorted by id; the offsets leave out the leading 0.
-    let chunk = |rows: &[i64]| {
+    // One task's rows (indices into `rows`), each row sorted by id; offsets without the leading 0.
+    let chunk = |task: &[usize]| {
         let (mut seen, mut heard) = (Perceived::default(), Perceived::default());
         let (mut scratch, mut seen_row, mut heard_row) = (Vec::new(), Vec::new(), Vec::new());
-        for &i in rows {
-            let i = i as usize;
+        for &r in task {
+            let i = rows[r] as usize;
             near.for_each(i, &mut scratch, |j, offset, distance| {
                 if let Some(s) = sight {
                     if distance <= s.range {
@@ -143,19 +165,33 @@ pub fn perceive(
         }
         (seen, heard)
     };
-    let parts: Vec<(Perceived, Perceived)> = if rows.len() >= PARALLEL_ROWS {
-        rows.par_chunks(CHUNK_ROWS).map(chunk).collect()
-    } else {
-        vec![chunk(rows)]
-    };
-    let (mut seen, mut heard) = (Perceived::default(), Perceived::default());
-    seen.offsets.push(0);
-    heard.offsets.push(0);
-    for (s, h) in parts {
-        seen.extend(s);
-        heard.extend(h);
+    // The rows go in the grid's cell order, so that a task's robots share their cells' memory
+    // (in the given order, robots spread at random touch a new part of the arena each time).
+    let mut rank = vec![0_usize; n];
+    for (k, &i) in near.order().iter().enumerate() {
+        rank[i] = k;
     }
-    Ok((seen, heard))
+    let mut order: Vec<usize> = (0..rows.len()).collect();
+    order.sort_unstable_by_key(|&r| rank[rows[r] as usize]);
+    let parts: Vec<(Perceived, Perceived)> = if rows.len() >= PARALLEL_ROWS {
+        order.par_chunks(CHUNK_ROWS).map(chunk).collect()
+    } else {
+        vec![chunk(&order)]
+    };
+    let chunk_rows = if rows.len() >= PARALLEL_ROWS {
+        CHUNK_ROWS
+    } else {
+        rows.len().max(1)
+    };
+    let mut place = vec![(0, 0); rows.len()];
+    for (k, &r) in order.iter().enumerate() {
+        place[r] = (k / chunk_rows, k % chunk_rows);
+    }
+    let (seen, heard): (Vec<Perceived>, Vec<Perceived>) = parts.into_iter().unzip();
+    Ok((
+        Perceived::gather(&seen, &place, true),
+        Perceived::gather(&heard, &place, false),
+    ))
 }
 
 #[cfg(test)]
