@@ -138,8 +138,8 @@ def perceive(
 ) -> tuple[tuple[_Ints, _Ints, _Floats, _Floats], tuple[_Ints, _Ints, _Floats]]:
     """(seen (offsets, ids, distances, bearings), heard (offsets, ids, distances)) of the robots `rows`."""
 
-def segment_reduce(values: _Floats, offsets: _Ints, op: str, index: _Ints | None = None) -> _Floats:
-    """op (sum, mean, min, max) of each row's entries of values (k, w), or of its rows `index`: (m, w)."""
+def segment_reduce(values: _Floats, offsets: _Ints, op: str) -> _Floats:
+    """op (sum, mean, min, max) of each row's entries of values (k, w): (m, w)."""
 
 def segment_any(flags: NDArray[np.bool_], offsets: _Ints) -> NDArray[np.bool_]:
     """(m,) bool: whether any entry of each row is set."""

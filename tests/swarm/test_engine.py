@@ -137,9 +137,10 @@ class Recorder(SwarmRobot):
         return np.zeros(len(ids), dtype=np.int64) if self.starts is None else self.starts[ids]
 
     def decide(self, view: View) -> np.ndarray:
-        self.views.append((view.step, view.ids.copy(), {k: view.heard[k].copy() for k in view.heard.names}))
+        self.views.append((int(view.clock[0]), view.ids.copy(), {k: v.copy() for k, v in view.heard.columns.items()}))
         if self.radio is not None:
-            view.send(**{key: view.ids * 1.0 + view.step / 1000 for key in self.radio.kinds})
+            fields = {key: view.ids * 1.0 + view.clock / 1000 for key in self.radio.kinds}
+            view.send(**{key: view.ids if kind is int else fields[key] for key, kind in self.radio.kinds.items()})
         return np.zeros((len(view), 2))
 
 
@@ -168,14 +169,16 @@ def test_decisions_follow_the_timer_rule():
         assert decided == expected
 
 
-def test_a_message_is_heard_from_the_step_after_its_latency():
-    robot = Recorder(period=1, radio=Radio(range=5.0, fields=("value",), latency=2))
-    drive(robot, 2, 8)
-    for t, _ids, heard in robot.views:
-        if t >= 4:  # sent at t - 3 (one step on the air, two of latency)
-            assert set(heard["sender"]) == {0, 1}
-            assert np.allclose(heard["value"] % 1, (t - 3) / 1000)
-        elif t < 3:
+@pytest.mark.parametrize("latency", [0, 1, 2, 5])
+def test_a_message_is_heard_latency_steps_after_it_was_sent(latency):
+    robot = Recorder(period=1, radio=Radio(range=5.0, fields=("value",), latency=latency))
+    drive(robot, 2, 12)
+    delay = max(latency, 1)  # never in the step it was sent
+    for t, _ids, heard in robot.views:  # every robot sends at every step from step 1 on
+        if t - delay >= 1:
+            assert sorted(heard["sender"]) == [0, 1]
+            assert np.allclose(heard["value"] % 1, (t - delay) / 1000)
+        else:
             assert len(heard["sender"]) == 0
 
 
@@ -217,10 +220,77 @@ def test_a_sensor_sees_only_within_its_range_and_field_of_view():
 
 def test_the_decision_gets_rows_never_the_swarm():
     robot = Recorder(period=2, radio=Radio(range=1.0, fields=("value",)))
-    engine, _ = drive(robot, 6, 3)
-    view_fields = set(View.__dataclass_fields__)
-    assert view_fields == {"ids", "step", "pose", "seen", "heard", "memory", "said"}
+    drive(robot, 6, 3)
+    assert set(View.__dataclass_fields__) == {"ids", "clock", "pose", "seen", "heard", "memory", "said"}
     assert all(len(ids) == 6 for _, ids, _ in robot.views)
+
+
+@pytest.mark.parametrize(
+    "meddle",
+    [
+        lambda view: view.ids.__setitem__(0, 5),
+        lambda view: view.seen["dx"].__setitem__(slice(None), 0.0),
+        lambda view: view.heard["value"].__setitem__(slice(None), 0.0),
+        lambda view: view.heard.offsets.__setitem__(slice(None), 0),
+    ],
+    ids=["ids", "detections", "messages", "rows"],
+)
+def test_a_decision_cannot_change_what_the_others_perceive(meddle):
+    class Meddler(SwarmRobot):
+        period = 1
+        movement = Movement(range=2.0)
+        radio = Radio(range=2.0, fields=("value",))
+
+        def decide(self, view):
+            view.send(value=view.pose[:, 0])
+            if view.clock[0] > 3:
+                meddle(view)
+            return np.zeros((len(view), 2))
+
+    with pytest.raises(ValueError, match="read-only"):
+        drive(Meddler(), 4, 6)
+
+
+@pytest.mark.parametrize(
+    ("said", "message"),
+    [
+        (lambda view: {"value": view.pose[:1, 0]}, r"message field 'value' must have one value per deciding robot"),
+        (lambda view: {"value": view.pose[:, 0], "count": view.pose[:, 0]}, "'count' holds int64 values, got float64"),
+    ],
+)
+def test_a_message_that_would_mix_robots_is_refused(said, message):
+    class Sender(SwarmRobot):
+        period = 1
+        radio = Radio(range=1.0, fields={"value": float, "count": int})
+
+        def decide(self, view):
+            view.send(**{"count": view.ids, **said(view)})
+            return np.zeros((len(view), 2))
+
+    with pytest.raises(ValueError, match=message):
+        drive(Sender(), 4, 3)
+
+
+def test_memory_keeps_its_kind_and_one_value_per_robot():
+    class Counter(SwarmRobot):
+        period = 1
+        memory = {"decisions": 0, "last": np.nan}
+
+        def decide(self, view):
+            view.memory["decisions"] += 1
+            view.memory["last"] = view.clock
+            return np.zeros((len(view), 2))
+
+    engine, _ = drive(Counter(), 3, 6)
+    assert engine.memory["decisions"].tolist() == [5, 5, 5] and engine.memory["last"].tolist() == [5.0] * 3
+
+    class Bad(Counter):
+        def decide(self, view):
+            view.memory["decisions"] = view.clock + 0.5  # a float into an int memory
+            return np.zeros((len(view), 2))
+
+    with pytest.raises(ValueError, match="memory 'decisions' holds int64 values, got float64"):
+        drive(Bad(), 3, 3)
 
 
 def test_draws_depend_on_keys_not_on_order():

@@ -34,13 +34,11 @@ fn rows_of<T: Send>(rows: usize, row: impl Fn(usize) -> T + Sync + Send) -> Vec<
     }
 }
 
-/// `op` of each row's entries, column by column: `(m, width)` row-major. Entry e is row e of
-/// `values` (`width` values each), or with `index` row `index[e]` of it: a neighbourhood of
-/// messages reduced straight from the board, by sender, without gathering it first.
+/// `op` of each row's entries, column by column: `(m, width)` row-major.
 ///
 /// # Errors
-/// `values` not a whole number of rows of `width`, an index out of its rows, or an invalid CSR.
-pub fn reduce(values: &[f64], width: usize, offsets: &[i64], op: Reduce, index: Option<&[i64]>) -> Result<Vec<f64>> {
+/// `values` not a whole number of entries of `width`, or an invalid CSR.
+pub fn reduce(values: &[f64], width: usize, offsets: &[i64], op: Reduce) -> Result<Vec<f64>> {
     if width == 0 || values.len() % width != 0 {
         return Err(GeomError::LengthMismatch {
             arg: "values",
@@ -48,25 +46,16 @@ pub fn reduce(values: &[f64], width: usize, offsets: &[i64], op: Reduce, index: 
             got: values.len(),
         });
     }
-    let rows = values.len() / width;
-    let entries = index.map_or(rows, <[i64]>::len);
-    check_offsets("offsets", offsets, entries, "entries")?;
-    if let Some(bad) = index.and_then(|ix| ix.iter().find(|&&i| i < 0 || i as usize >= rows)) {
-        return Err(GeomError::InvalidParameter {
-            arg: "index",
-            rule: "rows of `values`",
-            got: *bad as f64,
-        });
-    }
-    let at = |e: usize| index.map_or(e, |ix| ix[e] as usize) * width;
+    check_offsets("offsets", offsets, values.len() / width, "entries")?;
     let row = |r: usize| {
         let (start, end) = (offsets[r] as usize, offsets[r + 1] as usize);
         let mut out = vec![0.0; width];
         for (c, slot) in out.iter_mut().enumerate() {
-            let column = (start..end).map(|e| values[at(e) + c]);
+            // In entry order from +0.0, as the NumPy reference adds: the same bits on both paths.
+            let column = (start..end).map(|e| values[e * width + c]);
             *slot = match op {
-                Reduce::Sum => column.sum(),
-                Reduce::Mean if end > start => column.sum::<f64>() / (end - start) as f64,
+                Reduce::Sum => column.fold(0.0, |a, b| a + b),
+                Reduce::Mean if end > start => column.fold(0.0, |a, b| a + b) / (end - start) as f64,
                 Reduce::Min => column.fold(f64::NAN, f64::min),
                 Reduce::Max => column.fold(f64::NAN, f64::max),
                 Reduce::Mean => f64::NAN,
@@ -117,14 +106,11 @@ mod tests {
     fn empty_rows_and_nan() {
         let values = [1.0, 2.0, f64::NAN, 4.0];
         let offsets = [0, 0, 3, 4];
-        let sums = reduce(&values, 1, &offsets, Reduce::Sum, None).unwrap();
+        let sums = reduce(&values, 1, &offsets, Reduce::Sum).unwrap();
         assert_eq!(sums[0], 0.0);
         assert!(sums[1].is_nan());
         assert_eq!(sums[2], 4.0);
-        let mins = reduce(&values, 1, &offsets, Reduce::Min, None).unwrap();
-        let gathered = reduce(&values, 1, &[0, 2], Reduce::Sum, Some(&[3, 3])).unwrap();
-        assert_eq!(gathered, vec![8.0]);
-        assert!(reduce(&values, 1, &[0, 1], Reduce::Sum, Some(&[4])).is_err());
+        let mins = reduce(&values, 1, &offsets, Reduce::Min).unwrap();
         assert!(mins[0].is_nan());
         assert_eq!(mins[1], 1.0);
         assert_eq!(nearest(&values, &offsets).unwrap(), vec![-1, 0, 3]);
@@ -136,8 +122,8 @@ mod tests {
 
     #[test]
     fn bad_offsets_are_named() {
-        assert!(reduce(&[1.0], 1, &[0, 2], Reduce::Sum, None).is_err());
-        assert!(reduce(&[1.0, 2.0], 1, &[0, 2, 1, 2], Reduce::Sum, None).is_err());
-        assert!(reduce(&[1.0, 2.0, 3.0], 2, &[0, 1], Reduce::Sum, None).is_err());
+        assert!(reduce(&[1.0], 1, &[0, 2], Reduce::Sum).is_err());
+        assert!(reduce(&[1.0, 2.0], 1, &[0, 2, 1, 2], Reduce::Sum).is_err());
+        assert!(reduce(&[1.0, 2.0, 3.0], 2, &[0, 1], Reduce::Sum).is_err());
     }
 }

@@ -7,16 +7,13 @@ use pyo3::prelude::*;
 use crate::arrays::{flags_of, indices_of, matrix_of, vector_of};
 use crate::errors::{value_error, PyDreamResult};
 
-/// `op` ("sum", "mean", "min" or "max") of each row's entries of `values` `(k, w)` (or of its
-/// rows `index`): `(m, w)`.
+/// `op` ("sum", "mean", "min" or "max") of each row's entries of `values` `(k, w)`: `(m, w)`.
 #[pyfunction]
-#[pyo3(signature = (values, offsets, op, index=None))]
 pub fn segment_reduce<'py>(
     py: Python<'py>,
     values: Bound<'py, PyAny>,
     offsets: Bound<'py, PyAny>,
     op: &str,
-    index: Option<Bound<'py, PyAny>>,
 ) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
     let op = match op {
         "sum" => Reduce::Sum,
@@ -27,8 +24,12 @@ pub fn segment_reduce<'py>(
     };
     let (values, width) = matrix_of("values", &values)?;
     let offsets = indices_of("offsets", &offsets)?;
-    let index = index.map(|ix| indices_of("index", &ix)).transpose()?;
-    let out = py.detach(|| core::reduce(&values, width.max(1), &offsets, op, index.as_deref()))?;
+    if width == 0 {
+        return Err(value_error(
+            "`values` must have at least one column, got shape (k, 0)".into(),
+        ));
+    }
+    let out = py.detach(|| core::reduce(&values, width, &offsets, op))?;
     let rows = offsets.len().saturating_sub(1);
     Ok(out.into_pyarray(py).reshape([rows, width])?)
 }

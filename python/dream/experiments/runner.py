@@ -254,8 +254,8 @@ class Stepper:
     def __init__(self, exp: Experiment, n: int, world: World, rules: SimulatorSpec = RPS, swarm: bool = False) -> None:
         if swarm and not exp.has_swarm_mode:
             raise ValueError(
-                f"{exp.label()} has no swarm mode (swarm=True, --swarm): run it robot by robot, or give it "
-                "has_swarm_mode = True, build_swarm(n) and swarm_step(step, x) (see dream.Experiment)"
+                f"{exp.label()} has no swarm mode (swarm=True, --swarm): run it robot by robot, or write its "
+                "robots as a dream.swarm.SwarmRobot returned by swarm_robot(n) (see docs/swarm-robots.md)"
             )
         exp.n, exp.world, exp.rules, exp.arena, exp.swarm = n, world, rules, exp.arena_for(n), bool(swarm)
         team = exp.swarm_robot(n)

@@ -132,9 +132,11 @@ class Experiment:
     (the swarm's arrays instead of robot objects and timers) and, every step,
     :meth:`swarm_step` (every robot's command at once, from the poses) instead of the timers;
     every other hook is called as in the per-robot mode, so :meth:`done`, :meth:`measures` and
-    :meth:`frame` look at :attr:`swarm` to know where the robots' state is. Faults reach a swarm
-    through its wheels only (crashed and stuck robots, actuator noise): it has no radios or
-    sensors to lose messages or readings.
+    :meth:`frame` look at :attr:`swarm` to know where the robots' state is. Faults reach a
+    hand-written swarm mode through its wheels only (crashed and stuck robots, actuator noise):
+    it has no radios or sensors to lose messages or readings. An experiment whose robots are a
+    :class:`~dream.swarm.SwarmRobot` (:meth:`swarm_robot`) needs no swarm mode of its own, and
+    gets every fault both ways.
 
     Attributes the runner sets
     --------------------------
@@ -266,7 +268,7 @@ class Experiment:
     def frame(self, step: int, poses: np.ndarray) -> Frame:
         """What a renderer draws of this step (default: poses, and ``dxi`` of robots that have one)."""
         velocities = [getattr(robot, "dxi", None) for robot in self.robots]
-        drawn = None if self.engine is None else self.engine.dxi
+        drawn = None if self.engine is None else self.engine.dxi.copy()
         if self.robots and all(v is not None for v in velocities):
             drawn = np.array(velocities, dtype=np.float64).reshape(-1, 2)
         return Frame(step, self.arena, poses, velocities=drawn, title=self.label())

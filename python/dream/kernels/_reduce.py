@@ -19,24 +19,21 @@ def _values(values: Any, name: str) -> FloatArray:
     return array
 
 
-def segment_reduce(values: Any, offsets: Any, op: str, index: Any = None) -> FloatArray:
+def segment_reduce(values: Any, offsets: Any, op: str) -> FloatArray:
     """``op`` of each row's entries: ``(m,)`` for values ``(k,)``, ``(m, w)`` for ``(k, w)``.
 
     ``op`` is one of "sum", "mean", "min", "max". Row r holds the entries
-    ``offsets[r]:offsets[r + 1]``; entry e is ``values[e]``, or with ``index`` ``(k,)``
-    ``values[index[e]]`` (a neighbourhood reduced straight from per-robot arrays, by id, with no
-    gathered copy). Empty rows give 0 for a sum, NaN for the others; the minimum and maximum
-    skip NaN entries, the sum and the mean carry them.
+    ``offsets[r]:offsets[r + 1]``. Empty rows give 0 for a sum, NaN for the others; the minimum
+    and maximum skip NaN entries, the sum and the mean carry them. Sums add in entry order, on
+    both paths alike.
     """
     if op not in REDUCTIONS:
         raise ValueError(f"`op` must be one of {', '.join(REDUCTIONS)}, got {op!r}")
     array = _values(values, "values")
-    rows = None if index is None else np.ascontiguousarray(index, dtype=np.int64)
-    if rows is not None and (rows.ndim != 1 or (len(rows) and (rows.min() < 0 or rows.max() >= len(array)))):
-        raise ValueError(f"`index` must hold rows of `values` in [0, {len(array)}), shape (k,)")
-    cuts = as_offsets(offsets, "offsets", len(array) if rows is None else len(rows))
-    table = array.reshape(-1, 1) if array.ndim == 1 else array
-    out = implementation("segment_reduce")(table, cuts, op, rows)
+    if array.ndim == 2 and array.shape[1] == 0:
+        raise ValueError(f"`values` must have at least one column, got shape {array.shape}")
+    cuts = as_offsets(offsets, "offsets", len(array))
+    out = implementation("segment_reduce")(array.reshape(-1, 1) if array.ndim == 1 else array, cuts, op)
     return out[:, 0] if array.ndim == 1 else out
 
 

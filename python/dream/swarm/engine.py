@@ -71,6 +71,7 @@ class Engine:
         self.belief = np.full((n, 3), np.nan)  #: each robot's odometry, NaN until its first reading
         self.dxi = np.zeros((n, 2))  #: each robot's last chosen velocity (m/s)
         self.memory = {key: np.full(n, value) for key, value in robot.memory.items()}
+        self.silenced = np.zeros(n, dtype=bool)  #: crashed robots whose messages left the air
         self.sidestep = np.zeros(n, dtype=np.int64)
         self.side = np.ones(n)
         kinds = {} if robot.radio is None else robot.radio.kinds
@@ -94,8 +95,8 @@ class Engine:
     def step(self, t: int, x: np.ndarray, commands: np.ndarray, faults: FaultState | None = None) -> np.ndarray:
         """Decide at step ``t`` from the poses ``x`` ``(3, n)``: ``commands`` ``(2, n)`` (the last
         ones, which the movement sensors see) with the deciding robots' columns replaced."""
-        if faults is not None and faults.crashed.any():
-            self._silence(faults.crashed)
+        if faults is not None and (faults.crashed & ~self.silenced).any():
+            self._silence(faults.crashed & ~self.silenced)
         self._deliver(t)
         clock = self._clock(t, faults)
         due = (clock > self.start) & (clock - self.last >= self.robot.period)
@@ -106,56 +107,74 @@ class Engine:
         rows = rows[self._odometry(t, rows, x, faults)]
         if not len(rows):
             return commands
-        movement, radio = self.robot.movement, self.robot.radio
+        # What the sensors see of the others' motion: their commands before anyone decides now.
+        vx, vy = seen_velocity(commands, x[2])
+        talking = self.sent_at >= 0
+        batches = np.split(rows, len(rows)) if self.one_by_one else [rows]
+        out = commands.copy()
+        said = [self._decide(t, b, clock[b], x, (vx, vy), talking, faults, out) for b in batches]
+        if self.robot.radio is not None:
+            self._publish(t, [s for s in said if s is not None], faults)
+        return out
+
+    def _decide(
+        self,
+        t: int,
+        rows: np.ndarray,
+        clock: np.ndarray,
+        x: np.ndarray,
+        velocities: tuple[np.ndarray, np.ndarray],
+        talking: np.ndarray,
+        faults: FaultState | None,
+        out: np.ndarray,
+    ) -> tuple[np.ndarray, dict[str, np.ndarray]] | None:
+        """The robots ``rows`` perceive, hear and decide; their commands go into ``out``. Returns
+        what they said (their ids and fields), if anything."""
+        robot, movement, radio = self.robot, self.robot.movement, self.robot.radio
         seen, heard = kernels.perceive(
             x[:2].T,
             x[2],
             rows,
             sight=None if movement is None else (movement.range, movement.fov, movement.direction),
             radio_range=None if radio is None else radio.range,
-            talking=None if radio is None else self.sent_at >= 0,
+            talking=None if radio is None else talking,
         )
-        # What the sensors see of the others' motion: the commands before anyone decides now.
-        detections = self._sense(t, rows, seen, x, commands, faults)
-        inboxes = self._hear(t, rows, heard, faults)
-        batches = [(r, r + 1) for r in range(len(rows))] if self.one_by_one else [(0, len(rows))]
-        out = commands.copy()
-        said = [self._decide(t, rows[a:b], detections.rows(a, b), inboxes.rows(a, b), out) for a, b in batches]
-        if radio is not None:
-            self._publish(t, [s for s in said if s is not None], faults)
-        return out
-
-    def _decide(
-        self, t: int, rows: np.ndarray, seen: Neighbourhood, heard: Neighbourhood, out: np.ndarray
-    ) -> tuple[np.ndarray, dict[str, np.ndarray]] | None:
-        """The robots ``rows`` decide from what they perceive; their commands go into ``out``.
-        Returns what they said (their ids and fields), if anything."""
-        robot = self.robot
-        memory = {key: values[rows].copy() for key, values in self.memory.items()}
-        view = View(rows, t, self.belief[rows].copy(), seen, heard, memory)
+        ids = rows.copy()
+        ids.flags.writeable = False
+        memory = {key: values[rows] for key, values in self.memory.items()}
+        view = View(
+            ids,
+            clock.copy(),
+            self.belief[rows],
+            self._sense(t, rows, seen, velocities, faults).frozen(),
+            self._hear(t, rows, heard, faults).frozen(),
+            memory,
+        )
         wished = np.asarray(robot.decide(view), dtype=np.float64)
+        name = type(robot).__name__
         if wished.shape != (len(rows), 2) or not np.isfinite(wished).all():
             raise ValueError(
-                f"{type(robot).__name__}.decide must return finite velocities of shape (k, 2) = ({len(rows)}, 2), "
+                f"{name}.decide must return finite velocities of shape (k, 2) = ({len(rows)}, 2), "
                 f"got shape {wished.shape}" + ("" if wished.shape != (len(rows), 2) else " with NaN or inf")
             )
         for key, values in view.memory.items():
-            self.memory[key][rows] = values
-        out[:, rows] = self._drive(rows, wished, view)
+            if key not in self.memory:
+                raise ValueError(f"{name} remembers {key!r}, which its memory does not declare: add it to `memory`")
+            self.memory[key][rows] = _per_robot(values, len(rows), self.memory[key].dtype, f"{name} memory {key!r}")
+        out[:, rows] = self._drive(rows, wished, self.belief[rows], view.seen)
         if view.said is None:
             return None
-        return rows, self._message(view.said)
+        return rows, self._message(view.said, len(rows))
 
-    def _drive(self, rows: np.ndarray, wished: np.ndarray, view: View) -> np.ndarray:
+    def _drive(self, rows: np.ndarray, wished: np.ndarray, pose: np.ndarray, seen: Neighbourhood) -> np.ndarray:
         """The unicycle commands ``(2, k)`` that carry out ``wished`` ``(k, 2)``: through HRVO on the
         robots' own detections (if they avoid), the conversion, the limits and the motion guard."""
-        robot, avoid, pose = self.robot, self.robot.avoid, view.pose
+        robot, avoid = self.robot, self.robot.avoid
         chosen = wished
         if avoid is not None:
             asked = wished
             if avoid.sidestep:
                 asked, self.sidestep[rows] = rules.sidestep_preference(wished, self.sidestep[rows], self.side[rows])
-            seen = view.seen
             bearing = seen["bearing"]
             detections = np.column_stack(
                 (seen["distance"], np.where(bearing > 0, bearing - math.pi, bearing + math.pi), seen["vx"], seen["vy"])
@@ -182,7 +201,6 @@ class Engine:
         out = kernels.actuator_limit(kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain), self.limits)
         if avoid is not None and avoid.guard:
             near = guard_distance(robot.spec.diameter, avoid.safety)
-            seen = view.seen
             offsets = -np.column_stack((seen["dx"], seen["dy"]))
             out[0, stopping(out[0], pose[:, 2], seen.owner, offsets, near)] = 0.0
         return out
@@ -223,23 +241,18 @@ class Engine:
         t: int,
         rows: np.ndarray,
         seen: Perceived,
-        x: np.ndarray,
-        commands: np.ndarray,
+        velocities: tuple[np.ndarray, np.ndarray],
         faults: FaultState | None,
     ) -> Neighbourhood:
         """The movement sensor's detections (what :func:`dream.kernels.perceive` found ``rows``
-        see), with the sensor's noise and the world's sensor faults, as a neighbourhood."""
+        see; ``velocities``: every robot's as the sensor estimates it), with the sensor's noise and
+        the world's sensor faults."""
         sensor = self.robot.movement
         offsets, others, gaps, bearing = seen
         if sensor is None:
             return Neighbourhood(offsets, {name: np.zeros(0) for name in (*DETECTION, "dx", "dy")})
         me = np.repeat(rows, np.diff(offsets))
-        kept = self._kept(t, me, others, faults)
-        if not kept.all():
-            offsets = np.concatenate(([0], np.cumsum(kept)))[offsets]
-            me, others, gaps, bearing = me[kept], others[kept], gaps[kept], bearing[kept]
-        vx, vy = seen_velocity(commands[:, others], x[2, others])
-        columns = {"distance": gaps, "bearing": bearing, "vx": vx, "vy": vy}
+        columns = {"distance": gaps, "bearing": bearing, "vx": velocities[0][others], "vy": velocities[1][others]}
         sigma = math.hypot(sensor.noise, 0.0 if faults is None else faults.faults.sensor_noise)
         if sigma > 0:
             noise = draws.normal(self.seed, draws.DETECTION_NOISE, t, me[:, None], others[:, None], np.arange(4))
@@ -247,7 +260,9 @@ class Engine:
             columns["distance"] = np.maximum(columns["distance"], 0.0)  # never negative, noisy or not
         columns["dx"] = columns["distance"] * np.cos(columns["bearing"])
         columns["dy"] = columns["distance"] * np.sin(columns["bearing"])
-        return Neighbourhood(offsets, columns)
+        detections = Neighbourhood(offsets, columns)
+        kept = self._kept(t, me, others, faults)
+        return detections if kept.all() else detections.where(kept)
 
     # -- radio -------------------------------------------------------------------------------
     def _hear(self, t: int, rows: np.ndarray, heard: Heard, faults: FaultState | None) -> Neighbourhood:
@@ -257,25 +272,26 @@ class Engine:
         radio = self.robot.radio
         if radio is None:
             return Neighbourhood(offsets, {"sender": senders})
+        inbox = Neighbourhood(
+            offsets, {"sender": senders, **{key: board[senders] for key, board in self.board.items()}}
+        )
         f = None if faults is None else faults.faults
         keep: float | np.ndarray = 1.0 - radio.loss
         if f is not None:
             keep = keep * (1.0 - f.loss) * np.maximum(1.0 - f.distance_loss * gaps, 0.0)
         lossy = np.broadcast_to(keep < 1.0, senders.shape)
-        bursty = f is not None and f.burst is not None
-        if lossy.any() or bursty:
-            me = np.repeat(rows, np.diff(offsets))
-            through = np.ones(len(senders), dtype=bool)
-            if lossy.any():
-                chance = np.broadcast_to(keep, senders.shape)[lossy]
-                through[lossy] = draws.uniform(self.seed, draws.LOSS, t, me[lossy], senders[lossy]) < chance
-            if f is not None and f.burst is not None:
-                through &= ~self._burst(t, me, senders, f.burst)
-            if faults is not None:
-                faults.messages_lost += int((~through).sum())
-            offsets = np.concatenate(([0], np.cumsum(through)))[offsets]
-            senders = senders[through]
-        return Neighbourhood(offsets, {"sender": senders}, senders, self.board)
+        if not lossy.any() and (f is None or f.burst is None):
+            return inbox
+        me = np.repeat(rows, np.diff(offsets))
+        through = np.ones(len(senders), dtype=bool)
+        if lossy.any():
+            chance = np.broadcast_to(keep, senders.shape)[lossy]
+            through[lossy] = draws.uniform(self.seed, draws.LOSS, t, me[lossy], senders[lossy]) < chance
+        if f is not None and f.burst is not None:
+            through &= ~self._burst(t, me, senders, f.burst)
+        if faults is not None:
+            faults.messages_lost += int((~through).sum())
+        return inbox.where(through)
 
     def _burst(self, t: int, me: np.ndarray, others: np.ndarray, burst: tuple[float, float]) -> np.ndarray:
         """Each link's Gilbert-Elliott state after this message (True: in a loss burst)."""
@@ -286,8 +302,9 @@ class Engine:
         self.lossy = np.union1d(np.setdiff1d(self.lossy, links[was & ~now]), links[now & ~was])
         return now
 
-    def _message(self, said: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """The deciding robots' message, checked against the radio's fields."""
+    def _message(self, said: dict[str, np.ndarray], k: int) -> dict[str, np.ndarray]:
+        """The deciding robots' message, checked against the radio's fields: one value per robot
+        (or one for all), of the field's kind."""
         name = type(self.robot).__name__
         if self.robot.radio is None:
             raise ValueError(f"{name} sent a message but declares no radio")
@@ -295,7 +312,9 @@ class Engine:
             raise ValueError(
                 f"{name} sent fields {sorted(said)}, but its radio declares {sorted(self.kinds)}: send every field"
             )
-        return {key: np.asarray(said[key], dtype=kind) for key, kind in self.kinds.items()}
+        return {
+            key: _per_robot(said[key], k, kind, f"{name} message field {key!r}") for key, kind in self.kinds.items()
+        }
 
     def _publish(self, t: int, said: list[tuple[np.ndarray, dict[str, np.ndarray]]], faults: FaultState | None) -> None:
         """Put what the robots said this step in the air: lies from Byzantine senders, each
@@ -304,7 +323,7 @@ class Engine:
             return
         senders = np.concatenate([rows for rows, _ in said])
         fields = {key: np.concatenate([message[key] for _, message in said]) for key in self.kinds}
-        delay = np.full(len(senders), self.robot.radio.latency if self.robot.radio else 0)
+        delay = np.full(len(senders), self.robot.radio.latency if self.robot.radio is not None else 0)
         if faults is not None:
             f = faults.faults
             liars = faults.byzantine[senders]
@@ -313,7 +332,10 @@ class Engine:
             delay += f.latency
             if f.jitter:
                 delay += draws.integers(-f.jitter, f.jitter, self.seed, draws.LATENCY_JITTER, t, senders)
-        air = {"visible": t + 1 + np.maximum(delay, 0), "sender": senders, "sent": np.full(len(senders), t), **fields}
+        # Heard `latency` steps after it was sent, as in the object world, but never in the step it
+        # was sent: robots deciding together cannot hear each other (the order they decide in is
+        # no one's business).
+        air = {"visible": t + np.maximum(delay, 1), "sender": senders, "sent": np.full(len(senders), t), **fields}
         self.air = {key: np.concatenate((self.air[key], air[key])) for key in self.air}
 
     def _lie(self, t: int, senders: np.ndarray, liars: np.ndarray, fields: dict[str, np.ndarray], rule: str) -> None:
@@ -330,22 +352,42 @@ class Engine:
                 values[liars] += DRIFT_PER_STEP * t
 
     def _deliver(self, t: int) -> None:
-        """Move the messages heard from step ``t`` on to the board (the newest of each sender)."""
+        """Move the messages heard from step ``t`` on to the board: each sender's newest (by when it
+        was sent: with jitter, an older message can arrive after a newer one, and is dropped)."""
         air = self.air
-        arrived = air["visible"] <= t
-        if not arrived.any():
+        arrived = np.flatnonzero(air["visible"] <= t)
+        if not len(arrived):
             return
-        newer = arrived & (air["sent"] > self.sent_at[air["sender"]])
-        order = np.flatnonzero(newer)[np.argsort(air["sent"][newer], kind="stable")]
-        senders = air["sender"][order]  # assigned in order of sending: the newest stays
-        self.sent_at[senders] = air["sent"][order]
+        # The newest per sender: sort by (sender, sent), keep each sender's last.
+        order = arrived[np.lexsort((air["sent"][arrived], air["sender"][arrived]))]
+        last = np.r_[air["sender"][order][1:] != air["sender"][order][:-1], True]
+        newest = order[last]
+        senders = air["sender"][newest]
+        newer = air["sent"][newest] > self.sent_at[senders]
+        newest, senders = newest[newer], senders[newer]
+        self.sent_at[senders] = air["sent"][newest]
         for key in self.kinds:
-            self.board[key][senders] = air[key][order]
-        self.air = {key: values[~arrived] for key, values in air.items()}
+            self.board[key][senders] = air[key][newest]
+        keep = np.ones(len(air["visible"]), dtype=bool)
+        keep[arrived] = False
+        self.air = {key: values[keep] for key, values in air.items()}
 
     def _silence(self, crashed: np.ndarray) -> None:
-        """A crashed robot's messages leave the board and the air."""
+        """The messages of robots that have just crashed leave the board and the air."""
+        self.silenced |= crashed
         self.sent_at[crashed] = -1
         gone = crashed[self.air["sender"]]
         if gone.any():
             self.air = {key: values[~gone] for key, values in self.air.items()}
+
+
+def _per_robot(values: Any, k: int, kind: np.dtype, what: str) -> np.ndarray:
+    """``values`` as ``(k,)`` of ``kind``: one value per deciding robot, or one for all of them;
+    anything else (a shape that would spread one robot's value over the others, a float for an
+    int field) is refused, naming ``what``."""
+    array = np.asarray(values)
+    if array.shape not in ((), (k,)):
+        raise ValueError(f"{what} must have one value per deciding robot, shape ({k},), got shape {array.shape}")
+    if not np.can_cast(array.dtype, kind, casting="same_kind"):
+        raise ValueError(f"{what} holds {kind} values, got {array.dtype}")
+    return np.broadcast_to(array, (k,)).astype(kind)

@@ -30,43 +30,24 @@ class Neighbourhood:
         Row r's entries are ``offsets[r]:offsets[r + 1]``.
     columns : mapping of name to (e,) array
         One value per entry.
-    index, sources : (e,) int array and mapping of name to (n,) array, optional
-        Columns read through ``index``: entry e's value is ``sources[name][index[e]]`` (the
-        messages on the board, by sender). Reductions read them in place; a column is
-        gathered only when asked for by name.
     """
 
-    def __init__(
-        self,
-        offsets: np.ndarray,
-        columns: Mapping[str, np.ndarray],
-        index: np.ndarray | None = None,
-        sources: Mapping[str, np.ndarray] | None = None,
-    ) -> None:
+    def __init__(self, offsets: np.ndarray, columns: Mapping[str, np.ndarray]) -> None:
         self.offsets = offsets
         self.columns = dict(columns)
-        self.index = index
-        self.sources = {} if sources is None else dict(sources)
 
     def __len__(self) -> int:
         """The number of rows (robots deciding now)."""
         return len(self.offsets) - 1
 
-    @property
-    def names(self) -> list[str]:
-        """The columns' names."""
-        return [*self.columns, *self.sources]
-
     def __getitem__(self, name: str) -> np.ndarray:
         """Column ``name``, one value per entry."""
         if name not in self.columns:
-            if name not in self.sources or self.index is None:
-                raise KeyError(f"no column {name!r} in this neighbourhood (its columns: {', '.join(self.names)})")
-            self.columns[name] = self.sources[name][self.index]
+            raise KeyError(f"no column {name!r} in this neighbourhood (its columns: {', '.join(self.columns)})")
         return self.columns[name]
 
     def __repr__(self) -> str:
-        return f"Neighbourhood({len(self)} rows, {self.offsets[-1]} entries, columns {self.names})"
+        return f"Neighbourhood({len(self)} rows, {self.offsets[-1]} entries, columns {list(self.columns)})"
 
     @property
     def count(self) -> np.ndarray:
@@ -78,14 +59,18 @@ class Neighbourhood:
         """``(e,)`` int: the row of each entry (to broadcast a robot's own values to its entries)."""
         return np.repeat(np.arange(len(self)), self.count)
 
-    def _reduce(self, what: str | Sequence[str] | np.ndarray, op: str) -> FloatArray:
+    def _values(self, what: str | Sequence[str] | np.ndarray) -> np.ndarray:
+        if isinstance(what, str):
+            return self[what]
         if isinstance(what, np.ndarray):
-            return kernels.segment_reduce(what, self.offsets, op)
-        if not isinstance(what, str):  # several columns: each reduced where it lies
-            return np.column_stack([self._reduce(name, op) for name in what]).reshape(len(self), len(what))
-        if what in self.sources and what not in self.columns:
-            return kernels.segment_reduce(self.sources[what], self.offsets, op, index=self.index)
-        return kernels.segment_reduce(self[what], self.offsets, op)
+            return what
+        return np.column_stack([self[name] for name in what]).reshape(-1, len(what))
+
+    def _reduce(self, what: str | Sequence[str] | np.ndarray, op: str) -> FloatArray:
+        values = self._values(what)
+        if len(values) != self.offsets[-1]:
+            raise ValueError(f"values of shape {values.shape} for a neighbourhood of {self.offsets[-1]} entries")
+        return kernels.segment_reduce(values, self.offsets, op)
 
     def sum(self, what: str | Sequence[str] | np.ndarray) -> FloatArray:
         """Each row's sum of a column (``(k,)``), of several (``(k, w)``), or of values ``(e,)`` or
@@ -111,32 +96,26 @@ class Neighbourhood:
     def nearest(self, key: str | np.ndarray = "distance") -> np.ndarray:
         """``(k,)`` int: the entry of each row with the smallest ``key`` (a column or values
         ``(e,)``), -1 for an empty row; use it with :meth:`pick`."""
-        return kernels.segment_nearest(self[key] if isinstance(key, str) else key, self.offsets)
+        return kernels.segment_nearest(self._values(key), self.offsets)
 
     def pick(self, what: str | Sequence[str] | np.ndarray, entries: np.ndarray, fill: float = np.nan) -> FloatArray:
         """The values at ``entries`` ``(k,)`` (from :meth:`nearest`), ``fill`` where it is -1."""
-        if isinstance(what, str):
-            values = np.asarray(self[what], dtype=np.float64)
-        elif isinstance(what, np.ndarray):
-            values = np.asarray(what, dtype=np.float64)
-        else:
-            values = np.column_stack([self[name] for name in what]).astype(np.float64)
+        values = np.asarray(self._values(what), dtype=np.float64)
         out = np.full((len(entries), *values.shape[1:]), fill)
         found = entries >= 0
         out[found] = values[entries[found]]
         return out
 
-    def _entries(self, offsets: np.ndarray, chosen: slice | np.ndarray) -> Neighbourhood:
-        index = None if self.index is None else self.index[chosen]
-        columns = {name: column[chosen] for name, column in self.columns.items()}
-        return Neighbourhood(offsets, columns, index, self.sources)
-
     def where(self, keep: np.ndarray) -> Neighbourhood:
         """The entries flagged in ``keep`` ``(e,)`` bool, rows kept (some may become empty)."""
         keep = np.asarray(keep, dtype=bool)
-        return self._entries(np.concatenate(([0], np.cumsum(keep)))[self.offsets], keep)
+        if keep.shape != (self.offsets[-1],):
+            raise ValueError(f"`keep` must have shape ({self.offsets[-1]},), one flag per entry, got {keep.shape}")
+        kept = np.concatenate(([0], np.cumsum(keep)))[self.offsets]
+        return Neighbourhood(kept, {name: column[keep] for name, column in self.columns.items()})
 
-    def rows(self, first: int, last: int) -> Neighbourhood:
-        """Rows ``first:last`` alone (the neighbourhood of some of the robots)."""
-        start, end = self.offsets[first], self.offsets[last]
-        return self._entries(self.offsets[first : last + 1] - start, slice(start, end))
+    def frozen(self) -> Neighbourhood:
+        """This neighbourhood with read-only arrays (what a decision gets: it reads, never writes)."""
+        for array in (self.offsets, *self.columns.values()):
+            array.flags.writeable = False
+        return self

@@ -29,14 +29,9 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from dream.robot import GUARD_HORIZON
+from dream._checks import check_nonnegative
 from dream.specs import GRITSBOT, RobotSpec
 from dream.swarm.neighbourhood import Neighbourhood
-
-
-def _nonnegative(value: float, name: str) -> None:
-    if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
-        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -51,7 +46,9 @@ class Movement:
 
     def __post_init__(self) -> None:
         for name in ("range", "fov", "noise"):
-            _nonnegative(getattr(self, name), f"Movement {name}")
+            check_nonnegative(getattr(self, name), f"Movement {name}")
+        if not math.isfinite(self.direction):
+            raise ValueError(f"`Movement direction` must be finite, got {self.direction!r}")
 
 
 @dataclass(frozen=True)
@@ -69,10 +66,10 @@ class Radio:
     latency: int = 0
 
     def __post_init__(self) -> None:
-        _nonnegative(self.range, "Radio range")
+        check_nonnegative(self.range, "Radio range")
         if not 0.0 <= self.loss <= 1.0:
             raise ValueError(f"Radio loss is a probability in [0, 1], got {self.loss!r}")
-        if isinstance(self.latency, bool) or not isinstance(self.latency, int) or self.latency < 0:
+        if isinstance(self.latency, bool) or not isinstance(self.latency, (int, np.integer)) or self.latency < 0:
             raise ValueError(f"Radio latency must be a whole number of steps >= 0, got {self.latency!r}")
         for name, kind in self.kinds.items():
             if not name.isidentifier() or name == "sender":
@@ -109,7 +106,13 @@ class Avoid:
     include_preferred: bool = True
 
     def __post_init__(self) -> None:
-        _nonnegative(self.safety, "Avoid safety")
+        check_nonnegative(self.safety, "Avoid safety")
+        if self.margin is not None:
+            check_nonnegative(self.margin, "Avoid margin")
+        for name in ("sidestep", "n_angles", "n_speeds"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < (name != "sidestep"):
+                raise ValueError(f"Avoid {name} must be a whole number >= {int(name != 'sidestep')}, got {value!r}")
 
 
 @dataclass
@@ -120,12 +123,12 @@ class View:
     ----------
     ids : (k,) int
         Their ids (a robot knows its own name).
-    step : int
-        The world's step (the robots' clocks may drift from it).
+    clock : (k,) float
+        Each robot's own clock (steps): the world's step, unless drift or jitter put it off.
     pose : (k, 3)
         Their odometry ``[x, y, theta]`` (m, m, rad), as noisy as the sensor.
     seen : Neighbourhood
-        The movement sensor's detections, columns ``distance``, ``bearing`` (world frame, from the
+        (read-only, as ``ids``) The movement sensor's detections, columns ``distance``, ``bearing`` (world frame, from the
         robot towards the other), ``dx``, ``dy`` (the other's position less the robot's), ``vx``,
         ``vy`` (the other's velocity); empty rows without a movement sensor.
     heard : Neighbourhood
@@ -135,7 +138,7 @@ class View:
     """
 
     ids: np.ndarray
-    step: int
+    clock: np.ndarray
     pose: np.ndarray
     seen: Neighbourhood
     heard: Neighbourhood
@@ -146,9 +149,9 @@ class View:
         return len(self.ids)
 
     def send(self, **fields: Any) -> None:
-        """Broadcast a message from every robot deciding now: one ``(k,)`` array (or a scalar)
-        per declared field of the radio. A later call replaces an earlier one."""
-        self.said = {name: np.broadcast_to(np.asarray(value), (len(self),)) for name, value in fields.items()}
+        """Broadcast a message from every robot deciding now: one ``(k,)`` array (or one value for
+        all) per declared field of the radio. A later call replaces an earlier one."""
+        self.said = dict(fields)
 
 
 class SwarmRobot:
@@ -183,7 +186,6 @@ class SwarmRobot:
     vel_gain: float = 0.8
     ang_gain: float = 3.0
     spec: RobotSpec = GRITSBOT
-    guard_horizon: float = GUARD_HORIZON
 
     def start(self, ids: np.ndarray) -> np.ndarray:
         """Each robot's start-up delay (steps, ``(n,)`` ints): it decides first after it (default 0)."""
