@@ -23,6 +23,7 @@ messages leave the air.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
