@@ -129,8 +129,9 @@ class View:
         Their odometry ``[x, y, theta]`` (m, m, rad), as noisy as the sensor.
     seen : Neighbourhood
         (read-only, as ``ids``) The movement sensor's detections, columns ``distance``,
-        ``bearing`` (world frame, from the robot towards the other), ``dx``, ``dy`` (the other's position less the robot's), ``vx``,
-        ``vy`` (the other's velocity); empty rows without a movement sensor.
+        ``bearing`` (world frame, from the robot towards the other), ``dx``, ``dy`` (the other's
+        position less the robot's), ``vx``, ``vy`` (the other's velocity); empty rows without a
+        movement sensor.
     heard : Neighbourhood
         The messages the radio delivered: ``sender`` and the declared fields.
     memory : dict of (k,) arrays
