@@ -232,8 +232,8 @@ def _list(source: str | None) -> int:
     declared = cls.parameters()
     print("parameters:" if declared else "parameters: none")
     for name, spec in declared.items():
-        setting = f"{name}={spec.default}"
-        print(f"  --param {setting:<22} ({spec.kind.__name__}) {spec.help}")
+        setting, kind = f"{name}={spec.default}", ", ".join(filter(None, (spec.kind.__name__, spec.range)))
+        print(f"  --param {setting:<22} ({kind}) {spec.help}")
     return 0
 
 

@@ -98,7 +98,7 @@ def test_unwritable_json_is_refused_before_the_run(tmp_path, capsys):
 def test_list_shows_parameters_and_success(capsys):
     assert main(["list", "line-consensus"]) == 0
     out = capsys.readouterr().out
-    assert "--param spacing=0.3" in out and "(float)" in out and "success:" in out and "robots by default: 6" in out
+    assert "--param spacing=0.3" in out and "(float, finite and > 0)" in out and "success:" in out and "robots by default: 6" in out
 
 
 def test_new_writes_a_starter_that_succeeds(tmp_path, capsys):
@@ -147,3 +147,11 @@ def test_swarm_mode_of_an_experiment_without_one_is_refused(tmp_path, capsys):
     assert main(["run", str(starter), "--swarm", "--steps", "5"]) == 2
     err = capsys.readouterr().err
     assert "spread has no swarm mode" in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+@pytest.mark.parametrize("value", ["inf", "0", "-1"])
+def test_a_parameter_out_of_its_range_is_refused_in_one_line_before_any_step(capsys, value):
+    assert main(["run", "line-consensus", "--param", f"spacing={value}"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1
+    assert "parameter 'spacing' of line-consensus must be finite and > 0, got" in captured.err

@@ -109,7 +109,10 @@ def run(
         check_writable(checkpoint, "checkpoint")
     world = World(seed)
     with world:
-        stepper = Stepper(exp, n, world, rules_named(rules), swarm=swarm)
+        try:
+            stepper = Stepper(exp, n, world, rules_named(rules), swarm=swarm)
+        except ValueError as err:  # from the layers below, in their terms: say which parameters the run set
+            raise _naming_params(exp, err) from err
         sim = make_robotarium(n, backend, stepper.initial_conditions, arena=exp.arena, rules=exp.rules.rules)
         stepper.attach(sim, faults)
     cap = exp.steps(n) if steps is None else _count(steps, "steps", 1)
@@ -346,6 +349,14 @@ def _instance(experiment: type[Experiment] | Experiment | str, params: dict[str,
     if isinstance(experiment, type) and issubclass(experiment, Experiment):
         return experiment(**params)
     raise TypeError(f"run() takes an Experiment subclass, instance or name, got {experiment!r}")
+
+
+def _naming_params(exp: Experiment, err: ValueError) -> ValueError:
+    """``err``, raised while ``exp`` was built, prefixed with the parameters set away from their
+    defaults: a value refused by a layer below (a radio's ``range``) is the user's parameter."""
+    declared = exp.parameters()
+    changed = [f"{key}={value!r}" for key, value in exp.params.items() if value != declared[key].default]
+    return ValueError(f"{exp.label()} with {', '.join(changed)}: {err}") if changed else err
 
 
 def _count(value: Any, name: str, least: int) -> int:
