@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import re
 import signal
 import subprocess
 import sys
@@ -258,6 +260,23 @@ def _writable(path: str, option: str) -> None:
         raise UsageError(str(err)) from None
 
 
+def _outputs(args: argparse.Namespace, saved: tuple[str | None, str]) -> None:
+    """Refuse, before the run, drawing options that draw nothing, a ``--json`` path that cannot be
+    written (the video's is the recorder's to check) and two outputs on one file (``--json``,
+    ``--video`` and ``saved``, the checkpoint the run writes: ``(path, what)``)."""
+    if args.realtime and not (args.show or args.video):
+        raise UsageError("--realtime paces what is drawn: give --show or --video too")
+    if args.hold and not args.show:
+        raise UsageError("--hold keeps the live window open: give --show too")
+    if args.json:
+        _writable(args.json, "--json")
+    outputs = [(path, option) for path, option in ((args.json, "--json"), (args.video, "--video"), saved) if path]
+    for i, (path, option) in enumerate(outputs):
+        for other, other_option in outputs[i + 1 :]:
+            if os.path.realpath(path) == os.path.realpath(other):
+                raise UsageError(f"{option} and {other_option} name the same file {path}: give each its own")
+
+
 def _write_json(path: str, data: dict[str, Any]) -> None:
     with replaced(path) as out:
         json.dump(data, out, indent=2)
@@ -294,9 +313,9 @@ def _run(args: argparse.Namespace) -> int:
     n = cls.default_n if args.n is None else args.n
     if args.backend == "robotarium" and n > MAX_ROBOTS:
         raise UsageError(f"-n {n}: the Robotarium backend runs at most {MAX_ROBOTS} robots; use --backend fast")
-    for path, option in ((args.json, "--json"), (args.checkpoint, "--checkpoint")):
-        if path:
-            _writable(path, option)
+    if args.checkpoint:
+        _writable(args.checkpoint, "--checkpoint")
+    _outputs(args, (args.checkpoint, "--checkpoint"))
     every = CHECKPOINT_EVERY if args.checkpoint_every is None else args.checkpoint_every
     return _drive(
         args,
@@ -312,22 +331,21 @@ def _run(args: argparse.Namespace) -> int:
 def _resume(args: argparse.Namespace) -> int:
     if not Path(args.checkpoint).is_file():
         raise UsageError(f"{args.checkpoint}: no such checkpoint")
-    if args.json:
-        _writable(args.json, "--json")
+    _outputs(args, (args.checkpoint, "the checkpoint"))  # saved again as the run goes on
     try:
         n = None if args.focus is None else load(args.checkpoint, trust=args.trust).stepper.exp.n  # for --focus
-        return _drive(
-            args,
-            n,
-            lambda recorder, progress: resume(
-                args.checkpoint, args.steps, record=recorder, progress=progress,
-                checkpoint_every=args.checkpoint_every, trust=args.trust,
-            ),
-        )  # fmt: skip
-    except ValueError as err:  # the checkpoint, read for --focus
+    except ValueError as err:
         raise UsageError(str(err)) from None
     except OSError as err:
         raise UsageError(f"{args.checkpoint}: {err.strerror or err}") from None
+    return _drive(
+        args,
+        n,
+        lambda recorder, progress: resume(
+            args.checkpoint, args.steps, record=recorder, progress=progress,
+            checkpoint_every=args.checkpoint_every, trust=args.trust,
+        ),
+    )  # fmt: skip
 
 
 def _drive(args: argparse.Namespace, n: int | None, call: Callable[[Any, Any], ExperimentResult]) -> int:
@@ -370,7 +388,10 @@ def _report(result: ExperimentResult, args: argparse.Namespace) -> int:
     """Print (and with ``--json`` write) a run's metrics; its exit code."""
     print(result.summary())
     if args.json:
-        _write_json(args.json, result.to_dict())
+        try:
+            _write_json(args.json, result.to_dict())
+        except OSError as err:  # checked before the run, yet the disk filled or the folder went
+            raise UsageError(f"--json {args.json}: not written: {err.strerror or err}") from None
     if result.interrupted:
         kept = f"; metrics so far in {args.json}" if args.json else ""
         if args.checkpoint:
@@ -385,8 +406,9 @@ def _new(name: str, output: str | None) -> int:
     if path.exists():
         raise UsageError(f"{path} exists already: choose another name or -o PATH")
     _writable(str(path), "-o")
-    text = STARTER.read_text(encoding="utf-8")
-    text = text.replace("FILE_STEM", path.stem).replace("FILE", str(path)).replace("NAME", name)
+    words = {"FILE_STEM": path.stem, "FILE": str(path), "NAME": name}
+    # One pass: a name that holds a placeholder (NAME_x) is written as given, not replaced again.
+    text = re.sub("|".join(words), lambda found: words[found.group(0)], STARTER.read_text(encoding="utf-8"))
     path.write_text(text, encoding="utf-8")
     print(f"wrote {path}: run it with `dream run {path}`")
     return 0

@@ -106,11 +106,21 @@ class Faults:
 
     @classmethod
     def parse(cls, options: Iterable[str]) -> Faults:
-        """Faults from ``KIND=VALUE`` texts (the CLI's ``--fault``); see the module docs."""
+        """Faults from ``KIND=VALUE`` texts (the CLI's ``--fault``); see the module docs.
+
+        Raises
+        ------
+        ValueError
+            Naming the option: an unknown kind, a value it cannot take, or a kind given twice.
+        """
         settings: dict[str, Any] = {}
+        given: dict[str, str] = {}
         for option in options:
             kind, equals, value = option.partition("=")
             kind = kind.strip()
+            if kind in given:
+                raise ValueError(f"--fault {kind} given twice ({given[kind]!r}, {option!r}): give each kind once")
+            given[kind] = option
             try:
                 if not equals:
                     raise ValueError("expected KIND=VALUE")

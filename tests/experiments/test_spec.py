@@ -154,6 +154,17 @@ def test_run_refuses_bad_options_before_any_step(options, message):
         dream.run(Still, **options)
 
 
+def test_run_takes_false_for_no_progress_and_refuses_what_it_cannot_call():
+    assert dream.run(Still, backend="fast", progress=False, record=None).steps == 5
+    for options, message in [
+        ({"progress": True}, r"progress must be a function called as progress\(step, cap\), or None or False"),
+        ({"record": "x.gif"}, r"record must be a function called as record\(frame\)"),
+        ({"faults": {"loss": 0.3}}, r"faults must be a dream.Faults"),
+    ]:
+        with pytest.raises(ValueError, match=message):
+            dream.run(Still, backend="fast", **options)
+
+
 def test_run_refuses_unknown_experiment_names():
     with pytest.raises(ValueError, match="unknown experiment 'nope': choose one of affine-formation"):
         dream.run("nope")

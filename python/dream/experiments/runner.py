@@ -36,7 +36,7 @@ def run(
     steps: int | None = None,
     *,
     record: Callable[[Frame], None] | None = None,
-    progress: Progress | None = None,
+    progress: Progress | bool | None = None,
     trace: bool = False,
     faults: Faults | None = None,
     rules: str | None = None,
@@ -63,7 +63,7 @@ def run(
     record : callable, optional
         Called with the experiment's :class:`~dream.frames.Frame` after every step.
     progress : callable, optional
-        Called as ``progress(step, cap)`` after every step.
+        Called as ``progress(step, cap)`` after every step (``None`` or ``False``: nothing is).
     trace : bool
         Keep the poses of every step in ``result.trace`` ``(steps + 1, 3, n)``.
     faults : Faults, optional
@@ -103,6 +103,10 @@ def run(
     seed = _count(seed, "seed", 0)
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
+    if faults is not None and not isinstance(faults, Faults):
+        raise ValueError(f"faults must be a dream.Faults, such as Faults(loss=0.3), got {faults!r}")
+    record = _callback(record, "record", "record(frame)")
+    progress = _callback(progress, "progress", "progress(step, cap)")
     exp.check(n, backend)
     every = _count(checkpoint_every, "checkpoint_every", 1)
     if checkpoint is not None:
@@ -127,7 +131,7 @@ def resume(
     steps: int | None = None,
     *,
     record: Callable[[Frame], None] | None = None,
-    progress: Progress | None = None,
+    progress: Progress | bool | None = None,
     checkpoint_every: int | None = None,
     trust: bool = False,
 ) -> ExperimentResult:
@@ -150,6 +154,8 @@ def resume(
     ValueError
         ``steps`` fewer than the run has taken already.
     """
+    record = _callback(record, "record", "record(frame)")
+    progress = _callback(progress, "progress", "progress(step, cap)")
     state = load(checkpoint, trust=trust)
     if checkpoint_every is not None:
         state.every = _count(checkpoint_every, "checkpoint_every", 1)
@@ -357,6 +363,16 @@ def _naming_params(exp: Experiment, err: ValueError) -> ValueError:
     declared = exp.parameters()
     changed = [f"{key}={value!r}" for key, value in exp.params.items() if value != declared[key].default]
     return ValueError(f"{exp.label()} with {', '.join(changed)}: {err}") if changed else err
+
+
+def _callback(value: Any, name: str, call: str) -> Any:
+    """A callback argument: callable, or ``None`` or ``False`` for none (``progress=False`` reads as
+    "no progress")."""
+    if value is None or value is False:
+        return None
+    if not callable(value):
+        raise ValueError(f"{name} must be a function called as {call}, or None or False for none, got {value!r}")
+    return value
 
 
 def _count(value: Any, name: str, least: int) -> int:
