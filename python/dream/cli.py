@@ -24,6 +24,7 @@ import re
 import signal
 import subprocess
 import sys
+import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -414,8 +415,19 @@ def _new(name: str, output: str | None) -> int:
     return 0
 
 
+def _warning(message: Warning | str, category: type[Warning], *where: Any, **more: Any) -> None:
+    """A warning as the command prints it: one line, without the source line that raised it."""
+    print(f"dream: warning: {message}", file=sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(argv)
+    with warnings.catch_warnings():
+        warnings.showwarning = _warning
+        return _command(args)
+
+
+def _command(args: argparse.Namespace) -> int:
     try:
         if args.command == "list":
             return _list(args.experiment)

@@ -209,6 +209,9 @@ def _go_on(
     trace = None if state.poses is None else np.array(state.poses)
     result = stepper.result(done_at, state.wall_time, trace)
     result.interrupted, result.signal = stop.signal is not None, stop.signal
+    for fault in [] if result.interrupted else result.faults.get("pending", []):
+        message = f"fault {fault['kind']}@{fault['step']} never happened: the run ended at step {state.step}"
+        warnings.warn(f"{message} (an experiment's hold_steps keeps a run going after done)", RuntimeWarning, 3)
     return result
 
 
@@ -278,6 +281,7 @@ class Stepper:
         #: ``(3, n)`` poses the simulator starts from (m, m, rad).
         self.initial_conditions = exp.initial_poses(n, world.rng)
         self.state: FaultState | None = None
+        self.held = 0  # steps in a row that the experiment has been done
         self._limits = GRITSBOT
 
     def attach(self, sim: Backend, faults: Faults | None = None) -> None:
@@ -330,9 +334,11 @@ class Stepper:
 
     def after(self, step: int, poses: np.ndarray) -> bool:
         """After the simulator's step (``step`` steps run, ``poses`` ``(3, n)``): the experiment's
-        :meth:`~Experiment.after_step`, then whether it is :meth:`~Experiment.done`."""
+        :meth:`~Experiment.after_step`, then whether it is :meth:`~Experiment.done` and has been
+        for its :attr:`~Experiment.hold_steps` steps before."""
         self.exp.after_step(step, poses)
-        return bool(self.exp.done(step, poses))
+        self.held = self.held + 1 if self.exp.done(step, poses) else 0
+        return self.held > self.exp.hold_steps
 
     def result(self, done_at: int | None, wall: float, trace: np.ndarray | None = None) -> ExperimentResult:
         """The run's metrics: the simulator's counts, the experiment's measures and the faults."""

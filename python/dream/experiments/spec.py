@@ -196,6 +196,11 @@ class Experiment:
     has_swarm_mode : bool
         Whether the experiment also runs in swarm mode (default False): it defines
         :meth:`build_swarm` and :meth:`swarm_step`.
+    hold_steps : int
+        How many steps :meth:`done` must go on holding once it holds before the run ends, done
+        (default 0: at the first step it holds); a step where it does not hold starts the count
+        again, and the result's ``completed_step`` is the step the run ended at. A fault test
+        needs it: a crash scheduled at step 300 means nothing in a run done at step 189.
 
     Hooks, in the order the runner calls them (all but :meth:`build` optional)
     --------------------------------------------------------------------------
@@ -225,6 +230,7 @@ class Experiment:
     default_n: ClassVar[int] = 10
     success: ClassVar[str] = "the run reaches done() with zero collisions, boundary and actuator violations"
     has_swarm_mode: ClassVar[bool] = False
+    hold_steps: ClassVar[int] = 0
 
     n: int
     swarm: bool = False
@@ -239,6 +245,9 @@ class Experiment:
         super().__init_subclass__(**kwargs)
         if cls.swarm_robot is not Experiment.swarm_robot:  # a swarm robot runs both ways
             cls.has_swarm_mode = True
+        hold = cls.hold_steps
+        if isinstance(hold, bool) or not isinstance(hold, int) or hold < 0:
+            raise TypeError(f"{cls.__name__}.hold_steps must be an integer >= 0, got {hold!r}")
 
     def __init__(self, **params: Any) -> None:
         declared = self.parameters()
