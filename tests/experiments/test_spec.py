@@ -165,6 +165,48 @@ def test_run_takes_false_for_no_progress_and_refuses_what_it_cannot_call():
             dream.run(Still, backend="fast", **options)
 
 
+class Capped(Experiment):
+    """Sizes its arena by the step cap: room for the robots to drive at 0.1 m/s for the whole run."""
+
+    name = "capped"
+    default_n = 2
+
+    def check(self, n, backend):
+        self.seen = {"check": self.steps_cap}
+
+    def arena_for(self, n):  # the hook's signature of before the cap: still called as it is
+        self.seen["arena_for"] = self.steps_cap
+        side = 3.0 if self.steps_cap is None else max(3.0, 0.1 * 0.033 * self.steps_cap * 2)
+        return dream.ArenaSpec.centred(side, side)
+
+    def build(self, n):
+        self.seen["build"] = self.steps_cap
+
+    def steps(self, n):
+        return 7
+
+    def measures(self):
+        return {**self.seen, "width": self.arena.width}
+
+
+def test_the_experiment_sees_the_step_cap_before_it_sizes_its_arena_and_builds(tmp_path):
+    given = dream.run(Capped, backend="fast", steps=5000)
+    assert given.measures == {"check": 5000, "arena_for": 5000, "build": 5000, "width": pytest.approx(33.0)}
+    assert given.steps == 5000
+    own = dream.run(Capped, backend="fast")
+    assert own.measures == {"check": None, "arena_for": None, "build": None, "width": 3.0} and own.steps == 7
+    path = tmp_path / "run.ckpt"
+    dream.run(Capped, backend="fast", checkpoint=path)
+    resumed = dream.resume(path, steps=9)
+    assert resumed.steps == 9 and resumed.measures["check"] is None  # measured when it was built...
+    assert dream.experiments.checkpoint.load(path).stepper.exp.steps_cap == 9  # ...and sees the new cap
+
+
+def test_arena_spec_is_a_public_name():
+    assert dream.ArenaSpec is dream.specs.ArenaSpec and "ArenaSpec" in dream.__all__
+    assert dream.ArenaSpec() == dream.specs.ROBOTARIUM
+
+
 def test_run_refuses_unknown_experiment_names():
     with pytest.raises(ValueError, match="unknown experiment 'nope': choose one of affine-formation"):
         dream.run("nope")

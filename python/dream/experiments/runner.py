@@ -59,7 +59,8 @@ def run(
     backend : {"auto", "robotarium", "fast"}
         See :func:`dream.make_robotarium`.
     steps : int, optional
-        Step cap (default: the experiment's :meth:`~Experiment.steps`).
+        Step cap (default: the experiment's :meth:`~Experiment.steps`); the experiment sees it as
+        :attr:`~Experiment.steps_cap` from :meth:`~Experiment.check` on.
     record : callable, optional
         Called with the experiment's :class:`~dream.frames.Frame` after every step.
     progress : callable, optional
@@ -101,6 +102,7 @@ def run(
     exp = _instance(experiment, params)
     n = exp.default_n if n is None else _count(n, "n", 1)
     seed = _count(seed, "seed", 0)
+    exp.steps_cap = None if steps is None else _count(steps, "steps", 1)
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
     if faults is not None and not isinstance(faults, Faults):
@@ -119,7 +121,7 @@ def run(
             raise _naming_params(exp, err) from err
         sim = make_robotarium(n, backend, stepper.initial_conditions, arena=exp.arena, rules=exp.rules.rules)
         stepper.attach(sim, faults)
-    cap = exp.steps(n) if steps is None else _count(steps, "steps", 1)
+    cap = exp.steps(n) if exp.steps_cap is None else exp.steps_cap
     state = Checkpoint(stepper, sim, 0, cap, every, poses=[sim.poses] if trace else None)
     if checkpoint is not None:
         save(checkpoint, state)  # a run that cannot be saved fails here, before its first step
@@ -163,7 +165,7 @@ def resume(
         cap = _count(steps, "steps", 1)
         if cap < state.step:
             raise ValueError(f"steps={cap}: the run in {checkpoint} has taken {state.step} steps already")
-        state.cap = cap
+        state.cap = state.stepper.exp.steps_cap = cap
     return _go_on(state, record, progress, checkpoint)
 
 

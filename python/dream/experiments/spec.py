@@ -219,8 +219,11 @@ class Experiment:
 
     Attributes the runner sets
     --------------------------
-    n, world, rules (the :class:`~dream.specs.SimulatorSpec` the run follows), arena, swarm
-    (whether the run is in swarm mode) before :meth:`build` or :meth:`build_swarm`; sim, dxu (the
+    steps_cap (the step cap the run was given, ``steps=`` or ``--steps``; ``None`` when
+    :meth:`steps` decides) before :meth:`check`, so that :meth:`arena_for` and :meth:`build` can
+    size the run by it; n, world, rules (the :class:`~dream.specs.SimulatorSpec` the run
+    follows), arena, swarm (whether the run is in swarm mode) before :meth:`build` or
+    :meth:`build_swarm`; sim, dxu (the
     swarm's command array, ``(2, n)``, that controllers write into; in swarm mode the last
     :meth:`swarm_step`'s) once the simulator exists. ``robots`` is a list for :meth:`build` to
     fill (used by the default :meth:`frame`).
@@ -232,6 +235,7 @@ class Experiment:
     has_swarm_mode: ClassVar[bool] = False
     hold_steps: ClassVar[int] = 0
 
+    steps_cap: int | None = None
     n: int
     swarm: bool = False
     world: World
@@ -294,7 +298,8 @@ class Experiment:
         """Raise ``ValueError`` (saying why and what the limit is) for a size that cannot succeed."""
 
     def arena_for(self, n: int) -> ArenaSpec:
-        """The arena for ``n`` robots (default: the Robotarium's)."""
+        """The arena for ``n`` robots, a :class:`dream.ArenaSpec` (default: the Robotarium's,
+        :data:`dream.specs.ROBOTARIUM`); :attr:`steps_cap` is set."""
         return ROBOTARIUM
 
     def swarm_robot(self, n: int) -> SwarmRobot | None:
