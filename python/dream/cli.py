@@ -34,6 +34,7 @@ from dream.backends import BACKENDS
 from dream.backends.robotarium import MAX_ROBOTS
 from dream.experiments import EXPERIMENTS, Experiment, ExperimentResult, find, resume, run
 from dream.experiments.checkpoint import CHECKPOINT_EVERY, load
+from dream.experiments.runner import outputs_kept
 from dream.faults import KINDS, Faults
 from dream.specs import RULES
 
@@ -364,21 +365,27 @@ def _drive(args: argparse.Namespace, n: int | None, call: Callable[[Any, Any], E
         except (ValueError, OSError) as err:
             raise UsageError(str(err)) from None
     progress = _progress(not args.no_progress)
-    try:
-        result = call(recorder, progress)
-    except ValueError as err:  # a refusal (a size the experiment cannot do, a bad checkpoint), before any step
-        raise UsageError(str(err)) from None
-    finally:
-        if progress is not None:
-            progress.close()
-        if recorder is not None:
-            recorder.close()  # a run that failed half-way still leaves a playable video
-    if recorder is not None and recorder.writer is not None:
-        if recorder.writer.frames_written:
-            print(f"video: {recorder.video} ({recorder.writer.frames_written} frames, one step in {args.every})")
-        else:
-            print(f"video: none written (no steps recorded) to {recorder.video}")
-    code = _report(result, args)
+    with outputs_kept() as guard:  # once the run steps, a Ctrl-C waits for the video and the JSON
+        try:
+            result = call(recorder, progress)
+        except ValueError as err:  # a refusal (a size the experiment cannot do, a bad checkpoint), before any step
+            raise UsageError(str(err)) from None
+        finally:
+            if progress is not None:
+                progress.close()
+            if recorder is not None:
+                recorder.close()  # a run that failed half-way still leaves a playable video
+        if recorder is not None and recorder.writer is not None:
+            if recorder.writer.frames_written:
+                print(f"video: {recorder.video} ({recorder.writer.frames_written} frames, one step in {args.every})")
+            else:
+                print(f"video: none written (no steps recorded) to {recorder.video}")
+        code = _report(result, args)
+        if guard.signal is not None:  # the command ends now, all written: a late Ctrl-C has nothing to stop
+            guard.ignore_from_now()
+    if guard.signal is not None and not result.interrupted:  # it came as the run ended
+        print("dream: interrupted", file=sys.stderr)
+        return 128 + guard.signal
     if not result.interrupted and recorder is not None and recorder.live:
         print("close the window to exit", file=sys.stderr)
         recorder.hold()  # keep the live window on the last frame until the user closes it
