@@ -65,10 +65,12 @@ class Rendezvous(Experiment):
     name = "rendezvous"
     default_n = 10
     success = "every correct robot within `radius` of the correct robots' centre, zero collisions"
-    radius: float = param(0.0, "the team has met when every robot is this close to its centre (m; 0: met_radius(n))")
-    radio_range: float = param(1.0, "how far a robot hears the others (m)")
-    gain: float = param(0.5, "proportional gain towards the meeting point (1/s)")
-    safety: float = param(0.2, "HRVO safety distance between robot centres (m)")
+    radius: float = param(
+        0.0, "the team has met when every robot is this close to its centre (m; 0: met_radius(n))", ge=0
+    )
+    radio_range: float = param(1.0, "how far a robot hears the others (m)", gt=0)
+    gain: float = param(0.5, "proportional gain towards the meeting point (1/s)", gt=0)
+    safety: float = param(0.2, "HRVO safety distance between robot centres (m)", gt=0)
 
     def met_radius(self, n: int) -> float:
         """The default ``radius``: 1.8 times that of the smallest disc holding n robots ``safety``

@@ -34,6 +34,7 @@ from dream.specs import (
     T_ORIGIN_X,
     T_ORIGIN_Y,
     T_WIDTH,
+    ArenaSpec,
 )
 from dream.sweep import sweep
 from dream.timers import Timer
@@ -50,6 +51,7 @@ Radio_range = RangeRadio
 # `from dream import *` gives every public name: the original ones, for scripts written for the
 # prototype, and the PEP 8 ones.
 __all__ = [
+    "ArenaSpec",
     "ImuSensor",
     "ImuReading",
     "EncoderSensor",

@@ -85,6 +85,14 @@ def check_robot_id(robot_id: int, n: int, what: str = "poses") -> int:
     return int(robot_id)
 
 
+def check_finite(value: float, name: str) -> float:
+    """``value`` as a float, or a ValueError naming ``name`` if it is NaN or infinite."""
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"`{name}` must be finite, got {value}")
+    return value
+
+
 def check_nonnegative(value: float, name: str) -> float:
     value = float(value)
     if not (np.isfinite(value) and value >= 0):

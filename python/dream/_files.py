@@ -72,9 +72,12 @@ def replaced(path: str | os.PathLike[str], mode: str = "w", **options: Any) -> I
 
 def _create_beside(target: Path) -> tuple[int, str]:
     """A new, empty file beside ``target``, created as :func:`open` creates one (mode 0o666 less
-    the umask; :func:`tempfile.mkstemp` would make it 0o600), exclusively, never over another."""
+    the umask; :func:`tempfile.mkstemp` would make it 0o600), exclusively, never over another.
+
+    Its name is short whatever ``target``'s (``.dream-`` and 8 hex digits): a name of the longest
+    length the file system allows must not fail once the work is done."""
     while True:
-        temporary = str(target.parent / f".{target.name}.{secrets.token_hex(4)}.part")
+        temporary = str(target.parent / f".dream-{secrets.token_hex(4)}.part")
         try:
             return os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666), temporary
         except FileExistsError:
@@ -83,8 +86,9 @@ def _create_beside(target: Path) -> tuple[int, str]:
 
 def check_writable(path: str | os.PathLike[str], what: str) -> None:
     """Refuse, before a run, an output ``path`` that cannot be written: anything but a regular
-    file or a new path (a folder, a symlink, a device, a FIFO), or a file in a folder that does
-    not exist or is not writable. ``what`` names it in the message.
+    file or a new path (a folder, a symlink, a device, a FIFO), a name longer than the file system
+    allows, or a folder that does not exist or where no file can be made (a temporary file like
+    the one :func:`replaced` writes is made there and removed). ``what`` names it in the message.
 
     Raises
     ------
@@ -92,12 +96,27 @@ def check_writable(path: str | os.PathLike[str], what: str) -> None:
     """
     target = Path(path)
     folder = target.parent if str(target.parent) else Path(".")
+    if not folder.is_dir():
+        raise ValueError(f"{what} {path}: the folder {folder} does not exist")
+    longest = _longest_name(folder)
+    if len(os.fsencode(target.name)) > longest:
+        raise ValueError(f"{what} {path}: the file name is longer than the {longest} bytes the file system allows")
     kind = _not_a_file(target)
     if kind == "a folder":
         raise ValueError(f"{what} {path}: is a folder; give a file name")
     if kind is not None:
         raise ValueError(f"{what} {path}: is {kind}, not a regular file; give a file's path or a new one")
-    if not folder.is_dir():
-        raise ValueError(f"{what} {path}: the folder {folder} does not exist")
-    if not os.access(folder, os.W_OK):
-        raise ValueError(f"{what} {path}: the folder {folder} is not writable")
+    try:
+        handle, temporary = _create_beside(target)
+    except OSError as err:
+        raise ValueError(f"{what} {path}: cannot write in the folder {folder}: {err.strerror or err}") from None
+    os.close(handle)
+    os.unlink(temporary)
+
+
+def _longest_name(folder: Path) -> int:
+    """The longest file name (bytes) the file system of ``folder`` takes (255 where it cannot say)."""
+    try:
+        return os.pathconf(folder, "PC_NAME_MAX")
+    except (OSError, ValueError, AttributeError):  # no pathconf (Windows), or no such limit
+        return 255

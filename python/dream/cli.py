@@ -19,9 +19,12 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import re
 import signal
 import subprocess
 import sys
+import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -31,6 +34,7 @@ from dream.backends import BACKENDS
 from dream.backends.robotarium import MAX_ROBOTS
 from dream.experiments import EXPERIMENTS, Experiment, ExperimentResult, find, resume, run
 from dream.experiments.checkpoint import CHECKPOINT_EVERY, load
+from dream.experiments.runner import outputs_kept
 from dream.faults import KINDS, Faults
 from dream.specs import RULES
 
@@ -235,8 +239,8 @@ def _list(source: str | None) -> int:
     declared = cls.parameters()
     print("parameters:" if declared else "parameters: none")
     for name, spec in declared.items():
-        setting = f"{name}={spec.default}"
-        print(f"  --param {setting:<22} ({spec.kind.__name__}) {spec.help}")
+        setting, kind = f"{name}={spec.default}", ", ".join(filter(None, (spec.kind.__name__, spec.range)))
+        print(f"  --param {setting:<22} ({kind}) {spec.help}")
     return 0
 
 
@@ -259,6 +263,23 @@ def _writable(path: str, option: str) -> None:
         check_writable(path, option)
     except ValueError as err:
         raise UsageError(str(err)) from None
+
+
+def _outputs(args: argparse.Namespace, saved: tuple[str | None, str]) -> None:
+    """Refuse, before the run, drawing options that draw nothing, a ``--json`` path that cannot be
+    written (the video's is the recorder's to check) and two outputs on one file (``--json``,
+    ``--video`` and ``saved``, the checkpoint the run writes: ``(path, what)``)."""
+    if args.realtime and not (args.show or args.video):
+        raise UsageError("--realtime paces what is drawn: give --show or --video too")
+    if args.hold and not args.show:
+        raise UsageError("--hold keeps the live window open: give --show too")
+    if args.json:
+        _writable(args.json, "--json")
+    outputs = [(path, option) for path, option in ((args.json, "--json"), (args.video, "--video"), saved) if path]
+    for i, (path, option) in enumerate(outputs):
+        for other, other_option in outputs[i + 1 :]:
+            if os.path.realpath(path) == os.path.realpath(other):
+                raise UsageError(f"{option} and {other_option} name the same file {path}: give each its own")
 
 
 def _write_json(path: str, data: dict[str, Any]) -> None:
@@ -297,9 +318,9 @@ def _run(args: argparse.Namespace) -> int:
     n = cls.default_n if args.n is None else args.n
     if args.backend == "robotarium" and n > MAX_ROBOTS:
         raise UsageError(f"-n {n}: the Robotarium backend runs at most {MAX_ROBOTS} robots; use --backend fast")
-    for path, option in ((args.json, "--json"), (args.checkpoint, "--checkpoint")):
-        if path:
-            _writable(path, option)
+    if args.checkpoint:
+        _writable(args.checkpoint, "--checkpoint")
+    _outputs(args, (args.checkpoint, "--checkpoint"))
     every = CHECKPOINT_EVERY if args.checkpoint_every is None else args.checkpoint_every
     return _drive(
         args,
@@ -315,22 +336,21 @@ def _run(args: argparse.Namespace) -> int:
 def _resume(args: argparse.Namespace) -> int:
     if not Path(args.checkpoint).is_file():
         raise UsageError(f"{args.checkpoint}: no such checkpoint")
-    if args.json:
-        _writable(args.json, "--json")
+    _outputs(args, (args.checkpoint, "the checkpoint"))  # saved again as the run goes on
     try:
         n = None if args.focus is None else load(args.checkpoint, trust=args.trust).stepper.exp.n  # for --focus
-        return _drive(
-            args,
-            n,
-            lambda recorder, progress: resume(
-                args.checkpoint, args.steps, record=recorder, progress=progress,
-                checkpoint_every=args.checkpoint_every, trust=args.trust,
-            ),
-        )  # fmt: skip
-    except ValueError as err:  # the checkpoint, read for --focus
+    except ValueError as err:
         raise UsageError(str(err)) from None
     except OSError as err:
         raise UsageError(f"{args.checkpoint}: {err.strerror or err}") from None
+    return _drive(
+        args,
+        n,
+        lambda recorder, progress: resume(
+            args.checkpoint, args.steps, record=recorder, progress=progress,
+            checkpoint_every=args.checkpoint_every, trust=args.trust,
+        ),
+    )  # fmt: skip
 
 
 def _drive(args: argparse.Namespace, n: int | None, call: Callable[[Any, Any], ExperimentResult]) -> int:
@@ -348,21 +368,27 @@ def _drive(args: argparse.Namespace, n: int | None, call: Callable[[Any, Any], E
         except (ValueError, OSError) as err:
             raise UsageError(str(err)) from None
     progress = _progress(not args.no_progress)
-    try:
-        result = call(recorder, progress)
-    except ValueError as err:  # a refusal (a size the experiment cannot do, a bad checkpoint), before any step
-        raise UsageError(str(err)) from None
-    finally:
-        if progress is not None:
-            progress.close()
-        if recorder is not None:
-            recorder.close()  # a run that failed half-way still leaves a playable video
-    if recorder is not None and recorder.writer is not None:
-        if recorder.writer.frames_written:
-            print(f"video: {recorder.video} ({recorder.writer.frames_written} frames, one step in {args.every})")
-        else:
-            print(f"video: none written (no steps recorded) to {recorder.video}")
-    code = _report(result, args)
+    with outputs_kept() as guard:  # once the run steps, a Ctrl-C waits for the video and the JSON
+        try:
+            result = call(recorder, progress)
+        except ValueError as err:  # a refusal (a size the experiment cannot do, a bad checkpoint), before any step
+            raise UsageError(str(err)) from None
+        finally:
+            if progress is not None:
+                progress.close()
+            if recorder is not None:
+                recorder.close()  # a run that failed half-way still leaves a playable video
+        if recorder is not None and recorder.writer is not None:
+            if recorder.writer.frames_written:
+                print(f"video: {recorder.video} ({recorder.writer.frames_written} frames, one step in {args.every})")
+            else:
+                print(f"video: none written (no steps recorded) to {recorder.video}")
+        code = _report(result, args)
+        if guard.signal is not None:  # the command ends now, all written: a late Ctrl-C has nothing to stop
+            guard.ignore_from_now()
+    if guard.signal is not None and not result.interrupted:  # it came as the run ended
+        print("dream: interrupted", file=sys.stderr)
+        return 128 + guard.signal
     if not result.interrupted and recorder is not None and recorder.live:
         print("close the window to exit", file=sys.stderr)
         recorder.hold()  # keep the live window on the last frame until the user closes it
@@ -373,7 +399,10 @@ def _report(result: ExperimentResult, args: argparse.Namespace) -> int:
     """Print (and with ``--json`` write) a run's metrics; its exit code."""
     print(result.summary())
     if args.json:
-        _write_json(args.json, result.to_dict())
+        try:
+            _write_json(args.json, result.to_dict())
+        except OSError as err:  # checked before the run, yet the disk filled or the folder went
+            raise UsageError(f"--json {args.json}: not written: {err.strerror or err}") from None
     if result.interrupted:
         kept = f"; metrics so far in {args.json}" if args.json else ""
         if args.checkpoint:
@@ -388,15 +417,27 @@ def _new(name: str, output: str | None) -> int:
     if path.exists():
         raise UsageError(f"{path} exists already: choose another name or -o PATH")
     _writable(str(path), "-o")
-    text = STARTER.read_text(encoding="utf-8")
-    text = text.replace("FILE_STEM", path.stem).replace("FILE", str(path)).replace("NAME", name)
+    words = {"FILE_STEM": path.stem, "FILE": str(path), "NAME": name}
+    # One pass: a name that holds a placeholder (NAME_x) is written as given, not replaced again.
+    text = re.sub("|".join(words), lambda found: words[found.group(0)], STARTER.read_text(encoding="utf-8"))
     path.write_text(text, encoding="utf-8")
     print(f"wrote {path}: run it with `dream run {path}`")
     return 0
 
 
+def _warning(message: Warning | str, category: type[Warning], *where: Any, **more: Any) -> None:
+    """A warning as the command prints it: one line, without the source line that raised it."""
+    print(f"dream: warning: {message}", file=sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(argv)
+    with warnings.catch_warnings():
+        warnings.showwarning = _warning
+        return _command(args)
+
+
+def _command(args: argparse.Namespace) -> int:
     try:
         if args.command == "list":
             return _list(args.experiment)

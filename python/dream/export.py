@@ -61,6 +61,9 @@ LEFT_OUT = {
     "onboard": "onboard sensors, which DREAM simulates from the poses; the lab's robots need rps 2.1's own "
     "(use_distance_sensors=True, get_distances(), get_encoders())",
 }
+#: What imports a module by its name at run time, which the check cannot follow: a script imports
+#: with ``import`` statements only.
+DYNAMIC_IMPORTS = ("__import__", "importlib")
 #: Public names of left-out modules that ``from dream import *`` brings into a script.
 LEFT_OUT_NAMES = {"DistanceSensor": "onboard", "EncoderSensor": "onboard", "ImuSensor": "onboard", "sweep": "sweep"}
 
@@ -239,7 +242,8 @@ def check_script(path: Path) -> None:
     """Raise :class:`ExportError` if the experiment file ``path`` uses what the lab cannot run.
 
     Every import must be of the standard library, :data:`LAB_PACKAGES` or DREAM's pure part
-    (not :data:`LEFT_OUT`); the onboard sensors are refused by name too, for ``from dream import *``.
+    (not :data:`LEFT_OUT`), made by an ``import`` statement (not :data:`DYNAMIC_IMPORTS`); the
+    onboard sensors are refused by name too, for ``from dream import *``.
     """
     try:
         tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
@@ -256,6 +260,8 @@ def check_script(path: Path) -> None:
             modules = [base] + ([f"{base}.{alias.name}" for alias in node.names] if base == "dream" else [])
         else:
             name = node.id if isinstance(node, ast.Name) else node.attr if isinstance(node, ast.Attribute) else ""
+            if name in DYNAMIC_IMPORTS:
+                raise ExportError(f"{where}: uses {name}, {_DYNAMIC}")
             if name in LEFT_OUT_NAMES and LEFT_OUT_NAMES[name] == "onboard":
                 raise ExportError(f"{where}: uses {name}: {LEFT_OUT['onboard']}")
             continue
@@ -263,8 +269,13 @@ def check_script(path: Path) -> None:
             _check_module(module, where)
 
 
+_DYNAMIC = "an import by name that the check cannot follow: import modules with `import` statements"
+
+
 def _check_module(module: str, where: str) -> None:
     parts = module.split(".")
+    if parts[0] in DYNAMIC_IMPORTS:
+        raise ExportError(f"{where}: imports {parts[0]}, {_DYNAMIC}")
     if parts[0] == "dream":
         inner = parts[1] if len(parts) > 1 else ""
         left_out = LEFT_OUT_NAMES.get(inner, inner)

@@ -106,11 +106,21 @@ class Faults:
 
     @classmethod
     def parse(cls, options: Iterable[str]) -> Faults:
-        """Faults from ``KIND=VALUE`` texts (the CLI's ``--fault``); see the module docs."""
+        """Faults from ``KIND=VALUE`` texts (the CLI's ``--fault``); see the module docs.
+
+        Raises
+        ------
+        ValueError
+            Naming the option: an unknown kind, a value it cannot take, or a kind given twice.
+        """
         settings: dict[str, Any] = {}
+        given: dict[str, str] = {}
         for option in options:
             kind, equals, value = option.partition("=")
             kind = kind.strip()
+            if kind in given:
+                raise ValueError(f"--fault {kind} given twice ({given[kind]!r}, {option!r}): give each kind once")
+            given[kind] = option
             try:
                 if not equals:
                     raise ValueError("expected KIND=VALUE")
@@ -178,6 +188,8 @@ class FaultState:
         ``{"kind", "robot", "step"}`` of every robot fault, as it happens.
     messages_lost, readings_dropped : int
         Counts of lost radio messages and dropped sensor readings.
+    step : int
+        The last step the faults were advanced to (-1 before the first).
     """
 
     faults: Faults
@@ -190,6 +202,7 @@ class FaultState:
     events: list[dict[str, Any]] = field(default_factory=list)
     messages_lost: int = 0
     readings_dropped: int = 0
+    step: int = -1
 
     def __post_init__(self) -> None:
         f, n, rng = self.faults, self.n, self.rng
@@ -218,6 +231,7 @@ class FaultState:
 
     def advance(self, step: int) -> np.ndarray:
         """Apply the robot faults due at ``step``; returns the robots that crash now."""
+        self.step = step
         crashing = np.zeros(self.n, dtype=bool)
         if step == self.faults.crash_at:
             crashing = self._will_crash & ~self.crashed
@@ -294,11 +308,20 @@ class FaultState:
         out[:, self.crashed | self.stuck] = 0.0
         return out
 
+    @property
+    def pending(self) -> list[dict[str, Any]]:
+        """``{"kind", "step"}`` of every robot fault scheduled at a step the run has not reached
+        (a crash at step 300 in a run done at step 189): it never happened."""
+        f = self.faults
+        scheduled = (("crash", f.crash, f.crash_at), ("stuck", f.stuck, f.stuck_at))
+        return [{"kind": kind, "step": at} for kind, share, at in scheduled if share and at > self.step]
+
     def summary(self) -> dict[str, Any]:
-        """Settings, events and counts, JSON-ready."""
+        """Settings, events, the faults still pending and counts, JSON-ready."""
         return {
             "settings": self.faults.to_dict(),
             "events": list(self.events),
+            "pending": self.pending,
             "messages_lost": self.messages_lost,
             "readings_dropped": self.readings_dropped,
         }

@@ -104,7 +104,31 @@ class SimulatorSpec:
 
 @dataclass(frozen=True)
 class ArenaSpec:
-    """Axis-aligned rectangular arena (m); defaults are the Robotarium's."""
+    """An axis-aligned rectangular arena (m); the defaults are the Robotarium's (3.2 m x 2 m).
+
+    An experiment returns one from :meth:`dream.Experiment.arena_for` to give its robots room
+    beyond the Robotarium's (the simulators then count a robot outside it as a boundary
+    violation); ``dream.specs.ROBOTARIUM`` is the Robotarium's own.
+
+    Parameters
+    ----------
+    xmin, xmax, ymin, ymax : float
+        The bounds (m), finite, with ``xmin < xmax`` and ``ymin < ymax``.
+
+    Raises
+    ------
+    ValueError
+        Bounds that are not finite or not in that order.
+
+    Examples
+    --------
+    >>> from dream import ArenaSpec
+    >>> arena = ArenaSpec.centred(6.4, 4.0)  # twice the Robotarium's size, centred on the origin
+    >>> arena.bounds, arena.width
+    ((-3.2, 3.2, -2.0, 2.0), 6.4)
+    >>> ArenaSpec(-1.6, 1.6, -1.0, 1.0) == ArenaSpec()
+    True
+    """
 
     xmin: float = T_MIN_WIDTH
     xmax: float = T_MAX_WIDTH

@@ -43,7 +43,7 @@ from typing import IO, Any
 
 import numpy as np
 
-from dream._files import replaced
+from dream._files import check_writable, replaced
 from dream.backends import BACKENDS
 from dream.backends.robotarium import MAX_ROBOTS
 from dream.experiments import EXPERIMENTS, Experiment, find, run
@@ -239,6 +239,12 @@ def sweep(
         raise ValueError("dashboard: serves the local cluster's; with scheduler, open the cluster's own dashboard")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    if out is not None:
+        check_writable(out, "out")
+    if plot is not None:
+        from dream.sweep_plot import check_plot_path  # matplotlib only when drawing
+
+        check_plot_path(plot)
     sweep_plan = plan(experiment, seeds, n, params, backend, steps, faults, swarm)
     with Table(out, sweep_plan) as table:
         todo = [task for task in sweep_plan.tasks if task.key() not in table.done]
@@ -550,12 +556,9 @@ def _ignoring_ctrl_c() -> Iterator[None]:
 
 def command(args: argparse.Namespace) -> int:
     """``dream sweep``: the parsed command line to :func:`sweep`, bad input as one line (exit 2)."""
-    from dream.cli import UsageError, _writable
+    from dream.cli import UsageError
 
     grid, fault_grid = _grid(args.param, "--param", "NAME"), _grid(args.fault, "--fault", "KIND")
-    _writable(args.out, "--out")
-    if args.plot is not None:
-        _writable(args.plot, "--plot")
     start = time.perf_counter()
     try:
         rows = sweep(

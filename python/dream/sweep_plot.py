@@ -9,8 +9,28 @@ from typing import Any
 
 import numpy as np
 
+from dream._files import check_writable
+
 #: At most this many measures get a row of panels (the first ones the experiment reports).
 MAX_MEASURES = 4
+
+
+def check_plot_path(path: str | Path) -> None:
+    """Refuse, before a sweep runs, a plot path that :func:`plot_sweep` could not write: one
+    :func:`~dream._files.check_writable` refuses, or a suffix that names no image format.
+
+    Raises
+    ------
+    ValueError
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    check_writable(path, "plot")
+    formats = FigureCanvasAgg.get_supported_filetypes()
+    suffix = Path(path).suffix.lower().lstrip(".")
+    if suffix not in formats:
+        shown = f"suffix {Path(path).suffix!r}" if suffix else "no suffix"
+        raise ValueError(f"plot {path}: {shown}; give an image file, such as .png ({', '.join(sorted(formats))})")
 
 
 def plot_sweep(rows: Sequence[dict[str, Any]], swept: Sequence[str], path: str | Path) -> None:

@@ -46,6 +46,7 @@ from typing import Any
 
 import numpy as np
 
+from dream._files import check_writable
 from dream.frames import STATUSES, Frame
 from dream.specs import GRITSBOT, TIME_STEP, ArenaSpec
 
@@ -922,7 +923,8 @@ def check_video_path(path: str | os.PathLike[str]) -> str:
     Raises
     ------
     ValueError
-        For any other suffix.
+        For any other suffix, or a path that :func:`dream._files.check_writable` refuses (not a
+        regular file or a new path, a name too long, a folder where no file can be made).
     FileNotFoundError
         When the directory of ``path`` does not exist.
     """
@@ -934,6 +936,7 @@ def check_video_path(path: str | os.PathLike[str]) -> str:
     directory = path.parent if str(path.parent) else Path(".")
     if not directory.is_dir():
         raise FileNotFoundError(f"cannot write video {str(path)!r}: directory {str(directory)!r} does not exist")
+    check_writable(path, "video")
     return suffix
 
 

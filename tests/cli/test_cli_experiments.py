@@ -98,7 +98,8 @@ def test_unwritable_json_is_refused_before_the_run(tmp_path, capsys):
 def test_list_shows_parameters_and_success(capsys):
     assert main(["list", "line-consensus"]) == 0
     out = capsys.readouterr().out
-    assert "--param spacing=0.3" in out and "(float)" in out and "success:" in out and "robots by default: 6" in out
+    assert "--param spacing=0.3" in out and "(float, finite and > 0)" in out
+    assert "success:" in out and "robots by default: 6" in out
 
 
 def test_new_writes_a_starter_that_succeeds(tmp_path, capsys):
@@ -147,3 +148,97 @@ def test_swarm_mode_of_an_experiment_without_one_is_refused(tmp_path, capsys):
     assert main(["run", str(starter), "--swarm", "--steps", "5"]) == 2
     err = capsys.readouterr().err
     assert "spread has no swarm mode" in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+@pytest.mark.parametrize("value", ["inf", "0", "-1"])
+def test_a_parameter_out_of_its_range_is_refused_in_one_line_before_any_step(capsys, value):
+    assert main(["run", "line-consensus", "--param", f"spacing={value}"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1
+    assert "parameter 'spacing' of line-consensus must be finite and > 0, got" in captured.err
+
+
+# -- messages that say what is wrong, in the user's terms (issue 30, item 10) -------------------
+SHORT = ["run", "hrvo-circle", "-n", "4", "--steps", "3", "--backend", "fast"]
+
+
+def _one_line(capsys) -> str:
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1 and "Traceback" not in captured.err
+    return captured.err
+
+
+def test_a_line_of_one_robot_is_refused_in_the_experiments_terms(capsys):
+    assert main(["run", "line-consensus", "-n", "1"]) == 2
+    assert "line-consensus needs at least 2 robots to form a line" in _one_line(capsys)
+
+
+def test_resume_blames_the_json_path_not_the_checkpoint(tmp_path, capsys):
+    if not Path("/proc/self").is_dir():
+        pytest.skip("needs Linux's /proc, where no file can be made")
+    checkpoint = tmp_path / "run.ckpt"
+    assert main([*SHORT, "--checkpoint", str(checkpoint)]) == 0
+    capsys.readouterr()
+    assert main(["resume", str(checkpoint), "--steps", "6", "--json", "/proc/x.json"]) == 2
+    err = _one_line(capsys)
+    assert err.startswith("dream: error: --json /proc/x.json: cannot write") and "run.ckpt" not in err
+
+
+@pytest.mark.parametrize(
+    ("outputs", "message"),
+    [
+        (["--json", "X", "--checkpoint", "X"], "--json and --checkpoint name the same file X"),
+        (["--json", "out.gif", "--video", "./out.gif"], "--json and --video name the same file out.gif"),
+        (["--video", "X.gif", "--checkpoint", "X.gif"], "--video and --checkpoint name the same file X.gif"),
+    ],
+)
+def test_two_outputs_on_one_file_are_refused(tmp_path, monkeypatch, capsys, outputs, message):
+    monkeypatch.chdir(tmp_path)
+    assert main([*SHORT, *outputs]) == 2
+    assert message in _one_line(capsys)
+    assert not list(tmp_path.iterdir())
+
+
+def test_resume_refuses_json_on_its_own_checkpoint(tmp_path, capsys):
+    checkpoint = tmp_path / "run.ckpt"
+    assert main([*SHORT, "--checkpoint", str(checkpoint)]) == 0
+    capsys.readouterr()
+    saved = checkpoint.read_bytes()
+    assert main(["resume", str(checkpoint), "--json", str(checkpoint)]) == 2
+    assert "--json and the checkpoint name the same file" in _one_line(capsys)
+    assert checkpoint.read_bytes() == saved
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (
+            ["--fault", "crash=0.1@300", "--fault", "crash=0.2"],
+            "--fault crash given twice ('crash=0.1@300', 'crash=0.2')",
+        ),
+        (["--realtime"], "--realtime paces what is drawn: give --show or --video too"),
+        (["--hold", "--video", "x.gif"], "--hold keeps the live window open: give --show too"),
+    ],
+)
+def test_options_that_would_be_silently_lost_are_refused(tmp_path, monkeypatch, capsys, options, message):
+    monkeypatch.chdir(tmp_path)  # where a DREAM that took them would write its video
+    assert main([*SHORT, *options]) == 2
+    assert message in _one_line(capsys)
+
+
+def test_new_writes_a_name_that_holds_a_placeholder_as_given(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["new", "NAME_x"]) == 0
+    assert capsys.readouterr().out == "wrote NAME_x.py: run it with `dream run NAME_x.py`\n"
+    text = (tmp_path / "NAME_x.py").read_text()
+    assert "dream run NAME_x.py\n" in text and 'name = "NAME_x"' in text and "NAME_x_x" not in text
+
+
+def test_a_json_that_cannot_be_written_after_the_run_is_one_line(tmp_path, monkeypatch, capsys):
+    def full(path, data):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("dream.cli._write_json", full)
+    assert main([*SHORT, "--json", str(tmp_path / "m.json")]) == 2
+    err = capsys.readouterr().err
+    assert err == f"dream: error: --json {tmp_path / 'm.json'}: not written: No space left on device\n"

@@ -3,6 +3,7 @@ paths, refuses anything else in one line before any run, and gives new files the
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import stat
@@ -103,3 +104,52 @@ def test_new_files_get_the_umasks_mode_and_replaced_files_keep_theirs(tmp_path, 
         assert stat.S_IMODE(metrics.stat().st_mode) == 0o640
     finally:
         os.umask(previous)
+
+
+def test_a_json_name_of_the_longest_legal_length_is_written(tmp_path, capsys):
+    metrics = tmp_path / ("m" * 250 + ".json")  # 255 bytes: the longest name most file systems take
+    assert main([*RUN, "--json", str(metrics)]) == 0
+    assert json.loads(metrics.read_text())["steps"] == 5
+    assert [p.name for p in tmp_path.iterdir()] == [metrics.name]  # no temporary file left
+
+
+SWEEP = ["sweep", "hrvo-circle", "--seeds", "0", "-n", "4", "--steps", "5", "--workers", "1", "--no-progress"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "option"),
+    [
+        (RUN, "--json"),
+        (RUN, "--checkpoint"),
+        (RUN, "--video"),
+        (SWEEP, "--out"),
+        ([*SWEEP, "--out", "s.csv"], "--plot"),
+    ],
+    ids=["json", "checkpoint", "video", "sweep-out", "sweep-plot"],
+)
+def test_every_output_path_is_checked_before_the_first_step(tmp_path, monkeypatch, capsys, argv, option):
+    monkeypatch.chdir(tmp_path)
+    suffix = {"--video": ".mp4", "--plot": ".png"}.get(option, ".out")
+    too_long = "x" * 256 + suffix
+    assert main([*argv, option, too_long]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""  # no run, no summary
+    assert captured.err.count("\n") == 1 and "longer than the 255 bytes the file system allows" in captured.err
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_folder_where_no_file_can_be_made_is_refused_before_the_run(capsys):
+    if not os.path.isdir("/proc/self"):
+        pytest.skip("needs Linux's /proc, where no file can be made")
+    assert main([*RUN, "--json", "/proc/x.json"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1
+    assert "--json /proc/x.json: cannot write in the folder /proc" in captured.err
+
+
+def test_a_plot_that_names_no_image_format_is_refused_before_the_sweep(tmp_path, capsys):
+    assert main([*SWEEP, "--out", str(tmp_path / "s.csv"), "--plot", str(tmp_path / "s.txt")]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1
+    assert "suffix '.txt'; give an image file, such as .png" in captured.err
+    assert not list(tmp_path.iterdir())

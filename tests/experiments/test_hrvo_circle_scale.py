@@ -68,7 +68,7 @@ def test_hrvo_circle_swarm_mode_frames_and_measures_come_from_its_arrays():
 
 
 def test_hrvo_circle_refuses_a_radio_gap_below_one_step():
-    with pytest.raises(ValueError, match="radio_gap must be at least 1 step, got 0"):
+    with pytest.raises(ValueError, match="parameter .radio_gap. of hrvo-circle must be >= 1, got 0"):
         hrvo_circle.run(n=4, backend="fast", swarm=True, radio_gap=0)
 
 

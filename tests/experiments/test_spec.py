@@ -62,6 +62,74 @@ def test_params_reject_unknown_names_and_wrong_types(given, message):
         Still(**given)
 
 
+class Ranged(Experiment):
+    name = "ranged"
+    spacing: float = param(0.3, "> 0 and finite", gt=0)
+    share: float = param(0.5, "a fraction", ge=0, le=1)
+    gap: int = param(10, "at least one step", ge=1)
+    reach: float = param(1.0, "inf: unlimited", ge=0, finite=False)
+    gain: float = param(1.0, "any finite number")
+
+
+@pytest.mark.parametrize(
+    ("name", "value", "message"),
+    [
+        ("spacing", "inf", "must be finite and > 0, got inf"),
+        ("spacing", "0", "must be finite and > 0, got 0.0"),
+        ("spacing", "-1", "must be finite and > 0, got -1.0"),
+        ("spacing", "nan", "must be finite and > 0, got nan"),
+        ("share", 1.5, r"must be in \[0, 1\], got 1.5"),
+        ("gap", "0", "must be >= 1, got 0"),
+        ("reach", "nan", "must be >= 0, got nan"),
+        ("gain", "-inf", "must be finite, got -inf"),
+    ],
+)
+def test_params_refuse_values_out_of_their_range_naming_it(name, value, message):
+    with pytest.raises(ValueError, match=rf"^parameter '{name}' of ranged {message}$"):
+        Ranged(**{name: value})
+
+
+def test_params_take_any_value_in_their_range():
+    given = Ranged(spacing="1e-9", share=1, gap=1, reach="inf", gain=-5).params
+    assert given == {"spacing": 1e-9, "share": 1.0, "gap": 1, "reach": float("inf"), "gain": -5.0}
+    assert [p.range for p in Ranged.parameters().values()] == ["finite and > 0", "in [0, 1]", ">= 1", ">= 0", "finite"]
+    assert Still.parameters()["wait"].range == "" and Still.parameters()["loud"].range == ""
+
+
+@pytest.mark.parametrize(
+    ("call", "error", "message"),
+    [
+        (lambda: param(0.0, "x", gt=0), ValueError, r"default must be in its range \(finite and > 0\), got 0.0"),
+        (lambda: param(True, "x", ge=0), TypeError, "only a number has a range"),
+        (lambda: param("a", "x", finite=False), TypeError, "only a number has a range"),
+        (lambda: param(1.0, "x", gt=0, ge=0), TypeError, "one lower bound"),
+    ],
+)
+def test_param_refuses_a_range_that_cannot_hold(call, error, message):
+    with pytest.raises(error, match=message):
+        call()
+
+
+@pytest.mark.parametrize("name", sorted(EXPERIMENTS))
+def test_every_number_parameter_of_a_built_in_experiment_declares_its_range(name):
+    for declared in EXPERIMENTS[name].parameters().values():
+        if declared.kind in (int, float):
+            assert declared.range not in ("", "finite"), f"{name}: {declared.name}"
+
+
+def test_a_value_a_layer_below_refuses_is_named_by_the_users_parameter():
+    class Hear(Experiment):
+        name = "hear"
+        radio: float = param(1.0, "how far a robot hears (m); no range declared")
+
+        def build(self, n):
+            for i in range(n):
+                dream.RangeRadio(i, f"radio_{i}", lambda messages: None, range=self.radio)
+
+    with pytest.raises(ValueError, match=r"^hear with radio=-1.0: `range` must be finite and >= 0, got -1.0$"):
+        dream.run(Hear, n=2, radio=-1, progress=lambda step, cap: pytest.fail("stepped"))
+
+
 def test_run_takes_a_class_an_instance_or_a_name():
     by_class = dream.run(Still, backend="fast", wait=3)
     assert (by_class.completed_step, by_class.steps, by_class.n, by_class.params["wait"]) == (3, 3, 3, 3)
@@ -84,6 +152,59 @@ def test_run_takes_a_class_an_instance_or_a_name():
 def test_run_refuses_bad_options_before_any_step(options, message):
     with pytest.raises(ValueError, match=message):
         dream.run(Still, **options)
+
+
+def test_run_takes_false_for_no_progress_and_refuses_what_it_cannot_call():
+    assert dream.run(Still, backend="fast", progress=False, record=None).steps == 5
+    for options, message in [
+        ({"progress": True}, r"progress must be a function called as progress\(step, cap\), or None or False"),
+        ({"record": "x.gif"}, r"record must be a function called as record\(frame\)"),
+        ({"faults": {"loss": 0.3}}, r"faults must be a dream.Faults"),
+    ]:
+        with pytest.raises(ValueError, match=message):
+            dream.run(Still, backend="fast", **options)
+
+
+class Capped(Experiment):
+    """Sizes its arena by the step cap: room for the robots to drive at 0.1 m/s for the whole run."""
+
+    name = "capped"
+    default_n = 2
+
+    def check(self, n, backend):
+        self.seen = {"check": self.steps_cap}
+
+    def arena_for(self, n):  # the hook's signature of before the cap: still called as it is
+        self.seen["arena_for"] = self.steps_cap
+        side = 3.0 if self.steps_cap is None else max(3.0, 0.1 * 0.033 * self.steps_cap * 2)
+        return dream.ArenaSpec.centred(side, side)
+
+    def build(self, n):
+        self.seen["build"] = self.steps_cap
+
+    def steps(self, n):
+        return 7
+
+    def measures(self):
+        return {**self.seen, "width": self.arena.width}
+
+
+def test_the_experiment_sees_the_step_cap_before_it_sizes_its_arena_and_builds(tmp_path):
+    given = dream.run(Capped, backend="fast", steps=5000)
+    assert given.measures == {"check": 5000, "arena_for": 5000, "build": 5000, "width": pytest.approx(33.0)}
+    assert given.steps == 5000
+    own = dream.run(Capped, backend="fast")
+    assert own.measures == {"check": None, "arena_for": None, "build": None, "width": 3.0} and own.steps == 7
+    path = tmp_path / "run.ckpt"
+    dream.run(Capped, backend="fast", checkpoint=path)
+    resumed = dream.resume(path, steps=9)
+    assert resumed.steps == 9 and resumed.measures["check"] is None  # measured when it was built...
+    assert dream.experiments.checkpoint.load(path).stepper.exp.steps_cap == 9  # ...and sees the new cap
+
+
+def test_arena_spec_is_a_public_name():
+    assert dream.ArenaSpec is dream.specs.ArenaSpec and "ArenaSpec" in dream.__all__
+    assert dream.ArenaSpec() == dream.specs.ROBOTARIUM
 
 
 def test_run_refuses_unknown_experiment_names():

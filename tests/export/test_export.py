@@ -159,6 +159,10 @@ class Mine(Experiment):
         ("\nfrom dream import sweep", "pass", "uses dream.sweep, which a lab bundle leaves out: sweeps (Dask)"),
         ("\nfrom dream import *", "DistanceSensor(0, 'd', print)", "line 9: uses DistanceSensor: onboard sensors"),
         ("\nfrom . import helpers", "pass", "line 2: a relative import"),
+        ("", "__import__('tqdm')", "line 8: uses __import__, an import by name that the check cannot follow"),
+        ("", "builtins.__import__('tqdm')", "line 8: uses __import__, an import by name"),
+        ("\nimport importlib", "importlib.import_module('tqdm')", "line 2: imports importlib, an import by name"),
+        ("\nfrom importlib import import_module", "pass", "line 2: imports importlib, an import by name"),
     ],
 )
 def test_export_refuses_a_script_the_lab_cannot_run(tmp_path, capsys, imports, body, message):

@@ -184,3 +184,66 @@ def test_cli_fault_settings_reach_the_json(tmp_path, capsys):
 def test_world_without_injection_keeps_the_radio_loss_on_its_generator():
     with World(3) as world:
         assert world.fault_state is None and world.inject(Faults(), 4) is None
+
+
+# -- faults that never happen, and success that must hold (issue 30, item 11) ---------------------
+class Parked(Experiment):
+    """Robots that never move; done from step 189 on, or while every robot is correct with ``fragile``."""
+
+    name = "parked"
+    default_n = 10
+    fragile = False
+
+    def build(self, n):
+        pass
+
+    def done(self, step, poses):
+        return step >= 189 and (not self.fragile or bool(self.correct.all()))
+
+
+class ParkedHeld(Parked):
+    hold_steps = 150
+
+
+class FragileHeld(ParkedHeld):
+    fragile = True
+
+
+def test_a_fault_scheduled_after_the_run_ends_warns_and_is_recorded():
+    with pytest.warns(RuntimeWarning, match="fault crash@300 never happened: the run ended at step 189"):
+        result = dream.run(Parked, backend="fast", faults=Faults(crash=0.1, crash_at=300))
+    assert result.success and result.completed_step == 189
+    assert result.faults["events"] == [] and result.faults["pending"] == [{"kind": "crash", "step": 300}]
+    assert "never happened    crash@300" in result.summary()
+
+
+def test_the_json_lists_the_faults_that_never_happened(tmp_path, capsys):
+    source, out = tmp_path / "parked.py", tmp_path / "out.json"
+    source.write_text(
+        "from dream import Experiment\n\n\nclass Parked(Experiment):\n    name = 'parked'\n\n"
+        "    def build(self, n):\n        pass\n\n    def done(self, step, poses):\n        return step >= 189\n"
+    )
+    argv = ["run", str(source), "--backend", "fast", "--no-progress", "--json", str(out)]
+    assert main([*argv, "--fault", "crash=0.1@300", "--fault", "stuck=0.1@100"]) == 0
+    assert capsys.readouterr().err == (
+        "dream: warning: fault crash@300 never happened: the run ended at step 189 "
+        "(an experiment's hold_steps keeps a run going after done)\n"
+    )
+    faults = json.loads(out.read_text())["faults"]
+    assert faults["pending"] == [{"kind": "crash", "step": 300}]
+    assert [event["kind"] for event in faults["events"]] == ["stuck"]
+
+
+def test_success_must_hold_for_the_experiments_hold_steps():
+    result = dream.run(ParkedHeld, backend="fast", faults=Faults(crash=0.1, crash_at=300))
+    assert result.completed_step == 339 and result.faults["pending"] == []  # held from 189 to 339
+    assert [event["step"] for event in result.faults["events"]] == [300]
+    # a crash at 300 breaks a success that needs every robot: the count starts again, never to end
+    fragile = dream.run(FragileHeld, backend="fast", steps=600, faults=Faults(crash=0.1, crash_at=300))
+    assert not fragile.completed and fragile.steps == 600
+    assert dream.run(FragileHeld, backend="fast").completed_step == 339  # without the crash
+
+
+def test_hold_steps_must_be_a_whole_number():
+    with pytest.raises(TypeError, match=r"Bad.hold_steps must be an integer >= 0, got -1"):
+        type("Bad", (Parked,), {"hold_steps": -1})

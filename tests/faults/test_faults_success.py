@@ -41,7 +41,7 @@ def test_wmsr_graph_gives_every_robot_enough_neighbours_and_keeps_the_plain_grap
     assert resilient.sum(axis=1).min() >= 6 and (resilient >= plain).all()  # the same chords, a wider ring
     ids = np.arange(100)
     assert (resilient[ids, (ids + 3) % 100] == 1).all() and (resilient == resilient.T).all()
-    with pytest.raises(ValueError, match="resilient is the number of liars"):
+    with pytest.raises(ValueError, match="parameter .resilient. of line-consensus must be >= 0, got -1"):
         dream.run("line-consensus", n=10, backend="fast", steps=1, resilient=-1)
 
 

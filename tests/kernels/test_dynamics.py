@@ -573,6 +573,20 @@ def test_unicycle_step_rejects_non_positive_dt(dt):
         _core.unicycle_step(poses, commands, dt)
 
 
+@pytest.mark.parametrize(("speed", "dt"), [(10.0, 1e308), (1e10, 1e300)], ids=["1e308", "1e300"])
+def test_unicycle_step_refuses_a_dt_that_overflows_the_poses(speed, dt):
+    commands = np.array([[0.0, speed], [0.0, 0.0]])
+    with pytest.raises(ValueError, match=r"`dt` = .* overflows: robot 1's pose is no longer finite"):
+        kernels.unicycle_step(np.zeros((3, 2)), commands, dt)
+
+
+@pytest.mark.parametrize("gain", ["vel_gain", "ang_gain"])
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_dxi_to_dxu_refuses_non_finite_gains_naming_them(gain, bad):
+    with pytest.raises(ValueError, match=rf"`{gain}` must be finite, got {bad}"):
+        kernels.dxi_to_dxu(np.ones((2, 3)), np.zeros((3, 3)), **{gain: bad})
+
+
 @pytest.mark.parametrize(
     "bounds", [(1.0, 1.0, -1.0, 1.0), (1.0, -1.0, -1.0, 1.0), (-1.0, 1.0, 2.0, 1.0), (-1.0, np.nan, -1.0, 1.0)]
 )

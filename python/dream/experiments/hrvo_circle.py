@@ -549,11 +549,9 @@ class HrvoCircle(Experiment):
     success = "every robot finishes the third circle with zero collisions, boundary and actuator violations"
     has_swarm_mode = True
 
-    radio_gap: int = param(30, "steps between two radio exchanges of progress (both modes)")
+    radio_gap: int = param(30, "steps between two radio exchanges of progress (both modes)", ge=1)
 
     def check(self, n: int, backend: str) -> None:
-        if self.radio_gap < 1:
-            raise ValueError(f"radio_gap must be at least 1 step, got {self.radio_gap}")
         # On the real Robotarium the arena cannot grow: the goals close up instead (circle_layout,
         # which refuses more robots than the ring holds).
         self.grow = backend != "robotarium"

@@ -315,16 +315,17 @@ class LineConsensus(Experiment):
     default_n = 6
     success = "y spread and spacing error below 0.02 m (the line has formed), zero violations"
     has_swarm_mode = True
-    spacing: float = param(SPACING, "distance between neighbours on the line (m)")
-    radio_gap: int = param(10, "steps between radio exchanges")
+    spacing: float = param(SPACING, "distance between neighbours on the line (m)", gt=0)
+    radio_gap: int = param(10, "steps between radio exchanges", ge=1)
     resilient: int = param(
         0,
         "W-MSR: drop the F largest and F smallest neighbour values; beyond 6 robots the ring links 2F+1 ids a side",
+        ge=0,
     )
 
     def check(self, n: int, backend: str) -> None:
-        if self.resilient < 0:
-            raise ValueError(f"resilient is the number of liars W-MSR tolerates, at least 0, got {self.resilient}")
+        if n < 2:
+            raise ValueError(f"{NAME} needs at least 2 robots to form a line (each talks to its neighbours), got n={n}")
 
     def arena_for(self, n: int) -> ArenaSpec:
         return line_arena(n, self.spacing)

@@ -130,9 +130,11 @@ def _fault_rows(faults: dict[str, Any]) -> list[tuple[str, Any]]:
     kinds: dict[str, int] = {}
     for event in faults["events"]:
         kinds[event["kind"]] = kinds.get(event["kind"], 0) + 1
+    pending = ", ".join(f"{fault['kind']}@{fault['step']}" for fault in faults.get("pending", []))
     return [
         ("faults", settings),
         *((f"  {kind} robots", count) for kind, count in kinds.items()),
+        *((("  never happened", pending),) if pending else ()),
         ("  messages lost", faults["messages_lost"]),
         ("  readings dropped", faults["readings_dropped"]),
     ]

@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
+import contextlib
 import numbers
 import os
 import signal
 import threading
 import time
 import warnings
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Callable, Iterator
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -26,6 +27,7 @@ from dream.swarm import Engine
 from dream.world import World
 
 Progress = Callable[[int, int], None]
+_Call = TypeVar("_Call", bound=Callable[..., None])
 
 
 def run(
@@ -36,7 +38,7 @@ def run(
     steps: int | None = None,
     *,
     record: Callable[[Frame], None] | None = None,
-    progress: Progress | None = None,
+    progress: Progress | bool | None = None,
     trace: bool = False,
     faults: Faults | None = None,
     rules: str | None = None,
@@ -59,11 +61,12 @@ def run(
     backend : {"auto", "robotarium", "fast"}
         See :func:`dream.make_robotarium`.
     steps : int, optional
-        Step cap (default: the experiment's :meth:`~Experiment.steps`).
+        Step cap (default: the experiment's :meth:`~Experiment.steps`); the experiment sees it as
+        :attr:`~Experiment.steps_cap` from :meth:`~Experiment.check` on.
     record : callable, optional
         Called with the experiment's :class:`~dream.frames.Frame` after every step.
     progress : callable, optional
-        Called as ``progress(step, cap)`` after every step.
+        Called as ``progress(step, cap)`` after every step (``None`` or ``False``: nothing is).
     trace : bool
         Keep the poses of every step in ``result.trace`` ``(steps + 1, 3, n)``.
     faults : Faults, optional
@@ -90,7 +93,10 @@ def run(
     -------
     ExperimentResult
         A run stopped by Ctrl-C (SIGINT) or SIGTERM finishes its step and returns what it has
-        measured so far, with ``interrupted`` set (a second Ctrl-C raises ``KeyboardInterrupt``).
+        measured so far, with ``interrupted`` set; a second Ctrl-C cuts short the step the
+        experiment is computing (the run then ends at the step before, and saves no checkpoint
+        of the half step) but never a frame or a checkpoint being written (see
+        :func:`outputs_kept`).
 
     Raises
     ------
@@ -101,18 +107,26 @@ def run(
     exp = _instance(experiment, params)
     n = exp.default_n if n is None else _count(n, "n", 1)
     seed = _count(seed, "seed", 0)
+    exp.steps_cap = None if steps is None else _count(steps, "steps", 1)
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
+    if faults is not None and not isinstance(faults, Faults):
+        raise ValueError(f"faults must be a dream.Faults, such as Faults(loss=0.3), got {faults!r}")
+    record = _callback(record, "record", "record(frame)")
+    progress = _callback(progress, "progress", "progress(step, cap)")
     exp.check(n, backend)
     every = _count(checkpoint_every, "checkpoint_every", 1)
     if checkpoint is not None:
         check_writable(checkpoint, "checkpoint")
     world = World(seed)
     with world:
-        stepper = Stepper(exp, n, world, rules_named(rules), swarm=swarm)
+        try:
+            stepper = Stepper(exp, n, world, rules_named(rules), swarm=swarm)
+        except ValueError as err:  # from the layers below, in their terms: say which parameters the run set
+            raise _naming_params(exp, err) from err
         sim = make_robotarium(n, backend, stepper.initial_conditions, arena=exp.arena, rules=exp.rules.rules)
         stepper.attach(sim, faults)
-    cap = exp.steps(n) if steps is None else _count(steps, "steps", 1)
+    cap = exp.steps(n) if exp.steps_cap is None else exp.steps_cap
     state = Checkpoint(stepper, sim, 0, cap, every, poses=[sim.poses] if trace else None)
     if checkpoint is not None:
         save(checkpoint, state)  # a run that cannot be saved fails here, before its first step
@@ -124,7 +138,7 @@ def resume(
     steps: int | None = None,
     *,
     record: Callable[[Frame], None] | None = None,
-    progress: Progress | None = None,
+    progress: Progress | bool | None = None,
     checkpoint_every: int | None = None,
     trust: bool = False,
 ) -> ExperimentResult:
@@ -147,6 +161,8 @@ def resume(
     ValueError
         ``steps`` fewer than the run has taken already.
     """
+    record = _callback(record, "record", "record(frame)")
+    progress = _callback(progress, "progress", "progress(step, cap)")
     state = load(checkpoint, trust=trust)
     if checkpoint_every is not None:
         state.every = _count(checkpoint_every, "checkpoint_every", 1)
@@ -154,7 +170,7 @@ def resume(
         cap = _count(steps, "steps", 1)
         if cap < state.step:
             raise ValueError(f"steps={cap}: the run in {checkpoint} has taken {state.step} steps already")
-        state.cap = cap
+        state.cap = state.stepper.exp.steps_cap = cap
     return _go_on(state, record, progress, checkpoint)
 
 
@@ -169,37 +185,55 @@ def _go_on(
     done."""
     stepper, sim = state.stepper, state.sim
     everyone = np.arange(stepper.exp.n)
-    done_at = None
+    done_at, cut = None, False
     start, before = time.perf_counter(), state.wall_time
-    with stepper.world, _StopOnSignal() as stop:
-        while state.step < state.cap:
-            t = state.step
-            x = sim.get_poses()
-            sim.set_velocities(everyone, stepper.decide(t, x))
-            sim.step()
-            now = sim.poses
-            done = stepper.after(t + 1, now)
-            state.step = t + 1
-            if state.poses is not None:
-                state.poses.append(now)
-            if progress is not None:
-                progress(t + 1, state.cap)
-            if record is not None:
-                record(stepper.frame(t + 1, now))
-            if done:
-                done_at = t + 1
-                break
-            if stop.signal is not None:
-                break
-            if checkpoint is not None and state.step % state.every == 0 and state.step < state.cap:
-                state.wall_time = before + time.perf_counter() - start
+    stop = _kept[-1] if _kept else _Signals()  # the CLI's, whose outputs are written after the run
+    stop.install()
+    try:
+        with stepper.world:
+            try:
+                while state.step < state.cap:
+                    t = state.step
+                    stop.cuttable = True  # the experiment computes: a second Ctrl-C may cut it short
+                    x = sim.get_poses()
+                    sim.set_velocities(everyone, stepper.decide(t, x))
+                    sim.step()
+                    now = sim.poses
+                    done = stepper.after(t + 1, now)
+                    stop.cuttable = False  # what the step writes is written whole
+                    state.step = t + 1
+                    if state.poses is not None:
+                        state.poses.append(now)
+                    if progress is not None:
+                        progress(t + 1, state.cap)
+                    if record is not None:
+                        record(stepper.frame(t + 1, now))
+                    if done:
+                        done_at = t + 1
+                        break
+                    if stop.signal is not None:
+                        break
+                    if checkpoint is not None and state.step % state.every == 0 and state.step < state.cap:
+                        state.wall_time = before + time.perf_counter() - start
+                        _save_on(checkpoint, state)
+            except KeyboardInterrupt:
+                if not stop.cuttable:
+                    raise
+                stop.cuttable, cut = False, True  # the half step is no state to resume from
+            stopped = stop.signal  # a signal from here on comes once the steps are over: it stops nothing
+            state.wall_time = before + time.perf_counter() - start
+            if checkpoint is not None and done_at is None and not cut:  # a signal or the cap: resume() goes on
                 _save_on(checkpoint, state)
-        state.wall_time = before + time.perf_counter() - start
-        if checkpoint is not None and done_at is None:  # a signal or the cap: resume() goes on from here
-            _save_on(checkpoint, state)  # within the guard: a second SIGTERM cannot cut it short
+    finally:
+        stop.cuttable = False
+        if not _kept or stop is not _kept[-1]:
+            stop.restore()
     trace = None if state.poses is None else np.array(state.poses)
     result = stepper.result(done_at, state.wall_time, trace)
-    result.interrupted, result.signal = stop.signal is not None, stop.signal
+    result.interrupted, result.signal = stopped is not None, stopped
+    for fault in [] if result.interrupted else result.faults.get("pending", []):
+        message = f"fault {fault['kind']}@{fault['step']} never happened: the run ended at step {state.step}"
+        warnings.warn(f"{message} (an experiment's hold_steps keeps a run going after done)", RuntimeWarning, 3)
     return result
 
 
@@ -269,6 +303,7 @@ class Stepper:
         #: ``(3, n)`` poses the simulator starts from (m, m, rad).
         self.initial_conditions = exp.initial_poses(n, world.rng)
         self.state: FaultState | None = None
+        self.held = 0  # steps in a row that the experiment has been done
         self._limits = GRITSBOT
 
     def attach(self, sim: Backend, faults: Faults | None = None) -> None:
@@ -321,9 +356,11 @@ class Stepper:
 
     def after(self, step: int, poses: np.ndarray) -> bool:
         """After the simulator's step (``step`` steps run, ``poses`` ``(3, n)``): the experiment's
-        :meth:`~Experiment.after_step`, then whether it is :meth:`~Experiment.done`."""
+        :meth:`~Experiment.after_step`, then whether it is :meth:`~Experiment.done` and has been
+        for its :attr:`~Experiment.hold_steps` steps before."""
         self.exp.after_step(step, poses)
-        return bool(self.exp.done(step, poses))
+        self.held = self.held + 1 if self.exp.done(step, poses) else 0
+        return self.held > self.exp.hold_steps
 
     def result(self, done_at: int | None, wall: float, trace: np.ndarray | None = None) -> ExperimentResult:
         """The run's metrics: the simulator's counts, the experiment's measures and the faults."""
@@ -348,32 +385,98 @@ def _instance(experiment: type[Experiment] | Experiment | str, params: dict[str,
     raise TypeError(f"run() takes an Experiment subclass, instance or name, got {experiment!r}")
 
 
+def _naming_params(exp: Experiment, err: ValueError) -> ValueError:
+    """``err``, raised while ``exp`` was built, prefixed with the parameters set away from their
+    defaults: a value refused by a layer below (a radio's ``range``) is the user's parameter."""
+    declared = exp.parameters()
+    changed = [f"{key}={value!r}" for key, value in exp.params.items() if value != declared[key].default]
+    return ValueError(f"{exp.label()} with {', '.join(changed)}: {err}") if changed else err
+
+
+def _callback(value: _Call | bool | None, name: str, call: str) -> _Call | None:
+    """A callback argument: callable, or ``None`` or ``False`` for none (``progress=False`` reads as
+    "no progress")."""
+    if value is None or value is False:
+        return None
+    if not callable(value):
+        raise ValueError(f"{name} must be a function called as {call}, or None or False for none, got {value!r}")
+    return value
+
+
 def _count(value: Any, name: str, least: int) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least:
         raise ValueError(f"{name} must be an integer >= {least}, got {value!r}")
     return int(value)
 
 
-class _StopOnSignal:
-    """While a run steps, SIGINT and SIGTERM ask it to stop after the current step, so that
-    nothing (a video being written, the metrics) is cut half-way; a second Ctrl-C interrupts at
-    once. Only the main thread can take signals: elsewhere (a sweep's worker) this does nothing."""
+class _Signals:
+    """SIGINT and SIGTERM while a run steps, so that nothing it writes (a video, a checkpoint, the
+    metrics) is cut half-way. Only the main thread can take signals: elsewhere (a sweep's worker)
+    this catches nothing.
+
+    The first signal asks the run to stop after the current step (:attr:`signal`). A second Ctrl-C
+    raises ``KeyboardInterrupt`` while the experiment computes (:attr:`cuttable`: a step that
+    hangs can be cut short), and waits for the end of the step while a frame or a checkpoint is
+    written. Once the steps are over, signals are only noted: the run's last checkpoint is saved
+    whole, and within :func:`outputs_kept`, its video and JSON too.
+    """
 
     def __init__(self) -> None:
-        self.signal: int | None = None
+        self.signal: int | None = None  #: the first signal received
+        self.cuttable = False
         self._previous: dict[int, Any] = {}
 
     def _handle(self, signum: int, frame: object) -> None:
-        if self.signal == signal.SIGINT and signum == signal.SIGINT:
+        if self.signal is None:
+            self.signal = signum
+        elif self.cuttable and signum == signal.SIGINT:
             raise KeyboardInterrupt
-        self.signal = signum
 
-    def __enter__(self) -> _StopOnSignal:
-        if threading.current_thread() is threading.main_thread():
+    def install(self) -> None:
+        """Take SIGINT and SIGTERM (once; from the main thread only)."""
+        if not self._previous and threading.current_thread() is threading.main_thread():
             for signum in (signal.SIGINT, signal.SIGTERM):
                 self._previous[signum] = signal.signal(signum, self._handle)
-        return self
 
-    def __exit__(self, *exc: object) -> None:
+    def restore(self) -> None:
+        """Give SIGINT and SIGTERM back to the handlers :meth:`install` found."""
         for signum, handler in self._previous.items():
             signal.signal(signum, handler)
+        self._previous.clear()
+
+    def ignore_from_now(self) -> None:
+        """Ignore SIGINT and SIGTERM from now on, instead of giving them back: for a process that
+        ends once its outputs are written, where a late Ctrl-C has nothing left to stop (Python's
+        own handler would print a traceback, or kill it as it exits)."""
+        for signum in self._previous:
+            signal.signal(signum, signal.SIG_IGN)
+        self._previous.clear()
+
+
+#: The guards of :func:`outputs_kept` blocks, innermost last: the run within takes the last.
+_kept: list[_Signals] = []
+
+
+@contextlib.contextmanager
+def outputs_kept() -> Iterator[_Signals]:
+    """A block that runs (or resumes) a run and then writes what it recorded: the signals that come
+    once the run has begun to step are handled as the run handles them (see :func:`run`) until the
+    block ends, so that a second Ctrl-C lets the video close and the metrics be written. The
+    guard's ``signal`` is the first signal received (``None`` if none came); before the run
+    steps, signals act as they did before the block (Ctrl-C raises ``KeyboardInterrupt``).
+
+    Examples
+    --------
+    >>> with outputs_kept() as guard:
+    ...     result = run("hrvo-circle", n=4, steps=3, backend="fast")
+    ...     # close the video, write the JSON: a Ctrl-C now waits until the block ends
+    >>> guard.signal is None
+    True
+    """
+    guard = _Signals()
+    _kept.append(guard)
+    try:
+        yield guard
+    finally:
+        _kept.remove(guard)
+        guard.restore()

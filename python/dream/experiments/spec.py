@@ -8,7 +8,7 @@ progress bar, CLI (``dream run my_experiment.py --param gain=2``) and sweeps::
     class GoRight(Experiment):
         name = "go-right"
         default_n = 5
-        speed: float = param(0.1, "how fast the robots drive right (m/s)")
+        speed: float = param(0.1, "how fast the robots drive right (m/s)", gt=0)
 
         def build(self, n):
             for i in range(n):
@@ -39,6 +39,8 @@ step through one call, for swarms too large for robot objects and timers. The sa
 
 from __future__ import annotations
 
+import math
+import operator
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -56,15 +58,33 @@ _FALSE = {"0", "false", "no", "off"}
 
 @dataclass(frozen=True)
 class Param:
-    """A declared parameter: its default (whose type is the parameter's type) and its help."""
+    """A declared parameter: its default (whose type is the parameter's type), its help and, for a
+    number, its range (see :func:`param`)."""
 
     default: Any
     help: str
     name: str = ""
+    gt: float | None = None
+    ge: float | None = None
+    lt: float | None = None
+    le: float | None = None
+    finite: bool = True
 
     @property
     def kind(self) -> type:
         return type(self.default)
+
+    @property
+    def range(self) -> str:
+        """The values the parameter takes, in words (``"finite and > 0"``, ``"in [0, 1]"``); ``""``
+        for any value of its type."""
+        if (self.gt, self.ge) != (None, None) and (self.lt, self.le) != (None, None):  # finite whatever `finite`
+            left = f"({self.gt:g}" if self.gt is not None else f"[{self.ge:g}"
+            right = f"{self.lt:g})" if self.lt is not None else f"{self.le:g}]"
+            return f"in {left}, {right}"
+        said = ["finite"] if self.kind is float and self.finite else []
+        signs = ((">", self.gt), (">=", self.ge), ("<", self.lt), ("<=", self.le))
+        return " and ".join(said + [f"{sign} {bound:g}" for sign, bound in signs if bound is not None])
 
     def __set_name__(self, owner: type, name: str) -> None:
         object.__setattr__(self, "name", name)
@@ -75,8 +95,31 @@ class Param:
         return self if instance is None else self.default
 
     def convert(self, value: Any, experiment: str) -> Any:
-        """``value`` (a Python value, or the text given on the command line) as this parameter's type."""
+        """``value`` (a Python value, or the text given on the command line) as this parameter's
+        type, checked against its range.
+
+        Raises
+        ------
+        ValueError
+            Naming the parameter and the experiment: a value of another type, or out of range
+            (the message gives the range).
+        """
         where = f"parameter {self.name!r} of {experiment}"
+        value = self._typed(value, where)
+        if not self.admits(value):
+            raise ValueError(f"{where} must be {self.range}, got {value!r}")
+        return value
+
+    def admits(self, value: Any) -> bool:
+        """Whether ``value`` (of the parameter's type) is in its range."""
+        if self.kind not in (int, float):
+            return True
+        if math.isnan(value) or (self.finite and math.isinf(value)):
+            return False
+        bounds = ((operator.gt, self.gt), (operator.ge, self.ge), (operator.lt, self.lt), (operator.le, self.le))
+        return all(bound is None or holds(value, bound) for holds, bound in bounds)
+
+    def _typed(self, value: Any, where: str) -> Any:
         kind = self.kind
         if isinstance(value, str) and kind is not str:
             text = value.strip().lower()
@@ -99,11 +142,44 @@ def _kind_name(kind: type) -> str:
     return {bool: "true or false", int: "an integer", float: "a number", str: "text"}.get(kind, kind.__name__)
 
 
-def param(default: Any, help: str) -> Any:
-    """Declare a parameter of an :class:`Experiment` (type: that of ``default``)."""
+def param(
+    default: Any,
+    help: str,
+    *,
+    gt: float | None = None,
+    ge: float | None = None,
+    lt: float | None = None,
+    le: float | None = None,
+    finite: bool = True,
+) -> Any:
+    """Declare a parameter of an :class:`Experiment` (type: that of ``default``).
+
+    A number may say its range: ``gt`` (>), ``ge`` (>=), ``lt`` (<) and ``le`` (<=) bound it, and a
+    float is finite unless ``finite=False`` (NaN never is). A value out of range is refused
+    before the run builds anything, in one line that names the parameter and its range::
+
+        spacing: float = param(0.3, "distance between neighbours (m)", gt=0)
+        loss: float = param(0.0, "share of messages lost", ge=0, le=1)
+        radio_gap: int = param(10, "steps between radio exchanges", ge=1)
+
+    Raises
+    ------
+    TypeError
+        A default that is not a bool, int, float or str, or a range on a bool or a str.
+    ValueError
+        A default outside its own range.
+    """
     if not isinstance(default, (bool, int, float, str)):
         raise TypeError(f"a parameter's default must be a bool, int, float or str, got {default!r}")
-    return Param(default, help)
+    bounds = (gt, ge, lt, le)
+    if (any(bound is not None for bound in bounds) or not finite) and isinstance(default, (bool, str)):
+        raise TypeError(f"only a number has a range; this parameter's default is {default!r}")
+    if (gt is not None and ge is not None) or (lt is not None and le is not None):
+        raise TypeError("a range has one lower bound (gt or ge) and one upper bound (lt or le)")
+    declared = Param(default, help, gt=gt, ge=ge, lt=lt, le=le, finite=finite)
+    if not declared.admits(default):
+        raise ValueError(f"a parameter's default must be in its range ({declared.range}), got {default!r}")
+    return declared
 
 
 class Experiment:
@@ -120,6 +196,11 @@ class Experiment:
     has_swarm_mode : bool
         Whether the experiment also runs in swarm mode (default False): it defines
         :meth:`build_swarm` and :meth:`swarm_step`.
+    hold_steps : int
+        How many steps :meth:`done` must go on holding once it holds before the run ends, done
+        (default 0: at the first step it holds); a step where it does not hold starts the count
+        again, and the result's ``completed_step`` is the step the run ended at. A fault test
+        needs it: a crash scheduled at step 300 means nothing in a run done at step 189.
 
     Hooks, in the order the runner calls them (all but :meth:`build` optional)
     --------------------------------------------------------------------------
@@ -140,8 +221,11 @@ class Experiment:
 
     Attributes the runner sets
     --------------------------
-    n, world, rules (the :class:`~dream.specs.SimulatorSpec` the run follows), arena, swarm
-    (whether the run is in swarm mode) before :meth:`build` or :meth:`build_swarm`; sim, dxu (the
+    steps_cap (the step cap the run was given, ``steps=`` or ``--steps``; ``None`` when
+    :meth:`steps` decides) before :meth:`check`, so that :meth:`arena_for` and :meth:`build` can
+    size the run by it; n, world, rules (the :class:`~dream.specs.SimulatorSpec` the run
+    follows), arena, swarm (whether the run is in swarm mode) before :meth:`build` or
+    :meth:`build_swarm`; sim, dxu (the
     swarm's command array, ``(2, n)``, that controllers write into; in swarm mode the last
     :meth:`swarm_step`'s) once the simulator exists. ``robots`` is a list for :meth:`build` to
     fill (used by the default :meth:`frame`).
@@ -151,7 +235,9 @@ class Experiment:
     default_n: ClassVar[int] = 10
     success: ClassVar[str] = "the run reaches done() with zero collisions, boundary and actuator violations"
     has_swarm_mode: ClassVar[bool] = False
+    hold_steps: ClassVar[int] = 0
 
+    steps_cap: int | None = None
     n: int
     swarm: bool = False
     world: World
@@ -165,6 +251,9 @@ class Experiment:
         super().__init_subclass__(**kwargs)
         if cls.swarm_robot is not Experiment.swarm_robot:  # a swarm robot runs both ways
             cls.has_swarm_mode = True
+        hold = cls.hold_steps
+        if isinstance(hold, bool) or not isinstance(hold, int) or hold < 0:
+            raise TypeError(f"{cls.__name__}.hold_steps must be an integer >= 0, got {hold!r}")
 
     def __init__(self, **params: Any) -> None:
         declared = self.parameters()
@@ -211,7 +300,8 @@ class Experiment:
         """Raise ``ValueError`` (saying why and what the limit is) for a size that cannot succeed."""
 
     def arena_for(self, n: int) -> ArenaSpec:
-        """The arena for ``n`` robots (default: the Robotarium's)."""
+        """The arena for ``n`` robots, a :class:`dream.ArenaSpec` (default: the Robotarium's,
+        :data:`dream.specs.ROBOTARIUM`); :attr:`steps_cap` is set."""
         return ROBOTARIUM
 
     def swarm_robot(self, n: int) -> SwarmRobot | None:

@@ -7,7 +7,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 import dream._reference as _reference
-from dream._checks import FloatArray, as_array, as_poses
+from dream._checks import FloatArray, all_finite, as_array, as_poses, check_finite
 from dream.kernels._dispatch import implementation
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec, RobotSpec, SimulatorSpec
 
@@ -29,12 +29,22 @@ def unicycle_step(poses: Any, velocities: Any, dt: float = RPS.time_step) -> Flo
 
     ``x += dt cos(theta) v``, ``y += dt sin(theta) v``, ``theta += dt w``, then theta is
     wrapped to (-pi, pi] with ``atan2(sin, cos)``.
+
+    Raises
+    ------
+    ValueError
+        A non-finite pose or command, ``dt`` not finite and > 0, or a ``dt`` so large that a
+        pose overflows (the message names the robot).
     """
     p = as_poses(poses)
     u = _commands(velocities, "velocities", p.shape[1])
     if not (np.isfinite(dt) and dt > 0):
         raise ValueError(f"`dt` must be finite and > 0, got {dt}")
-    return implementation("unicycle_step")(p, u, dt)
+    out: FloatArray = implementation("unicycle_step")(p, u, dt)
+    if not all_finite(out):
+        robot = int(np.argwhere(~np.isfinite(out))[0][1])
+        raise ValueError(f"`dt` = {dt} overflows: robot {robot}'s pose is no longer finite after the step")
+    return out
 
 
 def threshold_velocities(velocities: Any, spec: SimulatorSpec = RPS) -> FloatArray:
@@ -86,10 +96,16 @@ def dxi_to_dxu(dxi: Any, poses: Any, vel_gain: float = 0.8, ang_gain: float = 3.
     """Unicycle commands ``(2, n)`` from single-integrator velocities ``(2, n)`` at ``poses`` ``(3, n)``.
 
     ``v = vel_gain (c dx + s dy)``, ``w = ang_gain atan2(-s dx + c dy, v) / (pi/2)``.
+
+    Raises
+    ------
+    ValueError
+        A non-finite velocity, pose or gain (naming it), or shapes that do not match.
     """
     d = _commands(dxi, "dxi")
     p = as_poses(poses, n=d.shape[1])
-    return implementation("dxi_to_dxu")(d, p, vel_gain, ang_gain)
+    gains = check_finite(vel_gain, "vel_gain"), check_finite(ang_gain, "ang_gain")
+    return implementation("dxi_to_dxu")(d, p, *gains)
 
 
 def actuator_limit(dxu: Any, robot: RobotSpec = GRITSBOT) -> FloatArray:

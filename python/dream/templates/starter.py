@@ -51,7 +51,7 @@ class Spread(Experiment):
     name = "NAME"
     default_n = 10
     success = "every two robots at least `spacing` apart, zero collisions"
-    spacing: float = param(0.5, "the distance every robot keeps from the others (m)")
+    spacing: float = param(0.5, "the distance every robot keeps from the others (m)", gt=0)
 
     # Build the robots, their sensors and radios, and the timer that runs them.
     def build(self, n: int) -> None:
