@@ -53,8 +53,9 @@ def scene(n: int) -> tuple[Engine, np.ndarray, np.ndarray]:
 
 
 def kernels_alone(engine: Engine, x: np.ndarray) -> float:
-    """The median time of one step's kernels (perception, the radio mean's reductions, HRVO, the
-    unicycle conversion and limits) called directly on this step's inputs."""
+    """The median time of one step's kernels (perception, the radio mean's reductions of the
+    messages gathered from the board, HRVO, the unicycle conversion and limits) called directly
+    on this step's inputs."""
     n = engine.n
     positions, everyone = x[:2].T.copy(), np.arange(n)
     talking = np.ones(n, dtype=bool)
@@ -67,7 +68,7 @@ def kernels_alone(engine: Engine, x: np.ndarray) -> float:
     def run() -> None:
         kernels.perceive(positions, x[2], everyone, sight=(0.5, 2 * np.pi, 0.0), radio_range=1.0, talking=talking)
         for column in positions.T:
-            kernels.segment_reduce(column, heard[0], "sum", index=heard[1])
+            kernels.segment_reduce(column[heard[1]], heard[0], "sum")
         kernels.hrvo_rows(engine.dxi, np.zeros((n, 2)), positions, offsets, detections, safety=0.2, bounds=bounds)
         kernels.actuator_limit(kernels.dxi_to_dxu(engine.dxi.T, x, 0.8, 3.0))
 
