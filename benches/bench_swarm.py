@@ -59,7 +59,7 @@ def kernels_alone(engine: Engine, x: np.ndarray) -> float:
     n = engine.n
     positions, everyone = x[:2].T.copy(), np.arange(n)
     talking = np.ones(n, dtype=bool)
-    (offsets, _, distances, bearings), heard = kernels.perceive(
+    (offsets, _, distances, bearings, *_), heard = kernels.perceive(
         positions, x[2], everyone, sight=(0.5, 2 * np.pi, 0.0), radio_range=1.0, talking=talking
     )
     detections = np.column_stack((distances, bearings, np.zeros(len(distances)), np.zeros(len(distances))))

@@ -135,8 +135,8 @@ def perceive(
     sight: tuple[float, float, float] | None = None,
     radio_range: float | None = None,
     talking: NDArray[np.bool_] | None = None,
-) -> tuple[tuple[_Ints, _Ints, _Floats, _Floats], tuple[_Ints, _Ints, _Floats]]:
-    """(seen (offsets, ids, distances, bearings), heard (offsets, ids, distances)) of the robots `rows`."""
+) -> tuple[tuple[_Ints, _Ints, _Floats, _Floats, _Floats, _Floats], tuple[_Ints, _Ints, _Floats]]:
+    """(seen (offsets, ids, distances, bearings, dx, dy), heard (offsets, ids, distances)) of the robots `rows`."""
 
 def segment_reduce(values: _Floats, offsets: _Ints, op: str) -> _Floats:
     """op (sum, mean, min, max) of each row's entries of values (k, w): (m, w)."""

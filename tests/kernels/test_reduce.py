@@ -150,10 +150,14 @@ def test_perceive_matches_the_reference(rng, n, fov):
     want = _reference.perceive(positions, headings, rows, **options)
     for mine, theirs in zip(got, want):
         assert len(mine) == len(theirs)
-        for a, b in zip(mine[:3], theirs[:3]):  # offsets, ids, distances: the same arithmetic
-            assert_array_equal(a, b)
-    assert_allclose(got[0][3], want[0][3], rtol=0, atol=1e-15)  # bearings: Rust's atan2 and NumPy's, to an ulp
-    (offsets, seen, distances, _), (h_offsets, heard, h_distances) = got
+        for k, (a, b) in enumerate(zip(mine, theirs)):
+            if k == 3:  # bearings: Rust's atan2 and NumPy's, to an ulp
+                assert_allclose(a, b, rtol=0, atol=1e-15)
+            else:  # offsets, ids, distances, dx, dy: the same arithmetic
+                assert_array_equal(a, b)
+    (offsets, seen, distances, bearings, dx, dy), (h_offsets, heard, h_distances) = got
+    assert_allclose(np.hypot(dx, dy), distances, rtol=1e-15)
+    assert_allclose(np.arctan2(dy, dx), bearings, rtol=0, atol=1e-15)
     assert (distances <= 0.4).all() and (h_distances <= 0.7).all() and talking[heard].all()
     assert len(offsets) == len(h_offsets) == len(rows) + 1
 

@@ -28,24 +28,32 @@ pub struct Sight {
 
 /// Ragged rows of seen or heard robots: row r is `ids[offsets[r]..offsets[r + 1]]`, with the
 /// distance of each and, for the seen ones, the bearing (world frame, from the perceiving robot
-/// towards the other; empty for the heard ones, whom no one needs the direction of).
+/// towards the other) and the offset `(dx, dy)` (the other's position less the perceiving
+/// robot's); those three are empty for the heard ones, whom no one needs the direction of.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Perceived {
     pub offsets: Vec<i64>,
     pub ids: Vec<i64>,
     pub distances: Vec<f64>,
     pub bearings: Vec<f64>,
+    pub dxs: Vec<f64>,
+    pub dys: Vec<f64>,
 }
+
+/// One perceived robot: id, distance, bearing and offset.
+type Entry = (i64, f64, f64, [f64; 2]);
 
 impl Perceived {
     /// Appends one row, sorted by id, from `row` (which it empties).
-    fn push_row(&mut self, row: &mut Vec<(i64, f64, f64)>, bearings: bool) {
+    fn push_row(&mut self, row: &mut Vec<Entry>, directions: bool) {
         row.sort_unstable_by_key(|e| e.0);
-        for &(j, distance, bearing) in row.iter() {
+        for &(j, distance, bearing, offset) in row.iter() {
             self.ids.push(j);
             self.distances.push(distance);
-            if bearings {
+            if directions {
                 self.bearings.push(bearing);
+                self.dxs.push(offset[0]);
+                self.dys.push(offset[1]);
             }
         }
         self.offsets.push(self.ids.len() as i64);
@@ -54,7 +62,7 @@ impl Perceived {
 
     /// The rows of `parts` (each with offsets from 0, leading 0 left out) put in the order
     /// `place` gives: `place[r] = (part, row within it)` of output row r.
-    fn gather(parts: &[Perceived], place: &[(usize, usize)], bearings: bool) -> Perceived {
+    fn gather(parts: &[Perceived], place: &[(usize, usize)], directions: bool) -> Perceived {
         let span = |&(p, k): &(usize, usize)| {
             let offsets = &parts[p].offsets;
             let start = if k == 0 { 0 } else { offsets[k - 1] as usize };
@@ -76,8 +84,10 @@ impl Perceived {
         for &(p, start, end) in &spans {
             out.ids.extend_from_slice(&parts[p].ids[start..end]);
             out.distances.extend_from_slice(&parts[p].distances[start..end]);
-            if bearings {
+            if directions {
                 out.bearings.extend_from_slice(&parts[p].bearings[start..end]);
+                out.dxs.extend_from_slice(&parts[p].dxs[start..end]);
+                out.dys.extend_from_slice(&parts[p].dys[start..end]);
             }
         }
         out
@@ -150,13 +160,13 @@ pub fn perceive(
                             || distance == 0.0
                             || wrap_angle(bearing - (headings[i] + s.direction)).abs() <= s.fov / 2.0;
                         if ahead {
-                            seen_row.push((j as i64, distance, bearing));
+                            seen_row.push((j as i64, distance, bearing, offset));
                         }
                     }
                 }
                 if let Some((range, talking)) = radio {
                     if distance <= range && talking[j] {
-                        heard_row.push((j as i64, distance, 0.0));
+                        heard_row.push((j as i64, distance, 0.0, [0.0; 2]));
                     }
                 }
             });

@@ -83,8 +83,8 @@ pub fn far_from<'py>(
     Ok(far.into_pyarray(py))
 }
 
-/// Who the robots `rows` see and hear: `(seen, heard)`, `(offsets, ids, distances, bearings)` and
-/// `(offsets, ids, distances)`.
+/// Who the robots `rows` see and hear: `(seen, heard)`, `(offsets, ids, distances, bearings, dx,
+/// dy)` and `(offsets, ids, distances)`.
 #[pyfunction]
 #[pyo3(signature = (positions, headings, rows, *, sight=None, radio_range=None, talking=None))]
 pub fn perceive<'py>(
@@ -114,6 +114,8 @@ pub fn perceive<'py>(
         ids,
         distances,
         bearings,
+        dxs,
+        dys,
     } = seen;
     Ok((
         (
@@ -121,6 +123,8 @@ pub fn perceive<'py>(
             ids.into_pyarray(py),
             distances.into_pyarray(py),
             bearings.into_pyarray(py),
+            dxs.into_pyarray(py),
+            dys.into_pyarray(py),
         ),
         (
             heard.offsets.into_pyarray(py),
@@ -133,6 +137,8 @@ pub fn perceive<'py>(
 type Perception<'py> = (
     Bound<'py, PyArray1<i64>>,
     Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
     Bound<'py, PyArray1<f64>>,
     Bound<'py, PyArray1<f64>>,
 );

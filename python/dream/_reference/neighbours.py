@@ -109,32 +109,34 @@ def perceive(
 ) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
     """Who the robots ``rows`` see (``sight``: range, fov, direction) and hear (within
     ``radio_range``, among the ``talking``): ``(seen, heard)``, ``(offsets, ids, distances,
-    bearings)`` and ``(offsets, ids, distances)`` over those rows, ids increasing in each row."""
+    bearings, dx, dy)`` and ``(offsets, ids, distances)`` over those rows, ids increasing in each
+    row."""
     n = len(positions)
     reach = max(0.0 if sight is None else sight[0], 0.0 if radio_range is None else radio_range)
     asked = np.zeros(n, dtype=bool)
     asked[rows] = True
     indptr, indices, distances = neighbours(positions, reach, rows=asked)
-    seen: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-    heard: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    seen: list[tuple[np.ndarray, ...]] = []
+    heard: list[tuple[np.ndarray, ...]] = []
     for i in rows:
         js, d = indices[indptr[i] : indptr[i + 1]], distances[indptr[i] : indptr[i + 1]]
-        bearing = np.arctan2(positions[js, 1] - positions[i, 1], positions[js, 0] - positions[i, 0])
+        dx, dy = positions[js, 0] - positions[i, 0], positions[js, 1] - positions[i, 1]
+        bearing = np.arctan2(dy, dx)
         if sight is not None:
             keep = d <= sight[0]
             if sight[1] < 2 * np.pi:
                 relative = (bearing - (headings[i] + sight[2]) + np.pi) % (2 * np.pi) - np.pi
                 keep &= (np.abs(relative) <= sight[1] / 2) | (d == 0)
-            seen.append((js[keep], d[keep], bearing[keep]))
+            seen.append((js[keep], d[keep], bearing[keep], dx[keep], dy[keep]))
         if radio_range is not None and talking is not None:
             keep = (d <= radio_range) & talking[js]
-            heard.append((js[keep], d[keep], bearing[keep]))
+            heard.append((js[keep], d[keep]))
 
-    def csr(parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]], columns: int) -> tuple[np.ndarray, ...]:
+    def csr(parts: list[tuple[np.ndarray, ...]], columns: int) -> tuple[np.ndarray, ...]:
         counts = [len(p[0]) for p in parts] if parts else [0] * len(rows)
         offsets = np.concatenate(([0], np.cumsum(counts))).astype(np.int64)
         if not parts:
             return offsets, np.zeros(0, dtype=np.int64), *(np.zeros(0) for _ in range(columns - 1))
         return (offsets, *(np.concatenate([p[k] for p in parts]) for k in range(columns)))
 
-    return csr(seen, 3), csr(heard, 2)
+    return csr(seen, 5), csr(heard, 2)

@@ -108,8 +108,8 @@ def far_from(points: Any, others: Any, distance: float, *, offsets: tuple[Any, A
     return implementation("far_from")(p, q, distance, cuts, theirs)
 
 
-#: What the asked robots see: ``(offsets, ids, distances, bearings)`` over their rows.
-Perceived = tuple[np.ndarray, np.ndarray, FloatArray, FloatArray]
+#: What the asked robots see: ``(offsets, ids, distances, bearings, dx, dy)`` over their rows.
+Perceived = tuple[np.ndarray, np.ndarray, FloatArray, FloatArray, FloatArray, FloatArray]
 #: What they hear: ``(offsets, ids, distances)``.
 Heard = tuple[np.ndarray, np.ndarray, FloatArray]
 
@@ -128,9 +128,10 @@ def perceive(
     Robot j is seen by robot i when it is within ``sight = (range, fov, direction)`` (m, rad,
     rad: the field of view about i's heading turned by ``direction``; a co-located robot is
     always seen), and heard when it is within ``radio_range`` (m) and ``talking[j]``. Returns
-    ``(seen, heard)``: ``(offsets (m + 1,), ids, distances, bearings)`` and ``(offsets, ids,
-    distances)``; row r's entries are ``offsets[r]:offsets[r + 1]``, ids increasing; bearings
-    are world-frame directions from the perceiving robot towards the other. A row does not
+    ``(seen, heard)``: ``(offsets (m + 1,), ids, distances, bearings, dx, dy)`` and ``(offsets,
+    ids, distances)``; row r's entries are ``offsets[r]:offsets[r + 1]``, ids increasing;
+    bearings are world-frame directions from the perceiving robot towards the other, ``(dx, dy)``
+    the other's position less the perceiving robot's. A row does not
     depend on which other rows are asked.
     """
     p = as_array(positions, "positions", (None, 2))

@@ -106,6 +106,8 @@ class Engine:
         self.last[due] = clock[due]
         rows = np.flatnonzero(due)
         rows = rows[self._odometry(t, rows, x, faults)]
+        if self.robot.movement is not None:  # a robot whose sensor reading is lost holds its command
+            rows = rows[self._kept(t, rows, np.full(len(rows), -2), faults)]
         if not len(rows):
             return commands
         # What the sensors see of the others' motion: their commands before anyone decides now.
@@ -230,7 +232,8 @@ class Engine:
         return np.isfinite(self.belief[rows, 0])
 
     def _kept(self, t: int, me: np.ndarray, others: np.ndarray, faults: FaultState | None) -> np.ndarray:
-        """Which readings (of robot ``me`` about ``others``; -1: its odometry) the dropout fault keeps."""
+        """Which readings of robots ``me`` the dropout fault keeps (``others``: -1 for the odometry,
+        -2 for the movement sensor's reading, which is lost whole, as an object sensor's is)."""
         if faults is None or not faults.faults.sensor_dropout:
             return np.ones(len(me), dtype=bool)
         kept = draws.uniform(self.seed, draws.DROPOUT, t, me, others) >= faults.faults.sensor_dropout
@@ -249,21 +252,20 @@ class Engine:
         see; ``velocities``: every robot's as the sensor estimates it), with the sensor's noise and
         the world's sensor faults."""
         sensor = self.robot.movement
-        offsets, others, gaps, bearing = seen
+        offsets, others, gaps, bearing, dx, dy = seen
         if sensor is None:
             return Neighbourhood(offsets, {name: np.zeros(0) for name in (*DETECTION, "dx", "dy")})
-        me = np.repeat(rows, np.diff(offsets))
         columns = {"distance": gaps, "bearing": bearing, "vx": velocities[0][others], "vy": velocities[1][others]}
         sigma = math.hypot(sensor.noise, 0.0 if faults is None else faults.faults.sensor_noise)
         if sigma > 0:
+            me = np.repeat(rows, np.diff(offsets))
             noise = draws.normal(self.seed, draws.DETECTION_NOISE, t, me[:, None], others[:, None], np.arange(4))
             columns = {name: columns[name] + sigma * noise[:, k] for k, name in enumerate(DETECTION)}
             columns["distance"] = np.maximum(columns["distance"], 0.0)  # never negative, noisy or not
-        columns["dx"] = columns["distance"] * np.cos(columns["bearing"])
-        columns["dy"] = columns["distance"] * np.sin(columns["bearing"])
-        detections = Neighbourhood(offsets, columns)
-        kept = self._kept(t, me, others, faults)
-        return detections if kept.all() else detections.where(kept)
+            dx = columns["distance"] * np.cos(columns["bearing"])
+            dy = columns["distance"] * np.sin(columns["bearing"])
+        columns["dx"], columns["dy"] = dx, dy
+        return Neighbourhood(offsets, columns)
 
     # -- radio -------------------------------------------------------------------------------
     def _hear(self, t: int, rows: np.ndarray, heard: Heard, faults: FaultState | None) -> Neighbourhood:
