@@ -142,9 +142,11 @@ def perceive_scene(rng, n):
 
 @pytest.mark.parametrize("n", [1, 2, 40, 3000])
 @pytest.mark.parametrize("fov", [2 * np.pi, 1.5])
-def test_perceive_matches_the_reference(rng, n, fov):
+@pytest.mark.parametrize("everyone", [False, True], ids=["some talk", "all talk"])
+def test_perceive_matches_the_reference(rng, n, fov, everyone):
     positions, headings, talking = perceive_scene(rng, n)
-    rows = rng.choice(n, size=max(n // 2, 1), replace=False)
+    talking |= everyone  # all talking over the longest range: the query's rows are what is heard
+    rows = np.sort(rng.choice(n, size=max(n // 2, 1), replace=False))
     options = dict(sight=(0.4, fov, 0.3), radio_range=0.7, talking=talking)
     got = _core.perceive(positions, headings, rows, **options)
     want = _reference.perceive(positions, headings, rows, **options)
@@ -176,7 +178,9 @@ def test_a_perceived_row_does_not_depend_on_the_other_rows(rng):
 @pytest.mark.parametrize(
     ("options", "message"),
     [
-        (dict(rows=[5]), r"`rows` must be robot ids in \[0, 3\)"),
+        (dict(rows=[5]), r"`rows` must be increasing robot ids in \[0, 3\)"),
+        (dict(rows=[1, 0]), r"`rows` must be increasing robot ids"),
+        (dict(rows=[1.0]), "integer robot ids"),
         (dict(rows=[0], sight=(-1.0, 1.0, 0.0)), "sensor range"),
         (dict(rows=[0], radio_range=1.0), "give both `radio_range` and `talking`"),
         (dict(rows=[0], radio_range=1.0, talking=[True]), "`talking` must"),

@@ -5,14 +5,15 @@
 //! i to j lies within `fov / 2` of `heading_i + direction` (a co-located robot is always seen);
 //! it is heard when `|p_j - p_i| <= radio range` and j is talking (has a message out). Each row
 //! lists ids in increasing order, and a row is the same whichever other rows are asked: the
-//! robots can be perceived for one at a time or all at once.
+//! robots can be perceived for one at a time or all at once. Distances are the neighbour
+//! query's, to the bit.
 
 use std::f64::consts::TAU;
 
 use rayon::prelude::*;
 
 use crate::error::{check_finite, check_len, GeomError, Result};
-use crate::neighbours::{wrap_angle, Near};
+use crate::neighbours::{within, wrap_angle};
 
 /// Rows from which the robots are perceived for on every thread.
 const PARALLEL_ROWS: usize = 512;
@@ -40,62 +41,29 @@ pub struct Perceived {
     pub dys: Vec<f64>,
 }
 
-/// One perceived robot: id, distance, bearing and offset.
-type Entry = (i64, f64, f64, [f64; 2]);
 
 impl Perceived {
-    /// Appends one row, sorted by id, from `row` (which it empties).
-    fn push_row(&mut self, row: &mut Vec<Entry>, directions: bool) {
-        row.sort_unstable_by_key(|e| e.0);
-        for &(j, distance, bearing, offset) in row.iter() {
-            self.ids.push(j);
-            self.distances.push(distance);
-            if directions {
-                self.bearings.push(bearing);
-                self.dxs.push(offset[0]);
-                self.dys.push(offset[1]);
-            }
+    fn with_offsets() -> Self {
+        Perceived {
+            offsets: vec![0],
+            ..Perceived::default()
         }
-        self.offsets.push(self.ids.len() as i64);
-        row.clear();
     }
 
-    /// The rows of `parts` (each with offsets from 0, leading 0 left out) put in the order
-    /// `place` gives: `place[r] = (part, row within it)` of output row r.
-    fn gather(parts: &[Perceived], place: &[(usize, usize)], directions: bool) -> Perceived {
-        let span = |&(p, k): &(usize, usize)| {
-            let offsets = &parts[p].offsets;
-            let start = if k == 0 { 0 } else { offsets[k - 1] as usize };
-            (p, start, offsets[k] as usize)
-        };
-        let spans: Vec<(usize, usize, usize)> = place.iter().map(span).collect();
-        let mut out = Perceived {
-            offsets: Vec::with_capacity(place.len() + 1),
-            ..Perceived::default()
-        };
-        out.offsets.push(0);
-        for &(_, start, end) in &spans {
-            out.offsets
-                .push(out.offsets[out.offsets.len() - 1] + (end - start) as i64);
-        }
-        let total = out.offsets[place.len()] as usize;
-        out.ids.reserve(total);
-        out.distances.reserve(total);
-        for &(p, start, end) in &spans {
-            out.ids.extend_from_slice(&parts[p].ids[start..end]);
-            out.distances.extend_from_slice(&parts[p].distances[start..end]);
-            if directions {
-                out.bearings.extend_from_slice(&parts[p].bearings[start..end]);
-                out.dxs.extend_from_slice(&parts[p].dxs[start..end]);
-                out.dys.extend_from_slice(&parts[p].dys[start..end]);
-            }
-        }
-        out
+    /// Appends the rows of `part` (whose offsets start at 0, the leading 0 left out).
+    fn extend(&mut self, part: Perceived) {
+        let base = self.ids.len() as i64;
+        self.offsets.extend(part.offsets.iter().map(|o| o + base));
+        self.ids.extend_from_slice(&part.ids);
+        self.distances.extend_from_slice(&part.distances);
+        self.bearings.extend_from_slice(&part.bearings);
+        self.dxs.extend_from_slice(&part.dxs);
+        self.dys.extend_from_slice(&part.dys);
     }
 }
 
-/// Rows one task perceives for: enough to amortise a task, few enough to balance the cores.
-const CHUNK_ROWS: usize = 256;
+/// Rows one task sorts out: enough to amortise a task, few enough to balance the cores.
+const CHUNK_ROWS: usize = 1024;
 
 fn check_range(arg: &'static str, value: f64) -> Result<()> {
     if value.is_finite() && value >= 0.0 {
@@ -109,11 +77,13 @@ fn check_range(arg: &'static str, value: f64) -> Result<()> {
     }
 }
 
-/// The robots `rows` (ids) see with `sight` and hear within `radio` (range, and who is talking),
-/// among the robots at `(xs[j], ys[j])` heading `headings[j]`.
+/// The robots `rows` (ids, increasing) see with `sight` and hear within `radio` (range, and who
+/// is talking), among the robots at `(xs[j], ys[j])` heading `headings[j]`: one neighbour query
+/// within the longer range ([`within`]), whose rows are then sorted out into the two.
 ///
 /// # Errors
-/// Length mismatches, non-finite positions or headings, negative ranges or ids out of range.
+/// Length mismatches, non-finite positions or headings, negative ranges, or rows that are not
+/// increasing ids of robots.
 pub fn perceive(
     xs: &[f64],
     ys: &[f64],
@@ -125,8 +95,6 @@ pub fn perceive(
     let n = xs.len();
     check_len("ys", n, ys.len())?;
     check_len("headings", n, headings.len())?;
-    check_finite("positions", xs)?;
-    check_finite("positions", ys)?;
     check_finite("headings", headings)?;
     if let Some(s) = sight {
         check_range("sensor range", s.range)?;
@@ -137,71 +105,73 @@ pub fn perceive(
         check_range("radio range", range)?;
         check_len("talking", n, talking.len())?;
     }
-    if let Some(r) = rows.iter().position(|&i| i < 0 || i as usize >= n) {
-        return Err(GeomError::InvalidParameter {
-            arg: "rows",
-            rule: "ids of robots",
-            got: rows[r] as f64,
-        });
+    let mut asked = vec![false; n];
+    for (r, &i) in rows.iter().enumerate() {
+        if i < 0 || i as usize >= n || (r > 0 && i <= rows[r - 1]) {
+            return Err(GeomError::InvalidCsr {
+                arg: "rows",
+                rows: rows.len(),
+                reason: format!("row {r} is {i}: rows must be increasing robot ids below {n}"),
+            });
+        }
+        asked[i as usize] = true;
     }
     let reach = sight.map_or(0.0, |s| s.range).max(radio.map_or(0.0, |r| r.0));
-    let near = Near::new(xs, ys, reach);
-    // One task's rows (indices into `rows`), each row sorted by id; offsets without the leading 0.
-    let chunk = |task: &[usize]| {
+    let near = within(xs, ys, reach, None, None, Some(&asked))?;
+    // Every robot in reach talking, over the longest range: the query's rows are what is heard,
+    // as they stand (the rows not asked are empty, so the entries are the asked rows' in order).
+    let all_heard = radio.is_some_and(|(range, talking)| range >= reach && talking.iter().all(|&t| t));
+    let sort_out = |task: &[i64]| {
         let (mut seen, mut heard) = (Perceived::default(), Perceived::default());
-        let (mut scratch, mut seen_row, mut heard_row) = (Vec::new(), Vec::new(), Vec::new());
-        for &r in task {
-            let i = rows[r] as usize;
-            near.for_each(i, &mut scratch, |j, offset, distance| {
+        for &i in task {
+            let i = i as usize;
+            let entries = near.indptr[i] as usize..near.indptr[i + 1] as usize;
+            for (&j, &distance) in near.indices[entries.clone()].iter().zip(&near.distances[entries]) {
+                let ju = j as usize;
                 if let Some(s) = sight {
                     if distance <= s.range {
+                        let offset = [xs[ju] - xs[i], ys[ju] - ys[i]];
                         let bearing = offset[1].atan2(offset[0]);
                         let ahead = s.fov >= TAU
                             || distance == 0.0
                             || wrap_angle(bearing - (headings[i] + s.direction)).abs() <= s.fov / 2.0;
                         if ahead {
-                            seen_row.push((j as i64, distance, bearing, offset));
+                            seen.ids.push(j);
+                            seen.distances.push(distance);
+                            seen.bearings.push(bearing);
+                            seen.dxs.push(offset[0]);
+                            seen.dys.push(offset[1]);
                         }
                     }
                 }
                 if let Some((range, talking)) = radio {
-                    if distance <= range && talking[j] {
-                        heard_row.push((j as i64, distance, 0.0, [0.0; 2]));
+                    if !all_heard && distance <= range && talking[ju] {
+                        heard.ids.push(j);
+                        heard.distances.push(distance);
                     }
                 }
-            });
-            seen.push_row(&mut seen_row, true);
-            heard.push_row(&mut heard_row, false);
+            }
+            seen.offsets.push(seen.ids.len() as i64);
+            heard.offsets.push(heard.ids.len() as i64);
         }
         (seen, heard)
     };
-    // The rows go in the grid's cell order, so that a task's robots share their cells' memory
-    // (in the given order, robots spread at random touch a new part of the arena each time).
-    let mut rank = vec![0_usize; n];
-    for (k, &i) in near.order().iter().enumerate() {
-        rank[i] = k;
-    }
-    let mut order: Vec<usize> = (0..rows.len()).collect();
-    order.sort_unstable_by_key(|&r| rank[rows[r] as usize]);
     let parts: Vec<(Perceived, Perceived)> = if rows.len() >= PARALLEL_ROWS {
-        order.par_chunks(CHUNK_ROWS).map(chunk).collect()
+        rows.par_chunks(CHUNK_ROWS).map(sort_out).collect()
     } else {
-        vec![chunk(&order)]
+        vec![sort_out(rows)]
     };
-    let chunk_rows = if rows.len() >= PARALLEL_ROWS {
-        CHUNK_ROWS
-    } else {
-        rows.len().max(1)
-    };
-    let mut place = vec![(0, 0); rows.len()];
-    for (k, &r) in order.iter().enumerate() {
-        place[r] = (k / chunk_rows, k % chunk_rows);
+    let (mut seen, mut heard) = (Perceived::with_offsets(), Perceived::with_offsets());
+    for (s, h) in parts {
+        seen.extend(s);
+        heard.extend(h);
     }
-    let (seen, heard): (Vec<Perceived>, Vec<Perceived>) = parts.into_iter().unzip();
-    Ok((
-        Perceived::gather(&seen, &place, true),
-        Perceived::gather(&heard, &place, false),
-    ))
+    if all_heard {
+        heard.offsets = rows.iter().map(|&i| near.indptr[i as usize]).collect();
+        heard.offsets.push(near.indptr[n]);
+        (heard.ids, heard.distances) = (near.indices, near.distances);
+    }
+    Ok((seen, heard))
 }
 
 #[cfg(test)]

@@ -123,7 +123,7 @@ def perceive(
     radio_range: float | None = None,
     talking: Any = None,
 ) -> tuple[Perceived, Heard]:
-    """Who the robots ``rows`` ``(m,)`` (ids) see and hear, in one pass over their neighbours.
+    """Who the robots ``rows`` ``(m,)`` (increasing ids) see and hear, in one neighbour query.
 
     Robot j is seen by robot i when it is within ``sight = (range, fov, direction)`` (m, rad,
     rad: the field of view about i's heading turned by ``direction``; a co-located robot is
@@ -137,9 +137,12 @@ def perceive(
     p = as_array(positions, "positions", (None, 2))
     n = p.shape[0]
     h = as_array(headings, "headings", (n,))
-    asked = np.ascontiguousarray(rows, dtype=np.int64)
-    if asked.ndim != 1 or (len(asked) and (asked.min() < 0 or asked.max() >= n)):
-        raise ValueError(f"`rows` must be robot ids in [0, {n}), shape (m,)")
+    array = np.asarray(rows)
+    if array.size and array.dtype.kind not in "iu":
+        raise ValueError(f"`rows` must hold integer robot ids, got dtype {array.dtype}")
+    asked = np.ascontiguousarray(array, dtype=np.int64)
+    if asked.ndim != 1 or (len(asked) and (asked[0] < 0 or asked[-1] >= n or np.any(np.diff(asked) <= 0))):
+        raise ValueError(f"`rows` must be increasing robot ids in [0, {n}), shape (m,)")
     if sight is not None:
         check_nonnegative(sight[0], "sensor range")
         check_nonnegative(sight[1], "fov")

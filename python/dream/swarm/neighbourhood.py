@@ -67,6 +67,8 @@ class Neighbourhood:
         return np.column_stack([self[name] for name in what]).reshape(-1, len(what))
 
     def _reduce(self, what: str | Sequence[str] | np.ndarray, op: str) -> FloatArray:
+        if not isinstance(what, (str, np.ndarray)):  # column by column: no (e, w) copy of them
+            return np.column_stack([self._reduce(name, op) for name in what]).reshape(len(self), len(what))
         values = self._values(what)
         if len(values) != self.offsets[-1]:
             raise ValueError(f"values of shape {values.shape} for a neighbourhood of {self.offsets[-1]} entries")
