@@ -41,7 +41,6 @@ pub struct Perceived {
     pub dys: Vec<f64>,
 }
 
-
 impl Perceived {
     fn with_offsets() -> Self {
         Perceived {
