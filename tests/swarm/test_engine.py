@@ -13,7 +13,7 @@ import pytest
 import dream
 from dream import Faults, timers
 from dream.experiments.files import load_file
-from dream.swarm import Movement, Radio, SwarmRobot, View, draws
+from dream.swarm import Avoid, Movement, Radio, SwarmRobot, View, draws
 
 ROOT = Path(__file__).resolve().parents[2]
 EVERY_FAULT = Faults(
@@ -331,3 +331,49 @@ def test_a_message_must_have_every_declared_field():
 
     with pytest.raises(ValueError, match=r"sent fields \['x'\], but its radio declares \['x', 'y'\]"):
         drive(Partial(), 3, 2)
+
+
+def test_a_graph_radio_hears_its_links_whatever_the_distance():
+    # A ring of 5: robot i hears i - 1 and i + 1 (mod 5), 10 m apart or not.
+    n = 5
+    indices = np.array([[(i - 1) % n, (i + 1) % n] for i in range(n)]).ravel()
+    radio = Radio(range=0.0, fields=("value",), graph=(np.arange(0, 2 * n + 1, 2), indices))
+    robot = Recorder(period=1, radio=radio)
+    poses = np.zeros((3, n))
+    poses[0] = np.arange(n) * 10.0
+    drive(robot, n, 5, poses=poses)
+    _, ids, heard = robot.views[-1]
+    offsets = np.concatenate(([0], np.cumsum([2] * n)))
+    for r, i in enumerate(ids):
+        assert sorted(heard["sender"][offsets[r] : offsets[r + 1]]) == sorted({(i - 1) % n, (i + 1) % n})
+    with pytest.raises(ValueError, match="graph links 5 robots, but the run has 6"):
+        drive(Recorder(period=1, radio=radio), 6, 3)
+
+
+@pytest.mark.parametrize("faults", [None, EVERY_FAULT], ids=["no faults", "every fault"])
+def test_a_graph_radio_is_the_same_both_ways(faults):
+    n = 12
+    rng = np.random.default_rng(3)
+    links = [sorted(set(rng.choice(n, 3, replace=False)) - {i}) for i in range(n)]
+    graph = (np.concatenate(([0], np.cumsum([len(row) for row in links]))), np.concatenate(links))
+
+    class Consensus(SwarmRobot):
+        period = 2
+        movement = Movement(range=0.4)
+        avoid = Avoid(safety=0.2)
+        radio = Radio(fields=("x", "y"), graph=graph)
+
+        def decide(self, view):
+            here = view.pose[:, :2]
+            view.send(x=here[:, 0], y=here[:, 1])
+            centre = (view.heard.sum(["x", "y"]) + here) / (view.heard.count + 1)[:, None]
+            return np.clip(0.5 * (centre - here), -0.1, 0.1)
+
+    class Meet(dream.Experiment):
+        name = "graph-meet"
+
+        def swarm_robot(self, n):
+            return Consensus()
+
+    one, swarm = both_ways(Meet, n, faults, steps=150)
+    assert np.array_equal(one.trace, swarm.trace) and one.collisions == 0

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from dream import kernels, rules
+from dream._csr import spans
 from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
 from dream.kernels._neighbours import Heard, Perceived
 from dream.robot import guard_distance, stopping
@@ -134,14 +135,17 @@ class Engine:
         """The robots ``rows`` perceive, hear and decide; their commands go into ``out``. Returns
         what they said (their ids and fields), if anything."""
         robot, movement, radio = self.robot, self.robot.movement, self.robot.radio
+        by_range = radio is not None and radio.graph is None
         seen, heard = kernels.perceive(
             x[:2].T,
             x[2],
             rows,
             sight=None if movement is None else (movement.range, movement.fov, movement.direction),
-            radio_range=None if radio is None else radio.range,
-            talking=None if radio is None else talking,
+            radio_range=radio.range if by_range else None,
+            talking=talking if by_range else None,
         )
+        if radio is not None and radio.graph is not None:
+            heard = _linked(radio.graph, rows, x, talking)
         ids = rows.copy()
         ids.flags.writeable = False
         memory = {key: values[rows] for key, values in self.memory.items()}
@@ -394,3 +398,17 @@ def _per_robot(values: Any, k: int, kind: np.dtype, what: str) -> np.ndarray:
     if not np.can_cast(array.dtype, kind, casting="same_kind"):
         raise ValueError(f"{what} holds {kind} values, got {array.dtype}")
     return np.broadcast_to(array, (k,)).astype(kind)
+
+
+def _linked(graph: tuple[np.ndarray, np.ndarray], rows: np.ndarray, x: np.ndarray, talking: np.ndarray) -> Heard:
+    """What ``rows`` hear over the communication ``graph``: their links that are talking, with
+    the distances (for the distance loss), as :func:`dream.kernels.perceive` gives a range radio's."""
+    indptr, indices = graph
+    if len(indptr) - 1 != x.shape[1]:
+        raise ValueError(f"the radio's graph links {len(indptr) - 1} robots, but the run has {x.shape[1]}")
+    counts = indptr[rows + 1] - indptr[rows]
+    me, linked = np.repeat(rows, counts), indices[spans(indptr[rows], counts)]
+    heard = talking[linked] & (linked != me)
+    offsets = np.concatenate(([0], np.cumsum(heard)))[np.concatenate(([0], np.cumsum(counts)))]
+    me, linked = me[heard], linked[heard]
+    return offsets, linked, np.hypot(x[0, linked] - x[0, me], x[1, linked] - x[1, me])

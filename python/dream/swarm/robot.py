@@ -29,7 +29,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from dream._checks import check_nonnegative
+from dream._checks import as_offsets, check_nonnegative
 from dream.specs import GRITSBOT, RobotSpec
 from dream.swarm.neighbourhood import Neighbourhood
 
@@ -53,17 +53,21 @@ class Movement:
 
 @dataclass(frozen=True)
 class Radio:
-    """A range radio: hears the robots within ``range`` (m) that have said something.
+    """A radio: hears the robots within ``range`` (m), or linked to it in ``graph``, that have
+    said something.
 
     ``fields`` names the message's fields (floats), or maps each to ``float`` or ``int`` (ints,
     such as ids, are never falsified by a Byzantine sender). ``loss`` drops each message with that
-    probability; ``latency`` delays a message by that many steps beyond the next one.
+    probability; ``latency`` delays a message by that many steps (at least one). ``graph``, a
+    communication graph as CSR ``(indptr (n + 1,), indices)`` (robot i hears the robots
+    ``indices[indptr[i]:indptr[i + 1]]``, whatever their distance), replaces the range.
     """
 
     range: float = 1.0
     fields: tuple[str, ...] | Mapping[str, type] = ()
     loss: float = 0.0
     latency: int = 0
+    graph: tuple[np.ndarray, np.ndarray] | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         check_nonnegative(self.range, "Radio range")
@@ -71,6 +75,12 @@ class Radio:
             raise ValueError(f"Radio loss is a probability in [0, 1], got {self.loss!r}")
         if isinstance(self.latency, bool) or not isinstance(self.latency, (int, np.integer)) or self.latency < 0:
             raise ValueError(f"Radio latency must be a whole number of steps >= 0, got {self.latency!r}")
+        if self.graph is not None:
+            indices = np.ascontiguousarray(self.graph[1], dtype=np.int64)
+            indptr = as_offsets(self.graph[0], "Radio graph", len(indices), part="indptr")
+            if len(indices) and (indices.min() < 0 or indices.max() >= len(indptr) - 1):
+                raise ValueError(f"`Radio graph` indices must be robot ids in [0, {len(indptr) - 1})")
+            object.__setattr__(self, "graph", (indptr, indices))
         for name, kind in self.kinds.items():
             if not name.isidentifier() or name == "sender":
                 raise ValueError(f"Radio field {name!r} must be an identifier other than 'sender'")
