@@ -141,7 +141,7 @@ class Engine:
             x[2],
             rows,
             sight=None if movement is None else (movement.range, movement.fov, movement.direction),
-            radio_range=radio.range if by_range else None,
+            radio_range=radio.range if radio is not None and by_range else None,
             talking=talking if by_range else None,
         )
         if radio is not None and radio.graph is not None:
