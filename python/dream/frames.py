@@ -6,11 +6,16 @@ An experiment run with ``record=callback`` calls ``callback(frame)`` once per st
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from dream.specs import ArenaSpec
+
+#: The most characters of a :func:`measures_title`: the renderer adds the step and time to it.
+TITLE_LENGTH = 80
 
 #: The values of :attr:`Frame.status`, from the mildest to the worst.
 STATUSES = ("ok", "byzantine", "stuck", "crashed")
@@ -40,7 +45,8 @@ class Frame:
     cells : list of (k, 2) ndarrays
         Per-robot polygons (e.g. Voronoi cells).
     title : str
-        The experiment's name and main measures so far (e.g. ``"coverage cost 0.41"``).
+        The experiment's name and main measures so far (e.g. ``"coverage cost 0.41"``); left
+        empty, the runner fills it with :func:`measures_title`.
     roles : (n,) str ndarray, optional
         A short label per robot, e.g. ``"leader"`` / ``"follower"``; the most common role is
         drawn plain, every other one with its own mark.
@@ -83,3 +89,29 @@ def fault_status(crashed: np.ndarray, stuck: np.ndarray, byzantine: np.ndarray) 
     for mask, name in ((byzantine, "byzantine"), (stuck, "stuck"), (crashed, "crashed")):
         status[np.asarray(mask, dtype=bool)] = name
     return status.astype(str)
+
+
+def measures_title(name: str, measures: Mapping[str, Any]) -> str:
+    """The default :attr:`Frame.title`: the experiment's ``name`` and its ``measures`` so far,
+    compactly (whole numbers as they are, others to 3 significant digits, nested measures as
+    ``outer.inner``, values that are not a number, a boolean or a text left out), cut with "…" at
+    :data:`TITLE_LENGTH`.
+
+    >>> measures_title("drift", {"mean_x": 0.123456, "steps": {"held": 3}, "done": True, "trace": [1, 2]})
+    'drift: mean_x 0.123, steps.held 3, done True'
+    """
+    parts = [f"{key} {value}" for key, value in _compact(measures, "")]
+    title = f"{name}: " + ", ".join(parts) if parts else name
+    return title if len(title) <= TITLE_LENGTH else title[: TITLE_LENGTH - 1].rstrip(", ") + "…"
+
+
+def _compact(measures: Mapping[str, Any], prefix: str) -> list[tuple[str, str]]:
+    found: list[tuple[str, str]] = []
+    for key, value in measures.items():
+        if isinstance(value, Mapping):
+            found += _compact(value, f"{prefix}{key}.")
+        elif isinstance(value, (bool, np.bool_, str, int, np.integer)):
+            found.append((f"{prefix}{key}", str(value)))
+        elif isinstance(value, (float, np.floating)):
+            found.append((f"{prefix}{key}", f"{value:.3g}"))
+    return found

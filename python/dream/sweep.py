@@ -10,14 +10,17 @@ its dashboard is off unless asked for (``--dashboard``: at http://127.0.0.1:8787
 another port if that one is taken; the address is printed).
 
 Rows reach the CSV as runs finish, so an interrupted sweep keeps what it has done, and running it
-again with the same file only runs what is missing (or failed). While a sweep runs it holds a lock
-on ``OUT.lock`` beside the CSV, and a second sweep on the same file refuses to start. The rows read
-back are checked: a last row cut short (no line end: its sweep was killed while writing it) is
-dropped with a warning and its run is done again; any other row that does not parse (wrong number
-of fields, a value of the wrong kind, a row without result or error) stops the sweep before any
-run with one line naming the file and line. Such a row is someone's data, or the sign of a file
-mixed up with another: the sweep would drop it at its first rewrite, so it leaves the file as it
-is and the researcher mends or deletes the line.
+again with the same file only runs what is missing (or failed), or was run by other code: each row
+holds the ``source_digest`` of the experiment's file (:func:`~dream.experiments.files.source_digest`),
+and a row of this sweep's runs whose digest differs from the file's current one (or a row from a
+table written before sweeps recorded it) is dropped with a warning and its run done again. While
+a sweep runs it holds a lock on ``OUT.lock`` beside the CSV, and a second sweep on the same file
+refuses to start. The rows read back are checked: a last row cut short (no line end: its sweep was
+killed while writing it) is dropped with a warning and its run is done again; any other row that
+does not parse (wrong number of fields, a value of the wrong kind, a row without result or error)
+stops the sweep before any run with one line naming the file and line. Such a row is someone's
+data, or the sign of a file mixed up with another: the sweep would drop it at its first rewrite,
+so it leaves the file as it is and the researcher mends or deletes the line.
 """
 
 from __future__ import annotations
@@ -47,18 +50,29 @@ from dream._files import check_writable, replaced
 from dream.backends import BACKENDS
 from dream.backends.robotarium import MAX_ROBOTS
 from dream.experiments import EXPERIMENTS, Experiment, find, run
-from dream.experiments.files import source_file
+from dream.experiments.files import source_digest, source_file
 from dream.experiments.runner import _count
 from dream.faults import Faults
 
 #: Input columns of every row, before one ``params.NAME`` column per declared parameter.
-INPUTS = ("experiment", "n", "seed", "backend", "swarm", "step_cap")
+INPUTS = ("experiment", "source_digest", "n", "seed", "backend", "swarm", "step_cap")
 #: Metric columns of every row (``simulator``: the backend that ran, when ``backend`` is "auto").
 METRICS = ("simulator", "steps", "completed_step", "collisions", "boundary", "actuator", "success")
 #: Last columns: one ``measures.NAME`` column per measure comes before them.
 TAIL = ("wall_time", "worker", "error")
 
 Row = dict[str, Any]
+
+
+class SweepRows(list[Row]):
+    """The rows of a sweep, in task order: a list of dicts, with ``new`` (how many runs this sweep
+    did) and ``kept`` (how many rows it took from ``out`` instead)."""
+
+    def __init__(self, rows: Iterable[Row], new: int, kept: int) -> None:
+        super().__init__(rows)
+        self.new = new
+        self.kept = kept
+
 
 # The current world is one per process (``dream.world``): a worker with several threads (``dask
 # worker`` defaults to one per core) must run its tasks one at a time. A run holds the GIL anyway.
@@ -70,6 +84,7 @@ class Task:
     """The inputs of one run of a sweep (one Dask task)."""
 
     experiment: str
+    source_digest: str  #: of the experiment's file: a row of other code is another run
     n: int
     seed: int
     backend: str
@@ -79,7 +94,8 @@ class Task:
     faults: tuple[tuple[str, str], ...] = ()  #: ``--fault`` kinds and values, as on the command line
 
     def inputs(self) -> Row:
-        columns = dict(zip(INPUTS, (self.experiment, self.n, self.seed, self.backend, self.swarm, self.step_cap)))
+        values = (self.experiment, self.source_digest, self.n, self.seed, self.backend, self.swarm, self.step_cap)
+        columns = dict(zip(INPUTS, values))
         return {
             **columns,
             **{f"params.{name}": value for name, value in self.params},
@@ -143,6 +159,7 @@ def plan(
     fault_grid = {
         kind: [str(v) for v in _values(values, f"faults[{kind!r}]")] for kind, values in (faults or {}).items()
     }
+    digest = source_digest(cls)
     tasks: dict[tuple[str, ...], Task] = {}  # converted values can coincide ("0" and "0.0"): one task each
     for combination, broken in itertools.product(
         itertools.product(*grid.values()), itertools.product(*fault_grid.values())
@@ -156,8 +173,9 @@ def plan(
             exp.check(size, backend)
             for seed in seeds:
                 task = Task(
-                    cls.label(), size, seed, backend, bool(swarm), steps, tuple(exp.params.items()), fault_options
-                )
+                    cls.label(), digest, size, seed, backend, bool(swarm), steps, tuple(exp.params.items()),
+                    fault_options,
+                )  # fmt: skip
                 tasks.setdefault(task.key(), task)
     ordered = list(tasks.values())
     columns = ordered[0].inputs()
@@ -181,7 +199,7 @@ def sweep(
     swarm: bool = False,
     progress: bool = True,
     dashboard: bool = False,
-) -> list[Row]:
+) -> SweepRows:
     """Run ``experiment`` for every (n, parameter values, seed) on Dask, one task per run.
 
     Parameters
@@ -201,7 +219,8 @@ def sweep(
         Address of a running Dask scheduler (``tcp://HOST:8786``) to use instead.
     out : path, optional
         CSV that receives a row per run as it finishes. Runs it already holds without an error
-        (same input columns) are not run again; rows of other sweeps in it are kept. Locked while
+        (same input columns, ``source_digest`` included: the same experiment code) are not run
+        again; rows of other sweeps in it are kept. Locked while
         the sweep runs (``OUT.lock``); its rows are checked as the module docstring says.
     plot : path, optional
         PNG of the success rate and the measures against the swept values.
@@ -219,9 +238,11 @@ def sweep(
 
     Returns
     -------
-    list of dict
-        One row per run of this sweep, in task order (``pandas.DataFrame(rows)`` makes a table):
-        the inputs (``experiment, n, seed, backend, swarm, step_cap, params.NAME, faults.KIND``), the metrics
+    SweepRows
+        A list of dicts, one row per run of this sweep, in task order (``pandas.DataFrame(rows)``
+        makes a table), whose ``new`` and ``kept`` say how many runs were done now and how many
+        rows came from ``out``. A row holds the inputs (``experiment, source_digest, n, seed,
+        backend, swarm, step_cap, params.NAME, faults.KIND``), the metrics
         (``simulator, steps, completed_step, collisions, boundary, actuator, success,
         measures.NAME``), ``wall_time`` (s, on the worker), ``worker`` (its address) and
         ``error`` (``"Type: message"`` of a run that raised, else ``None``). Rows read back from
@@ -259,7 +280,7 @@ def sweep(
         from dream.sweep_plot import plot_sweep  # matplotlib only when drawing
 
         plot_sweep(rows, sweep_plan.swept, plot)
-    return rows
+    return SweepRows(rows, len(todo), len(sweep_plan.tasks) - len(todo))
 
 
 def run_task(source: str | type[Experiment], task: Task) -> Row:
@@ -356,10 +377,13 @@ class Table:
         repeated = [column for column in set(header) if header.count(column) > 1]
         if repeated:
             raise ValueError(f"out: {path}:1: the column {repeated[0]!r} comes twice; mend or delete the line")
-        missing = [column for column in INPUTS if column not in header and column != "swarm"]
+        missing = [column for column in INPUTS if column not in header and column not in ("swarm", "source_digest")]
         if missing:
             raise ValueError(f"out: {path} is not a sweep table (no column {missing[0]!r})")
         ours = {task.key() for task in self.plan.tasks}
+        digest = self.plan.tasks[0].source_digest
+        at = self.inputs.index("source_digest")
+        stale = 0  # rows of this sweep's runs from other code (or unknown code): they run again
         for line, fields in rows:
             if fields == []:
                 continue  # a blank line
@@ -368,13 +392,27 @@ class Table:
                 raise ValueError(f"out: {path}:{line}: {problem}; mend or delete the line (a sweep would lose it)")
             row = dict(zip(header, fields))  # type: ignore[arg-type]  # a list once _row_problem passes it
             row.setdefault("swarm", "False")  # a table from before sweeps had --swarm: robot by robot
+            row.setdefault("source_digest", "")  # from before sweeps recorded it: unknown code
             key = self._key(row)
+            if (*key[:at], digest, *key[at + 1 :]) in ours and not (digest and row["source_digest"] == digest):
+                stale += not row.get("error")
+                continue  # its run is done again with the current code: the new row replaces it
             if not row.get("error"):
-                self.done[key] = {column: _value(cell) for column, cell in row.items()}
+                # A digest of decimal digits only would read back as a number.
+                self.done[key] = {
+                    column: cell if column == "source_digest" else _value(cell) for column, cell in row.items()
+                }
             elif key in ours:
                 continue  # a failed run of this sweep runs again: its old row goes
             self.rows.append(row)
         self.columns = _ordered([*header, *self.columns])
+        if stale:
+            why = (
+                "come from a table written before sweeps recorded the experiment's code (no source_digest column)"
+                if "source_digest" not in header
+                else f"come from other code of {self.plan.tasks[0].experiment} (another source_digest)"
+            )
+            warnings.warn(f"out: {path}: {stale} rows of this sweep {why}: run again", RuntimeWarning, stacklevel=4)
 
     def add(self, row: Row) -> None:
         self.rows.append(row)
@@ -575,7 +613,8 @@ def command(args: argparse.Namespace) -> int:
     succeeded = sum(1 for row in rows if row.get("success") is True)
     print(
         f"{len(rows)} runs of {rows[0]['experiment']}: {succeeded} succeeded, {failed} raised; "
-        f"{time.perf_counter() - start:.1f} s; rows in {args.out}" + (f", plot in {args.plot}" if args.plot else "")
+        f"{rows.new} new, {rows.kept} kept; {time.perf_counter() - start:.1f} s; rows in {args.out}"
+        + (f", plot in {args.plot}" if args.plot else "")
     )
     return 0
 

@@ -9,13 +9,14 @@ An experiment run with ``record=callback`` calls ``callback(frame)`` once per st
     ...     hrvo_circle.run(n=10, record=recorder)
 
 What a picture shows, to scale (metres on the axes): each robot as a disc of its real diameter
-(0.11 m) with a dark notch at the front (its heading), its chosen velocity as an arrow, goals,
-radio links, Voronoi cells, static (grey) and moving (hatched brown) obstacles, roles (the most
-common plain, the others marked), faults (crashed: grey with a cross; stuck: orange square;
-Byzantine: red ring), optionally one robot's ranges and the robots it hears, and a legend of
-what is on screen. The title gives the step, the simulated time and the experiment's measures.
-When the swarm occupies a small part of a large arena, or robots would be only a few pixels
-wide, the view follows the swarm's bounding box.
+(0.11 m) with a dark notch at the front (its heading), its chosen velocity as an arrow (none for a
+crashed robot), goals, radio links, Voronoi cells, static (grey) and moving (hatched brown)
+obstacles, roles (the most common plain, the others marked), faults (crashed: grey with a cross;
+stuck: orange square; Byzantine: red ring), optionally one robot's ranges and the robots it
+hears, and a legend of what is on screen. The title gives the step, the simulated time and the
+experiment's measures (:attr:`~dream.frames.Frame.title`). When the swarm occupies a small part
+of a large arena, or robots would be only a few pixels wide, the view follows the swarm's
+bounding box.
 
 Everything is headless by default: a :class:`Renderer` draws on a ``matplotlib.figure.Figure``
 with an Agg canvas, and :mod:`matplotlib.pyplot` is imported only when a live window is asked
@@ -478,6 +479,8 @@ class Renderer:
         if frame.velocities is not None and n:
             velocities = np.asarray(frame.velocities, dtype=np.float64).reshape(-1, 2)[:n]
             shown = np.isfinite(velocities).all(axis=1)
+            if status is not None:  # a crashed robot goes nowhere, whatever it last chose
+                shown &= status[: len(velocities)] != "crashed"
             starts = positions[: len(velocities)][shown]
             self._velocities.set_verts(_arrows(starts, VELOCITY_SCALE * velocities[shown]))
             self._velocities.set_facecolor(colours[: len(velocities)][shown])

@@ -340,7 +340,7 @@ def test_a_bad_row_stops_the_sweep_before_any_run_naming_file_and_line(
 def test_a_table_that_is_not_utf8_is_refused_naming_the_line(drift, tmp_path):
     out = tmp_path / "runs.csv"
     sweep_plan = written(drift, out, [0, 1])
-    out.write_bytes(out.read_bytes().replace(b"drift,3,1", b"drift,\xff,1"))
+    out.write_bytes(out.read_bytes().replace(b",3,1,", b",\xff,1,"))
     with pytest.raises(ValueError, match=f"out: {out}:3: not UTF-8 text"):
         Table(out, sweep_plan).__enter__()
 
@@ -381,8 +381,11 @@ def test_sweep_runs_the_swarm_mode_and_refuses_it_where_there_is_none(drift, tmp
 
 def test_table_from_before_the_swarm_column_resumes_as_robot_by_robot_runs(drift, tmp_path):
     out = tmp_path / "old.csv"
-    out.write_text("experiment,n,seed,backend,step_cap,params.speed,success,error\ndrift,3,0,auto,,0.05,True,\n")
     task = plan(drift, seeds=[0]).tasks[0]
+    out.write_text(
+        "experiment,source_digest,n,seed,backend,step_cap,params.speed,success,error\n"
+        f"drift,{task.source_digest},3,0,auto,,0.05,True,\n"
+    )
     with Table(out, plan(drift, seeds=[0])) as table:
         assert task.key() in table.done
     swarm = plan(drift, seeds=[0], swarm=True)
@@ -408,3 +411,55 @@ def test_unreachable_scheduler_is_one_line_and_leaves_no_file(drift, tmp_path, c
     err = capsys.readouterr().err
     assert err.startswith("dream: error: scheduler: cannot reach tcp://127.0.0.1:") and err.count("\n") == 1
     assert not out.exists()
+
+
+def test_a_changed_experiment_file_reruns_its_rows_and_the_summary_counts_new_and_kept(
+    drift, tmp_path, monkeypatch, capsys
+):
+    out = tmp_path / "runs.csv"
+    written(drift, out, [0, 1])  # rows of the file as it is now
+    Path(drift).write_text(DRIFT.replace("step >= 4", "step >= 5"))  # then the researcher edits it
+    argv = ["sweep", drift, "--seeds", "0:2", "--backend", "fast", "--workers", "1", "--out", str(out), "--no-progress"]
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    assert "2 runs of drift: 2 succeeded, 0 raised; 2 new, 0 kept;" in captured.out
+    assert captured.err == f"dream: warning: out: {out}: 2 rows of this sweep come from other code of drift " \
+        "(another source_digest): run again\n"  # fmt: skip
+    rows = read(out)
+    assert len(rows) == 2 and all(r["worker"] != "tcp://x:1" and r["completed_step"] == "5" for r in rows)
+    assert {r["source_digest"] for r in rows} == {plan(drift, seeds=[0]).tasks[0].source_digest}
+
+    monkeypatch.setattr(distributed, "LocalCluster", no_cluster)  # unchanged: nothing runs
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    assert "2 runs of drift: 2 succeeded, 0 raised; 0 new, 2 kept;" in captured.out and captured.err == ""
+    assert read(out) == rows
+
+
+def test_a_table_without_source_digests_reruns_this_sweeps_rows_saying_so_once(drift, tmp_path):
+    out = tmp_path / "old.csv"
+    out.write_text(
+        "experiment,n,seed,backend,step_cap,params.speed,success,error\n"
+        "drift,3,0,auto,,0.05,True,\ndrift,3,1,auto,,0.05,True,\ndrift,3,0,auto,,0.5,True,\n"
+    )
+    sweep_plan = plan(drift, seeds=[0, 1])
+    with pytest.warns(RuntimeWarning) as caught, Table(out, sweep_plan) as table:
+        assert not any(task.key() in table.done for task in sweep_plan.tasks)
+        assert len(table.rows) == 1  # another sweep's row (speed 0.5) stays
+    assert [str(w.message) for w in caught] == [
+        f"out: {out}: 2 rows of this sweep come from a table written before sweeps recorded the experiment's "
+        "code (no source_digest column): run again"
+    ]
+
+
+def test_the_source_digest_is_of_the_experiments_file_builtin_or_not(drift):
+    import hashlib
+
+    from dream.experiments import LineConsensus
+
+    def digest(path) -> str:
+        return hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16]
+
+    assert plan(drift, seeds=[0]).tasks[0].source_digest == digest(drift)
+    builtin = plan("line-consensus", seeds=[0]).tasks[0].source_digest
+    assert builtin == digest(sys.modules[LineConsensus.__module__].__file__)

@@ -12,7 +12,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from dream.frames import Frame
+import dream
+from dream import Experiment
+from dream.frames import TITLE_LENGTH, Frame, measures_title
 from dream.specs import ROBOTARIUM, ArenaSpec
 from dream.viz import Recorder, Renderer, VideoWriter, robot_colours
 
@@ -82,6 +84,58 @@ def test_renderer_draws_every_overlay():
     assert (pixel(renderer, image, 0.0, 0.0 + 0.5) == 255).all()  # between drawn things: white
     assert renderer.axes.get_title() == "step 7  |  collisions 0"
     assert renderer.figure is renderer.axes.figure
+
+
+def test_renderer_draws_no_velocity_arrow_for_a_crashed_robot():
+    renderer = Renderer(ROBOTARIUM)
+    renderer.draw(make_frame(n=4, status=np.array(["ok", "crashed", "stuck", "ok"])))
+    starts = [path.vertices[:, 0].mean() for path in renderer._velocities.get_paths()]  # arrows point down
+    assert np.allclose(starts, [-1.2, 0.4, 1.2], atol=0.05)  # robot 1, at x = -0.4, has none
+    colours = robot_colours(4)
+    assert np.allclose(renderer._velocities.get_facecolor(), colours[[0, 2, 3]])
+    renderer.draw(make_frame(n=4, status=np.full(4, "crashed")))
+    assert not renderer._velocities.get_paths()
+    assert not any(label.startswith("velocity") for label in renderer.legend_labels)
+
+
+class Walk(Experiment):
+    """Robots that drive forward and measure how far they went (its frame: the default one)."""
+
+    name = "walk"
+    default_n = 2
+
+    def build(self, n):
+        pass
+
+    def after_step(self, step, poses):
+        self.dxu[0] = 0.1
+
+    def done(self, step, poses):
+        return step >= 3
+
+    def measures(self):
+        return {"mean_x": float(self.sim.poses[0].mean()), "moved": True}
+
+
+def test_the_default_title_has_the_name_and_measures_so_far():
+    frames = []
+    dream.run(Walk, backend="fast", record=frames.append)
+    measured = Walk.run(backend="fast").measures["mean_x"]
+    assert frames[-1].title == f"walk: mean_x {measured:.3g}, moved True"
+    renderer = Renderer(ROBOTARIUM)
+    renderer.draw(frames[-1])
+    assert (
+        renderer.axes.get_title() == f"step 3, t = {frames[-1].time:.2f} s  |  walk: mean_x {measured:.3g}, moved True"
+    )
+
+
+def test_measures_title_is_compact_and_short():
+    assert measures_title("walk", {}) == "walk"
+    assert measures_title("walk", {"cost": 1234567.0, "n": 123456, "d": {"min": np.float32(0.5)}}) == (
+        "walk: cost 1.23e+06, n 123456, d.min 0.5"
+    )
+    long = measures_title("walk", {f"measure_{i}": i / 7 for i in range(20)})
+    assert len(long) == TITLE_LENGTH and long.endswith("…")
 
 
 def test_renderer_image_changes_only_where_a_robot_moves():

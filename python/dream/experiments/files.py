@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
+import inspect
 import sys
 from pathlib import Path
 
@@ -69,3 +70,15 @@ def source_file(cls: type) -> str | None:
         return None
     file = getattr(sys.modules.get(cls.__module__), "__file__", None)
     return None if file is None else str(Path(file).resolve())
+
+
+def source_digest(cls: type) -> str:
+    """A short SHA-256 (16 hex digits) of the file that defines ``cls``: a built-in's module, a
+    file from :func:`load_file`, or a script; of the class's own source where there is no file (a
+    notebook's cell), and ``""`` where neither can be read (code that cannot be told apart)."""
+    try:
+        path = inspect.getsourcefile(cls)
+        data = Path(path).read_bytes() if path and Path(path).is_file() else inspect.getsource(cls).encode()
+    except (OSError, TypeError):
+        return ""
+    return hashlib.sha256(data).hexdigest()[:16]

@@ -21,7 +21,7 @@ from dream.experiments.checkpoint import CHECKPOINT_EVERY, Checkpoint, Checkpoin
 from dream.experiments.result import ExperimentResult
 from dream.experiments.spec import Experiment
 from dream.faults import Faults, FaultState
-from dream.frames import Frame, fault_status
+from dream.frames import Frame, fault_status, measures_title
 from dream.specs import GRITSBOT, RPS, SimulatorSpec
 from dream.swarm import Engine
 from dream.world import World
@@ -347,8 +347,11 @@ class Stepper:
         return out
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
-        """The experiment's frame of this step, with the simulated time and who is faulty."""
+        """The experiment's frame of this step, with the simulated time, who is faulty and, when the
+        experiment gives no title, its name and measures (:func:`~dream.frames.measures_title`)."""
         frame = self.exp.frame(step, poses)
+        if not frame.title:
+            frame.title = measures_title(self.exp.label(), self.exp.measures())
         frame.time = step * self.exp.sim.time_step if frame.time is None else frame.time
         if self.state is not None and frame.status is None:  # who has crashed, is stuck or lies
             frame.status = fault_status(self.state.crashed, self.state.stuck, self.state.byzantine)

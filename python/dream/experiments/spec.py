@@ -356,9 +356,10 @@ class Experiment:
         return {}
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
-        """What a renderer draws of this step (default: poses, and ``dxi`` of robots that have one)."""
+        """What a renderer draws of this step (default: poses, and ``dxi`` of robots that have one;
+        the runner titles a frame left without a title with the name and :meth:`measures`)."""
         velocities = [getattr(robot, "dxi", None) for robot in self.robots]
         drawn = None if self.engine is None else self.engine.dxi.copy()
         if self.robots and all(v is not None for v in velocities):
             drawn = np.array(velocities, dtype=np.float64).reshape(-1, 2)
-        return Frame(step, self.arena, poses, velocities=drawn, title=self.label())
+        return Frame(step, self.arena, poses, velocities=drawn)
