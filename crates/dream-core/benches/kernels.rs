@@ -8,8 +8,10 @@ use std::f64::consts::PI;
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use dream_core::dynamics::{self, Arena, Wheels};
-use dream_core::hrvo::{self, HrvoParams, Vec2};
+use dream_core::dynamics::{self, Wheels};
+use dream_core::geom::Arena;
+use dream_core::geom::Vec2;
+use dream_core::hrvo::{self, HrvoParams};
 use dream_core::{neighbours, voronoi};
 
 /// `n` robots on a jittered lattice with ~10 within 1 m of each (a deterministic jitter).

@@ -11,7 +11,8 @@
 
 use rayon::prelude::*;
 
-use crate::error::{check_finite, check_len, check_positive, GeomError, Result};
+use crate::error::{check_finite, check_len, check_positive, Result};
+use crate::geom::Arena;
 use crate::grid::Grid;
 
 /// Swarms of this many robots or more are stepped and validated on every core (at 10,000
@@ -86,33 +87,6 @@ impl Checks {
             collider_offset,
             boundary,
         })
-    }
-}
-
-/// Axis-aligned rectangular arena (m).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Arena {
-    pub xmin: f64,
-    pub xmax: f64,
-    pub ymin: f64,
-    pub ymax: f64,
-}
-
-impl Arena {
-    /// # Errors
-    /// [`GeomError::InvalidBounds`] unless the bounds are finite with `xmin < xmax`, `ymin < ymax`.
-    pub fn new(xmin: f64, xmax: f64, ymin: f64, ymax: f64) -> Result<Self> {
-        let finite = [xmin, xmax, ymin, ymax].iter().all(|v| v.is_finite());
-        if finite && xmin < xmax && ymin < ymax {
-            Ok(Self { xmin, xmax, ymin, ymax })
-        } else {
-            Err(GeomError::InvalidBounds { xmin, xmax, ymin, ymax })
-        }
-    }
-
-    /// Whether `(x, y)` is inside or on the border (the rps boundary criterion).
-    pub fn contains(&self, x: f64, y: f64) -> bool {
-        !(x < self.xmin || x > self.xmax || y < self.ymin || y > self.ymax)
     }
 }
 
@@ -334,6 +308,7 @@ pub fn actuator_limit(dxu: &mut [f64], n: usize, max_linear: f64, max_angular: f
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::GeomError;
 
     const MAX_ANGULAR: f64 = 2.0 * (0.016 / 0.11) * (0.2 / 0.016);
 

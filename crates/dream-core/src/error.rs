@@ -50,23 +50,6 @@ pub fn check_finite(arg: &'static str, values: &[f64]) -> Result<()> {
     }
 }
 
-/// Fails with [`GeomError::InvalidCsr`] unless `offsets` rise from 0 to `len`, the number of
-/// entries of the rows they cut (`what`: those entries, for the message).
-pub fn check_offsets(arg: &'static str, offsets: &[i64], len: usize, what: &str) -> Result<()> {
-    let rising = offsets.first() == Some(&0)
-        && offsets.last() == Some(&(len as i64))
-        && offsets.windows(2).all(|w| w[0] <= w[1]);
-    if rising {
-        Ok(())
-    } else {
-        Err(GeomError::InvalidCsr {
-            arg,
-            rows: offsets.len().saturating_sub(1),
-            reason: format!("its offsets must rise from 0 to the number of {what}"),
-        })
-    }
-}
-
 /// Fails with [`GeomError::LengthMismatch`] unless `got == expected`.
 pub fn check_len(arg: &'static str, expected: usize, got: usize) -> Result<()> {
     if got == expected {

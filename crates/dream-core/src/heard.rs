@@ -15,10 +15,11 @@
 
 use rayon::prelude::*;
 
-use crate::dynamics::Arena;
-use crate::error::{check_len, check_offsets, GeomError, Result};
+use crate::csr::check_offsets;
+use crate::error::{check_len, GeomError, Result};
+use crate::geom::Arena;
+use crate::geom::Vec2;
 use crate::grid::Grid;
-use crate::hrvo::Vec2;
 use crate::neighbours::{in_range, radius_squared, Closeness};
 use crate::voronoi::{
     area_centroid, check_cell_parameters, check_coordinates, squared_distance, unit_circle, widest, Cells, Clipper,

@@ -27,12 +27,10 @@ use std::f64::consts::TAU;
 
 use rayon::prelude::*;
 
-use crate::dynamics::Arena;
-use crate::error::{check_finite, check_len, check_offsets, GeomError, Result};
+use crate::csr::{check_csr, check_offsets};
+use crate::error::{check_finite, check_len, GeomError, Result};
+use crate::geom::{Arena, Vec2};
 use crate::neighbours::Near;
-
-/// A 2-D vector `[x, y]`.
-pub type Vec2 = [f64; 2];
 
 /// Rows below this count run on one thread.
 const PARALLEL_ROBOTS: usize = 256;
@@ -674,33 +672,6 @@ fn for_each_robot(
     } else {
         (0..n).map(|k| robot(&mut scratch, robots(k))).collect()
     }
-}
-
-/// Checks that `(indptr, indices)` has `n` rows of ids in `[0, n)`.
-///
-/// # Errors
-/// [`GeomError::InvalidCsr`] saying what is wrong.
-pub fn check_csr(indptr: &[i64], indices: &[i64], n: usize) -> Result<()> {
-    let fail = |reason: String| {
-        Err(GeomError::InvalidCsr {
-            arg: "neighbours",
-            rows: n,
-            reason,
-        })
-    };
-    if indptr.len() != n + 1 {
-        return fail(format!("indptr has {} entries, expected {}", indptr.len(), n + 1));
-    }
-    if indptr[0] != 0 || indptr[n] != indices.len() as i64 {
-        return fail(format!("indptr must run from 0 to len(indices) = {}", indices.len()));
-    }
-    if let Some(i) = indptr.windows(2).position(|w| w[1] < w[0]) {
-        return fail(format!("indptr decreases at row {i}"));
-    }
-    if let Some(&j) = indices.iter().find(|&&j| j < 0 || j >= n as i64) {
-        return fail(format!("index {j} is not a robot id in [0, {n})"));
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -5,16 +5,28 @@
 //! owned vectors or a [`GeomError`] that names the bad argument. Units are SI (metres,
 //! seconds, radians) in the world frame.
 //!
+//! Shared types:
+//! - [`geom`]: the 2-D vector and the arena;
+//! - [`csr`]: ragged rows (one per robot) and the checks of ragged inputs;
+//! - [`error`]: the one error type, [`GeomError`], and the input checks every kernel shares.
+//!
+//! Kernels:
 //! - [`dynamics`]: unicycle Euler step, rps velocity thresholding and validation counts,
 //!   single-integrator to unicycle conversion and actuator limiting, for the whole swarm.
 //! - [`grid`]: the uniform grid behind neighbour queries.
-//! - [`heard`]: Voronoi cells of robots that know the others by range radio, in one pass.
+//! - [`neighbours`]: who is near whom, within a range and field of view, for the whole swarm.
+//! - [`perceive`]: who the robots deciding now see and hear, in one neighbour query.
 //! - [`reduce`]: sums, means, extremes and nearest entries of ragged rows (a robot's neighbourhood).
-//! - [`perceive`]: who the robots deciding now see and hear, in one pass over the neighbours.
+//! - [`hrvo`]: Hybrid Reciprocal Velocity Obstacles, for the whole swarm or on each robot's detections.
+//! - [`voronoi`]: disc-bounded Voronoi cells and their centroids.
+//! - [`heard`]: Voronoi cells of robots that know the others by range radio, in one pass.
+//! - [`obstacles`]: virtual agents that keep robots off convex obstacles.
 //! - [`raycast`]: the GRITSbot's infrared distance sensors for the whole swarm (rps 2.1's model).
 
+pub mod csr;
 pub mod dynamics;
 pub mod error;
+pub mod geom;
 pub mod grid;
 pub mod heard;
 pub mod hrvo;

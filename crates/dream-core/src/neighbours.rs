@@ -10,7 +10,8 @@ use std::f64::consts::{PI, TAU};
 
 use rayon::prelude::*;
 
-use crate::error::{check_finite, check_len, check_offsets, GeomError, Result};
+use crate::csr::{check_offsets, Csr};
+use crate::error::{check_finite, check_len, GeomError, Result};
 use crate::grid::Grid;
 
 /// Rows below this count run on one thread: spawning costs more than it saves.
@@ -22,14 +23,6 @@ pub struct FieldOfView<'a> {
     pub headings: &'a [f64],
     pub direction: f64,
     pub fov: f64,
-}
-
-/// Ragged rows: row i is `indices[indptr[i]..indptr[i + 1]]` (with matching `distances`).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Csr {
-    pub indptr: Vec<i64>,
-    pub indices: Vec<i64>,
-    pub distances: Vec<f64>,
 }
 
 impl Csr {

@@ -14,8 +14,9 @@ use parry2d_f64::math::Vector;
 use parry2d_f64::query::PointQuery;
 use parry2d_f64::shape::ConvexPolygon;
 
-use crate::error::{check_finite, check_offsets, GeomError, Result};
-use crate::hrvo::Vec2;
+use crate::csr::check_offsets;
+use crate::error::{check_finite, GeomError, Result};
+use crate::geom::Vec2;
 
 /// Least distance (m) from a robot to the bisector of its virtual agent.
 pub const GAP: f64 = 1e-6;

@@ -8,7 +8,8 @@
 
 use rayon::prelude::*;
 
-use crate::error::{check_offsets, GeomError, Result};
+use crate::csr::check_offsets;
+use crate::error::{GeomError, Result};
 
 /// Rows from which a reduction runs on every thread (below, the thread pool costs more).
 const PARALLEL_ROWS: usize = 4096;

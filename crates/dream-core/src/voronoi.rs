@@ -15,9 +15,10 @@ use std::f64::consts::TAU;
 
 use rayon::prelude::*;
 
-use crate::dynamics::Arena;
-use crate::error::{check_finite, check_len, check_offsets, GeomError, Result};
-use crate::hrvo::Vec2;
+use crate::csr::check_offsets;
+use crate::error::{check_finite, check_len, GeomError, Result};
+use crate::geom::Arena;
+use crate::geom::Vec2;
 use crate::neighbours;
 
 /// Largest number of vertices of a cell's disc (far beyond any use; keeps memory bounded).

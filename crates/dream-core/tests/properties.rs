@@ -4,8 +4,10 @@
 
 use std::f64::consts::PI;
 
-use dream_core::dynamics::{self, Arena, Wheels};
-use dream_core::hrvo::{self, HrvoParams, Vec2};
+use dream_core::dynamics::{self, Wheels};
+use dream_core::geom::Arena;
+use dream_core::geom::Vec2;
+use dream_core::hrvo::{self, HrvoParams};
 use dream_core::neighbours;
 use dream_core::obstacles::{self, Obstacles};
 use dream_core::raycast::{self, Ray, Sensors, Wall};

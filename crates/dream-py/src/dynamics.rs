@@ -1,6 +1,7 @@
 //! Bindings of `dream_core::dynamics`: the Fast backend's step and the rps validation counts.
 
-use dream_core::dynamics::{self, Arena, BoundaryCount, Checks, Wheels};
+use dream_core::dynamics::{self, BoundaryCount, Checks, Wheels};
+use dream_core::geom::Arena;
 use numpy::{IntoPyArray, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 

@@ -1,6 +1,6 @@
 //! Bindings of `dream_core::heard`: the Voronoi cells of robots that know the others by radio.
 
-use dream_core::dynamics::Arena;
+use dream_core::geom::Arena;
 use dream_core::heard;
 use pyo3::prelude::*;
 

@@ -1,7 +1,8 @@
 //! Bindings of `dream_core::hrvo`: the batch call and a per-robot planner.
 
-use dream_core::dynamics::Arena;
-use dream_core::hrvo::{self as core, HrvoParams, Neighbour, Vec2};
+use dream_core::geom::Arena;
+use dream_core::geom::Vec2;
+use dream_core::hrvo::{self as core, HrvoParams, Neighbour};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 

@@ -1,6 +1,6 @@
 //! Bindings of `dream_core::voronoi`: disc-bounded Voronoi cells of the whole swarm.
 
-use dream_core::dynamics::Arena;
+use dream_core::geom::Arena;
 use dream_core::voronoi as core;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
