@@ -28,8 +28,9 @@ A team of any size spreads as fast as Lloyd's algorithm lets it: a robot heads f
 at :data:`GAIN`, which covers the way in one decision, and stops within :func:`arrival_for` of
 it, a tolerance that shrinks as the team widens; otherwise the middle of a large team, packed
 at the start, never feels the pull of the space the edge opened. A moving robot carries
-:data:`MOMENTUM` of its last step into the next, so that a wide team comes to rest in flowing
-rather than in stop-and-go creep, and a robot told to stay gets no command at all (:func:`halt`).
+:data:`MOMENTUM` of its last step into the next and tells the others where it is going
+(:data:`LEAD`), so that a wide team comes to rest flowing, not creeping in stop and go; a robot
+told to stay gets no command at all (:func:`halt`).
 Cells stay the robot's radius and :data:`MARGIN` off the walls (:func:`cell_bounds`), as off the
 obstacles.
 """
@@ -62,11 +63,15 @@ SEEN = 0.5  #: range of the movement sensor that finds robots close by (m)
 SAME_ROBOT = 0.08  #: a robot seen this close to where a message put a robot is that robot (m)
 #: Share of its last step that a moving robot adds to its way to the centroid (heavy-ball; see
 #: :meth:`CoverageRobot.update`). Lloyd's steps alone spread a team as diffusion does, in
-#: decisions growing with the square of its width: at N = 3,000 the last robots crept in stop and
-#: go, each triggered again by a neighbour's millimetre, and the team came to rest after 49,791
-#: steps of a 42,427 cap; with 0.8, after 31,236. More (0.9) gains nothing; a larger gain with it
-#: overshoots and fails.
+#: decisions growing with the square of its width, and the last robots crept in stop and go, each
+#: started again by a neighbour's millimetre: at N = 3,000 the team came to rest after 49,791 steps
+#: of a 42,427 cap; with this alone, after 31,236 (0.9: the same; twice the gain with it: unstable).
 MOMENTUM = 0.8
+#: How far ahead a moving robot says it is, in steps like its last (:func:`sent`): 1, where it will
+#: be at its next decision if it keeps its pace. A neighbour decides up to five steps after hearing
+#: it; from where it was, a flow looks slower than it is and each cell lags behind it. With
+#: :data:`MOMENTUM`, N = 3,000 came to rest after 13,230 steps (0.5: half the gain; 2: never rests).
+LEAD = 1.0
 REST_STEPS = 60  #: steps without any command after which the team is at rest
 COVERED = 0.2  #: the team covers the arena when its cost is below this fraction of its start...
 SPREAD = 5.0  #: ...and below this many times the cost of an ideal spread (:func:`ideal_cost`)
@@ -108,6 +113,13 @@ def halt(dxu: np.ndarray, dxi: np.ndarray) -> np.ndarray:
     """
     dxu[:, ~dxi.any(axis=1)] = 0.0
     return dxu
+
+
+def sent(here: np.ndarray, last: np.ndarray) -> np.ndarray:
+    """Where a moving robot at ``here`` ``(k, 2)`` or ``(2,)`` says it is, having been at ``last`` at
+    its last decision: :data:`LEAD` of that step further on (a step is 33 mm at top speed, well
+    within :data:`SAME_ROBOT`: a robot seen there is still the robot heard)."""
+    return here + LEAD * (here - last)
 
 
 def guard_distance(rules: SimulatorSpec) -> float:
@@ -226,11 +238,18 @@ class CoverageRobot(Robot):
         self.seen = np.zeros((0, 2))  # positions of the robots the movement sensor detects
 
     def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
+        """Keep the positions heard; send ``(id, x, y)``: where the robot believes itself, or, moving,
+        where it will be at its next decision if it keeps its pace (:func:`sent`)."""
         # The (id, x, y) triples flattened into one array: half the cost of a list of pairs, for
         # the hundreds of messages a robot in a crowd hears.
         flat = np.fromiter(itertools.chain.from_iterable(messages), np.float64, 3 * len(messages))
         self.others = flat.reshape(-1, 3)[:, 1:]
-        return (self.robot_id, self.pos_x, self.pos_y) if self.has_pose else None
+        if not self.has_pose:
+            return None
+        if self.moving:
+            x, y = sent(np.array([self.pos_x, self.pos_y]), self.last)
+            return (self.robot_id, float(x), float(y))
+        return (self.robot_id, self.pos_x, self.pos_y)
 
     def update_obstacles(self, closest_points: np.ndarray) -> None:
         self.obstacle_points = closest_points
@@ -444,7 +463,9 @@ class VoronoiCoverage(Experiment):
         if talking.any():
             who = np.flatnonzero(talking)
             said = team.board.copy()
-            team.board[who] = team.pose[:2, who].T  # the radio round: each sends where it believes itself
+            # The radio round: each sends where it believes itself, a moving robot where it is going.
+            here = team.pose[:2, who].T
+            team.board[who] = np.where(team.moving[who, None], sent(here, team.last[who]), here)
             self._decide(step, who, positions, said, commands)
         return commands
 
