@@ -1,7 +1,7 @@
 """How voronoi-coverage comes to rest without its moving obstacles: whether its last robots converge or chatter.
 
     python benches/voronoi_rest.py -n 1000 --seeds 0-2
-    python benches/voronoi_rest.py -n 3000 --momentum 0       # Lloyd's step alone, without the carried step
+    python benches/voronoi_rest.py -n 3000 --momentum 0 --lead 0     # Lloyd's step alone
 
 Each run is swarm mode on Fast to the experiment's own step cap. Per run: success, the steps to
 rest and the cap, violations, the cost at rest over the ideal spread's, wall time, and how the
@@ -93,13 +93,16 @@ def main() -> None:
     parser.add_argument("-n", type=int, nargs="+", default=[300], help="team sizes")
     parser.add_argument("--seeds", default="0", help="a seed or a range a-b (inclusive)")
     parser.add_argument("--momentum", type=float, default=None, help=f"override MOMENTUM ({vc.MOMENTUM})")
+    parser.add_argument("--lead", type=float, default=None, help=f"override LEAD ({vc.LEAD})")
     args = parser.parse_args()
     if args.momentum is not None:
         vc.MOMENTUM = args.momentum
+    if args.lead is not None:
+        vc.LEAD = args.lead
     first, _, last = args.seeds.partition("-")
     seeds = range(int(first), int(last or first) + 1)
     print(machine())
-    print(f"MOMENTUM = {vc.MOMENTUM}")
+    print(f"MOMENTUM = {vc.MOMENTUM}, LEAD = {vc.LEAD}")
     header = [
         "N",
         "seed",
