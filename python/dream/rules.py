@@ -501,10 +501,19 @@ def settles(desired: Any, nearest: Any, fine: float, clearance: float) -> np.nda
     return (length(desired) < fine) & (np.asarray(nearest) >= clearance)
 
 
-def approach(positions: Any, centroids: Any, gain: float, v_max: float, arrival: float) -> FloatArray:
+def approach(
+    positions: Any, centroids: Any, gain: float, v_max: float, arrival: float, carry: Any = None
+) -> FloatArray:
     """Coverage: ``gain`` times the way to the cell's centroid ``(n, 2)`` or ``(2,)`` (m/s), no
-    faster than ``v_max``; zero within ``arrival`` (m) of it."""
+    faster than ``v_max``; zero when the way is shorter than ``arrival`` (m).
+
+    ``carry`` ``(n, 2)`` or ``(2,)`` (m), optional, is added to the way: the share of its last step
+    a moving robot keeps (heavy-ball). A robot in a slow flow, whose centroid moves ahead of it
+    with its neighbours, then keeps moving instead of stopping each time it is just within
+    ``arrival`` and starting again when a neighbour's step pushes it out.
+    """
     offset = np.asarray(centroids, dtype=np.float64) - np.asarray(positions, dtype=np.float64)
-    distance = length(offset)
+    way = offset if carry is None else offset + np.asarray(carry, dtype=np.float64)
+    distance = length(way)
     scale = np.minimum(1.0, v_max / (gain * np.maximum(distance, 1e-300)))
-    return np.where((distance >= arrival)[..., None], gain * offset * scale[..., None], 0.0)
+    return np.where((distance >= arrival)[..., None], gain * way * scale[..., None], 0.0)
