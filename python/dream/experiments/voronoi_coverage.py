@@ -519,8 +519,9 @@ class VoronoiCoverage(Experiment):
 
     def steps(self, n: int) -> int:
         """1500 up to the thesis's 15 robots; beyond, 3000 times the arena's growth in side. Coming
-        to rest takes longest: up to 2602 steps at N = 100 (an arena 2.6 times the Robotarium's)
-        and 17,700 at N = 1,000 (8.2 times; seeds 0-2)."""
+        to rest takes longest: up to 1,680 steps at N = 100 (an arena 2.6 times the Robotarium's;
+        seeds 0-9), 6,176 at N = 1,000 (8.2 times; seeds 0-2), 13,230 at 3,000 and 37,656 at
+        10,000 (seed 0; caps 42,427 and 77,460)."""
         scale = scale_for(n)
         return 1500 if scale == 1.0 else math.ceil(3000 * scale)
 
