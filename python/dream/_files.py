@@ -70,6 +70,38 @@ def replaced(path: str | os.PathLike[str], mode: str = "w", **options: Any) -> I
         raise
 
 
+@contextmanager
+def replaced_path(path: str | os.PathLike[str]) -> Iterator[str]:
+    """As :func:`replaced`, for a writer that takes a path rather than a file (a library that
+    opens the file itself): the path of an empty temporary file beside ``path``, renamed over
+    ``path`` when the block ends without an error and removed when it raises.
+
+    Raises
+    ------
+    OSError
+        As :func:`replaced`.
+    """
+    target = Path(path)
+    kind = _not_a_file(target)
+    if kind is not None:
+        raise OSError(f"{path}: is {kind}; DREAM writes only to regular files or new paths")
+    handle, temporary = _create_beside(target)
+    os.close(handle)
+    try:
+        yield temporary
+        written = os.open(temporary, os.O_RDONLY)
+        try:
+            os.fsync(written)
+        finally:
+            os.close(written)
+        if target.exists():
+            os.chmod(temporary, stat.S_IMODE(target.stat().st_mode))
+        os.replace(temporary, target)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+
+
 def _create_beside(target: Path) -> tuple[int, str]:
     """A new, empty file beside ``target``, created as :func:`open` creates one (mode 0o666 less
     the umask; :func:`tempfile.mkstemp` would make it 0o600), exclusively, never over another.

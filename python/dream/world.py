@@ -30,6 +30,7 @@ from dream._checks import as_array, as_poses
 from dream.faults import Faults, FaultState
 from dream.obstacles import sensed
 from dream.timers import Timer
+from dream.traffic import Traffic
 
 if TYPE_CHECKING:
     from dream.backends import Backend
@@ -49,6 +50,7 @@ class World:
         self.seed = seed
         self.rng = np.random.default_rng(seed)
         self.fault_state: FaultState | None = None  #: the run's faults as drawn (see :meth:`inject`)
+        self.traffic: Traffic | None = None  #: each robot's messages, counted once a run sets it
         self.time: float = 0  #: the ``current_time`` of the last ``update_timers`` call
         self.timers: list[Timer] = []
         self.simulator: Backend | None = None  #: the simulator made last in this world
@@ -182,6 +184,8 @@ class World:
             if state.byzantine[robot_id]:
                 snapshot = state.lie(robot_id, snapshot, int(self.time))
             latency = state.delay(latency)
+        if self.traffic is not None:
+            self.traffic.sent[robot_id] += 1
         if latency > 0:
             self._in_flight.append((self.time + latency, robot_id, snapshot))
         else:
@@ -210,10 +214,12 @@ class World:
         board, mutable = self.messages, self._mutable
         state = self.fault_state
         if state is None and loss <= 0:  # nothing lost: the common case, hundreds of senders a call
-            return [
+            received = [
                 _copy(board[sender]) if sender in mutable else board[sender] for sender in senders if sender in board
             ]
-        received = []
+            self._count(receiver, len(received), 0)
+            return received
+        received, lost = [], 0
         for sender in senders:
             if sender not in board:
                 continue
@@ -223,7 +229,16 @@ class World:
                 through = state.delivered(receiver, sender, loss, self._distance(receiver, sender))
             if through:
                 received.append(_copy(board[sender]) if sender in mutable else board[sender])
+            else:
+                lost += 1
+        self._count(receiver, len(received), lost)
         return received
+
+    def _count(self, receiver: int | None, heard: int, lost: int) -> None:
+        """Add to the :attr:`traffic` of ``receiver`` (a listener that gives no id is not counted)."""
+        if self.traffic is not None and receiver is not None:
+            self.traffic.heard[receiver] += heard
+            self.traffic.lost[receiver] += lost
 
     def _distance(self, a: int | None, b: int) -> float:
         """Distance between robots ``a`` and ``b`` in the poses checked last (0 if unknown)."""

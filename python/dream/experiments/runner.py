@@ -9,8 +9,9 @@ import signal
 import threading
 import time
 import warnings
-from collections.abc import Callable, Iterator
-from typing import Any, TypeVar
+from collections.abc import Callable, Iterator, Sequence
+from types import TracebackType
+from typing import Any, Protocol, TypeVar
 
 import numpy as np
 
@@ -24,10 +25,25 @@ from dream.faults import Faults, FaultState
 from dream.frames import Frame, fault_status, measures_title
 from dream.specs import GRITSBOT, RPS, SimulatorSpec
 from dream.swarm import Engine
+from dream.traffic import Traffic
 from dream.world import World
 
 Progress = Callable[[int, int], None]
 _Call = TypeVar("_Call", bound=Callable[..., None])
+
+
+class Watcher(Protocol):
+    """An output that looks at the run as it steps (the trajectory log, a Rerun recording): opened
+    and closed around the steps (closed with the error when the run fails), it sees the state
+    before the first step, after every step, and at the end (``last``)."""
+
+    def __enter__(self) -> Any: ...
+
+    def __exit__(
+        self, kind: type[BaseException] | None, error: BaseException | None, trace: TracebackType | None
+    ) -> Any: ...
+
+    def see(self, step: int, stepper: Stepper, sim: Backend, poses: np.ndarray, last: bool = False) -> None: ...
 
 
 def run(
@@ -45,6 +61,9 @@ def run(
     swarm: bool = False,
     checkpoint: str | os.PathLike[str] | None = None,
     checkpoint_every: int = CHECKPOINT_EVERY,
+    log: str | os.PathLike[str] | None = None,
+    log_every: int = 1,
+    rerun: str | os.PathLike[str] | None = None,
     **params: Any,
 ) -> ExperimentResult:
     """Run ``experiment`` until it is done or ``steps`` have run.
@@ -86,6 +105,14 @@ def run(
         (one holding a live window, say) fails before its first step.
     checkpoint_every : int
         Steps between two saves (default 20,000).
+    log : path, optional
+        Write the run's trajectory log, a Parquet table with one row per robot and logged step
+        (:mod:`dream.trajectory_log`).
+    log_every : int
+        Log (and record, with ``rerun``) every ``log_every``-th step, and step 0 and the last.
+    rerun : path, "spawn" or "serve", optional
+        Record the run for the Rerun viewer (:mod:`dream.recording`; needs the ``rerun`` extra):
+        into a ``.rrd`` file, live into a viewer it spawns, or served to a web viewer.
     **params
         Values of the experiment's declared parameters.
 
@@ -118,6 +145,7 @@ def run(
     every = _count(checkpoint_every, "checkpoint_every", 1)
     if checkpoint is not None:
         check_writable(checkpoint, "checkpoint")
+    watch = _watchers(log, _count(log_every, "log_every", 1), rerun)
     world = World(seed)
     with world:
         try:
@@ -130,7 +158,24 @@ def run(
     state = Checkpoint(stepper, sim, 0, cap, every, poses=[sim.poses] if trace else None)
     if checkpoint is not None:
         save(checkpoint, state)  # a run that cannot be saved fails here, before its first step
-    return _go_on(state, record, progress, checkpoint)
+    with contextlib.ExitStack() as outputs:  # each output closed whole, or removed if the run fails
+        for watcher in watch:
+            outputs.enter_context(watcher)
+        return _go_on(state, record, progress, checkpoint, watch)
+
+
+def _watchers(log: str | os.PathLike[str] | None, every: int, rerun: str | os.PathLike[str] | None) -> list[Watcher]:
+    """The outputs that look at the run as it steps, their paths checked before it starts."""
+    watch: list[Watcher] = []
+    if log is not None:
+        from dream.trajectory_log import TrajectoryLog
+
+        watch.append(TrajectoryLog(log, every))
+    if rerun is not None:
+        from dream.recording import Recorder
+
+        watch.append(Recorder(rerun, every))
+    return watch
 
 
 def resume(
@@ -179,10 +224,11 @@ def _go_on(
     record: Callable[[Frame], None] | None,
     progress: Progress | None,
     checkpoint: str | os.PathLike[str] | None,
+    watch: Sequence[Watcher] = (),
 ) -> ExperimentResult:
     """Step the run from ``state.step`` until it is done, reaches its cap or a signal stops it;
     with ``checkpoint``, save it there every ``state.every`` steps and when it stops short of
-    done."""
+    done; ``watch`` sees the run before its steps, after each and at the end."""
     stepper, sim = state.stepper, state.sim
     everyone = np.arange(stepper.exp.n)
     done_at, cut = None, False
@@ -191,6 +237,8 @@ def _go_on(
     stop.install()
     try:
         with stepper.world:
+            for watcher in watch:
+                watcher.see(state.step, stepper, sim, sim.poses)
             try:
                 while state.step < state.cap:
                     t = state.step
@@ -208,6 +256,8 @@ def _go_on(
                         progress(t + 1, state.cap)
                     if record is not None:
                         record(stepper.frame(t + 1, now))
+                    for watcher in watch:
+                        watcher.see(t + 1, stepper, sim, now)
                     if done:
                         done_at = t + 1
                         break
@@ -222,6 +272,8 @@ def _go_on(
                 stop.cuttable, cut = False, True  # the half step is no state to resume from
             stopped = stop.signal  # a signal from here on comes once the steps are over: it stops nothing
             state.wall_time = before + time.perf_counter() - start
+            for watcher in watch:
+                watcher.see(state.step, stepper, sim, sim.poses, last=True)
             if checkpoint is not None and done_at is None and not cut:  # a signal or the cap: resume() goes on
                 _save_on(checkpoint, state)
     finally:
@@ -314,6 +366,8 @@ class Stepper:
         self._limits = GRITSBOT.within(sim.spec)
         if exp.engine is not None:
             exp.engine.attach(sim.spec)
+        elif not self.swarm:  # robot objects: the world counts their messages
+            self.world.traffic = Traffic(exp.n)
 
     def decide(self, step: int, x: np.ndarray) -> np.ndarray:
         """The commands ``(2, n)`` ``[v; w]`` (m/s, rad/s) of step ``step`` (0-based).

@@ -207,7 +207,7 @@ class Experiment:
     :meth:`check` (refuse sizes that cannot succeed), :meth:`arena_for`, :meth:`build`,
     :meth:`initial_poses`, :meth:`steps`; then every step :meth:`before_step`, the timers with
     :meth:`timer_params`, the simulator's step, :meth:`after_step`, :meth:`frame` (when recording)
-    and :meth:`done`; at the end :meth:`measures`.
+    and :meth:`done`, :meth:`robot_measures` (when logging); at the end :meth:`measures`.
 
     Swarm mode (``dream.run(..., swarm=True)``) calls :meth:`build_swarm` instead of :meth:`build`
     (the swarm's arrays instead of robot objects and timers) and, every step,
@@ -353,6 +353,12 @@ class Experiment:
 
     def measures(self) -> dict[str, Any]:
         """The experiment's own figures for the result (plain numbers)."""
+        return {}
+
+    def robot_measures(self) -> dict[str, np.ndarray]:
+        """Per-robot figures of the step just run, by name, each ``(n,)`` numbers: the trajectory
+        log's last columns (:mod:`dream.trajectory_log`), asked at every logged step (default
+        none); the same names at every step."""
         return {}
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:

@@ -37,6 +37,7 @@ from dream.specs import ArenaSpec, SimulatorSpec
 from dream.swarm import draws
 from dream.swarm.neighbourhood import Neighbourhood
 from dream.swarm.robot import SwarmRobot, View
+from dream.traffic import Traffic
 
 #: The columns of a detection, in the order of their noise keys.
 DETECTION = ("distance", "bearing", "vx", "vy")
@@ -88,6 +89,7 @@ class Engine:
             **{key: np.zeros(0, dtype=kind) for key, kind in self.kinds.items()},
         }
         self.lossy = np.zeros(0, dtype=np.int64)  #: links (receiver * n + sender) in a loss burst
+        self.traffic = Traffic(n)  #: each robot's messages sent, heard and lost so far
 
     def attach(self, simulator: SimulatorSpec) -> None:
         """Keep to the limits of the simulator the robots run on."""
@@ -288,6 +290,7 @@ class Engine:
             keep = keep * (1.0 - f.loss) * np.maximum(1.0 - f.distance_loss * gaps, 0.0)
         lossy = np.broadcast_to(keep < 1.0, senders.shape)
         if not lossy.any() and (f is None or f.burst is None):
+            self.traffic.received(rows, offsets)
             return inbox
         me = np.repeat(rows, np.diff(offsets))
         through = np.ones(len(senders), dtype=bool)
@@ -298,6 +301,7 @@ class Engine:
             through &= ~self._burst(t, me, senders, f.burst)
         if faults is not None:
             faults.messages_lost += int((~through).sum())
+        self.traffic.received(rows, offsets, through)
         return inbox.where(through)
 
     def _burst(self, t: int, me: np.ndarray, others: np.ndarray, burst: tuple[float, float]) -> np.ndarray:
@@ -329,6 +333,7 @@ class Engine:
         if not said:
             return
         senders = np.concatenate([rows for rows, _ in said])
+        np.add.at(self.traffic.sent, senders, 1)
         fields = {key: np.concatenate([message[key] for _, message in said]) for key in self.kinds}
         delay = np.full(len(senders), self.robot.radio.latency if self.robot.radio is not None else 0)
         if faults is not None:
