@@ -235,7 +235,7 @@ class Recorder:
             self._recording.__exit__(kind, error, trace)
 
     def see(self, step: int, stepper: Stepper, sim: Backend, poses: np.ndarray, last: bool = False) -> None:
-        """Record step ``step`` (poses ``(3, n)``) if it is due (see :class:`~dream.runner.Watcher`)."""
+        """Record step ``step`` (poses ``(3, n)``) if it is due (see :class:`~dream.experiments.runner.Watcher`)."""
         first = self._recording is None
         if step == self._last or not (step % self.every == 0 or last or first):
             return
@@ -326,8 +326,7 @@ def _serve() -> str:
     """Start a ``rerun`` server on 127.0.0.1 with a web viewer; returns the gRPC address to send
     to. The web viewer's address is printed (stderr)."""
     grpc, web = _free_port(GRPC_PORT), _free_port(WEB_PORT)
-    viewer = shutil.which("rerun") or "rerun"
-    command = [viewer, "--serve-web", "--bind", "127.0.0.1", "--port", str(grpc), "--web-viewer-port", str(web)]
+    command = [_viewer(), "--serve-web", "--bind", "127.0.0.1", "--port", str(grpc), "--web-viewer-port", str(web)]
     server = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL)
     _served.append(server)
     if len(_served) == 1:
@@ -336,6 +335,15 @@ def _serve() -> str:
     _wait_listening(grpc, server)
     print(f"Rerun web viewer: http://127.0.0.1:{web}/?url={address}", file=sys.stderr)
     return address
+
+
+def _viewer() -> str:
+    """The ``rerun`` binary of the installed SDK (not a wrapper script: stopping the server must
+    stop the process that listens)."""
+    import rerun_cli
+
+    binary = Path(rerun_cli.__file__).parent / ("rerun.exe" if sys.platform == "win32" else "rerun")
+    return str(binary) if binary.exists() else shutil.which("rerun") or "rerun"
 
 
 def wait_served() -> None:

@@ -100,3 +100,23 @@ class Broken(dream.Experiment):
 
     def robot_measures(self):
         return {"bad": np.zeros(1)}
+
+
+def test_served_recording_listens_on_localhost_only(capfd):
+    import urllib.request
+
+    import psutil
+
+    from dream import recording
+
+    dream.run("hrvo-circle", n=4, backend="fast", steps=3, rerun="serve")
+    try:
+        (server,) = recording._served
+        address = capfd.readouterr().err.split("Rerun web viewer: ")[1].split()[0]
+        with urllib.request.urlopen(address, timeout=30) as page:  # the web viewer's page
+            assert page.status == 200 and b"<html" in page.read(2000).lower()
+        listening = [c.laddr for c in psutil.Process(server.pid).net_connections() if c.status == "LISTEN"]
+        assert len(listening) == 2 and {addr.ip for addr in listening} == {"127.0.0.1"}
+    finally:
+        recording._stop_served()
+    assert not recording._served and server.poll() is not None
