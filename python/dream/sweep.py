@@ -29,6 +29,7 @@ import argparse
 import contextlib
 import csv
 import fcntl
+import hashlib
 import io
 import itertools
 import logging
@@ -199,6 +200,8 @@ def sweep(
     swarm: bool = False,
     progress: bool = True,
     dashboard: bool = False,
+    log: bool = False,
+    log_every: int = 1,
 ) -> SweepRows:
     """Run ``experiment`` for every (n, parameter values, seed) on Dask, one task per run.
 
@@ -235,6 +238,13 @@ def sweep(
         A progress bar on stderr (only when stderr is a terminal).
     dashboard : bool
         Serve the local cluster's Dask dashboard on 127.0.0.1 (its address goes to stderr).
+    log : bool
+        Write each run's trajectory log (:mod:`dream.trajectory_log`) into the folder
+        ``OUT-logs`` beside ``out`` (:func:`logs_folder`, made if need be; a cluster's workers
+        need it at the same absolute path), one file per run (:func:`log_name`), whose path is the
+        row's ``log`` column.
+    log_every : int
+        The logs' ``log_every`` (see :func:`dream.run`).
 
     Returns
     -------
@@ -252,7 +262,8 @@ def sweep(
     ------
     ValueError
         Bad arguments (see :func:`plan`), a CSV that is not a sweep table or holds a row that does
-        not parse (naming the file and line), or a CSV another sweep is writing; before any run.
+        not parse (naming the file and line), a CSV another sweep is writing, or ``log`` without
+        ``out``; before any run.
     """
     if workers is not None and scheduler is not None:
         raise ValueError("workers: sizes the local cluster; with scheduler, the cluster's own workers run the tasks")
@@ -266,11 +277,15 @@ def sweep(
         from dream.sweep_plot import check_plot_path  # matplotlib only when drawing
 
         check_plot_path(plot)
+    every = _count(log_every, "log_every", 1)
+    if log and out is None:
+        raise ValueError("log: each run's log goes beside the CSV: give out too")
     sweep_plan = plan(experiment, seeds, n, params, backend, steps, faults, swarm)
     with Table(out, sweep_plan) as table:
+        logs = None if not log or out is None else (str(_made(logs_folder(out)).resolve()), every)
         todo = [task for task in sweep_plan.tasks if task.key() not in table.done]
         if todo:
-            _execute(sweep_plan.source, todo, workers, scheduler, progress, dashboard, table.add)
+            _execute(sweep_plan.source, todo, workers, scheduler, progress, dashboard, table.add, logs)
         rows = [table.done[task.key()] for task in sweep_plan.tasks]
     # The same columns in every row (a run that raised has no metrics; the file may hold other sweeps' columns).
     found = (column for row in rows for column, value in row.items() if value is not None)
@@ -283,19 +298,46 @@ def sweep(
     return SweepRows(rows, len(todo), len(sweep_plan.tasks) - len(todo))
 
 
-def run_task(source: str | type[Experiment], task: Task) -> Row:
-    """Run one task (on a Dask worker): its row, with the error instead of metrics if it raised."""
+def logs_folder(out: str | Path) -> Path:
+    """The folder of a sweep's trajectory logs: ``OUT-logs`` beside the CSV ``out`` (``r.csv``:
+    ``r-logs``)."""
+    path = Path(out)
+    return path.with_name(f"{path.stem}-logs")
+
+
+def log_name(task: Task) -> str:
+    """The file name of a run's trajectory log: ``EXPERIMENT-nN-seedS-KEY.parquet``, ``KEY`` 8 hex
+    digits of the run's inputs (parameters and faults included), so no two runs share one."""
+    key = hashlib.sha256("\x1f".join(task.key()).encode()).hexdigest()[:8]
+    return f"{task.experiment}-n{task.n}-seed{task.seed}-{key}.parquet"
+
+
+def _made(folder: Path) -> Path:
+    try:
+        folder.mkdir(exist_ok=True)
+    except OSError as err:
+        raise ValueError(f"log: cannot make the folder {folder} for the logs: {err.strerror or err}") from None
+    return folder
+
+
+def run_task(source: str | type[Experiment], task: Task, logs: tuple[str, int] | None = None) -> Row:
+    """Run one task (on a Dask worker): its row, with the error instead of metrics if it raised;
+    with ``logs`` (folder, log_every), its trajectory log in that folder."""
     from distributed import get_worker
 
     start = time.perf_counter()
     row = task.inputs()
+    log = None if logs is None else Path(logs[0]) / log_name(task)
     try:
         with _ONE_RUN_AT_A_TIME:
             cls = find(source) if isinstance(source, str) else source
             result = run(
                 cls, n=task.n, seed=task.seed, backend=task.backend, steps=task.step_cap,
-                faults=task.fault_model(), swarm=task.swarm, **dict(task.params),
+                faults=task.fault_model(), swarm=task.swarm, log=log, log_every=1 if logs is None else logs[1],
+                **dict(task.params),
             )  # fmt: skip
+        if log is not None:
+            row["log"] = str(log)
         data = result.to_dict()
         row.update({"simulator": data["backend"], **{key: data[key] for key in METRICS[1:]}})
         row.update(_flatten(data["measures"], "measures."))
@@ -525,6 +567,7 @@ def _execute(
     progress: bool,
     dashboard: bool,
     record: Callable[[Row], None],
+    logs: tuple[str, int] | None = None,
 ) -> None:
     """Submit every task and record each row as its run finishes; the cluster closes on any exit.
 
@@ -560,7 +603,7 @@ def _execute(
                 client = stack.enter_context(Client(scheduler, timeout="10s"))
             except OSError as err:
                 raise ValueError(f"scheduler: cannot reach {scheduler}: {err}") from None
-        futures = {client.submit(run_task, source, task, pure=False): task for task in tasks}
+        futures = {client.submit(run_task, source, task, logs, pure=False): task for task in tasks}
         bar = stack.enter_context(
             tqdm(total=len(tasks), unit="run", file=sys.stderr, disable=None if progress else True, dynamic_ncols=True)
         )

@@ -463,3 +463,25 @@ def test_the_source_digest_is_of_the_experiments_file_builtin_or_not(drift):
     assert plan(drift, seeds=[0]).tasks[0].source_digest == digest(drift)
     builtin = plan("line-consensus", seeds=[0]).tasks[0].source_digest
     assert builtin == digest(sys.modules[LineConsensus.__module__].__file__)
+
+
+def test_sweep_writes_each_runs_log_beside_its_csv(drift, tmp_path):
+    import pyarrow.parquet as pq
+
+    from dream.sweep import log_name, logs_folder
+    from dream.trajectory_log import read_metadata
+
+    out = tmp_path / "s.csv"
+    rows = dream.sweep(drift, seeds=[0, 1, 2], params={"speed": [0.05, 0.1]}, workers=1, out=out, log=True, log_every=2)
+    folder = logs_folder(out)
+    assert folder == tmp_path / "s-logs"
+    done = [row for row in rows if not row["error"]]
+    assert len(done) == 4 and all(row["log"] is None for row in rows if row["error"])  # seed 2 raised: no log
+    assert sorted(Path(row["log"]).name for row in done) == sorted(p.name for p in folder.iterdir())
+    for row in done:
+        meta = read_metadata(row["log"])
+        assert (meta["seed"], meta["params"], meta["log_every"]) == (row["seed"], {"speed": row["params.speed"]}, 2)
+        assert pq.read_table(row["log"]).column("step").to_pylist() == [0] * 3 + [2] * 3 + [4] * 3  # done at step 4
+    assert len({log_name(task) for task in plan(drift, [0, 1], params={"speed": [0.05, 0.1]}).tasks}) == 4
+    with pytest.raises(ValueError, match="give out too"):
+        dream.sweep(drift, seeds=[0], workers=1, log=True)
