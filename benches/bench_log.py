@@ -32,8 +32,8 @@ def scenes(quick: bool) -> list[tuple[str, Any, dict[str, Any]]]:
     """(label, experiment, run options) of each scene: robot objects, and a SwarmRobot's swarm."""
     rendezvous = load_file(ROOT / "examples" / "rendezvous.py")
     return [
-        ("hrvo-circle, 30 robot objects", "hrvo-circle", {"n": 30, "steps": 100 if quick else 300}),
-        ("rendezvous swarm, 10,000 robots", rendezvous, {"n": 10_000, "steps": 10 if quick else 30, "swarm": True}),
+        ("hrvo-circle, 30 robot objects", "hrvo-circle", {"n": 30, "steps": 200 if quick else 1000}),
+        ("rendezvous swarm, 10,000 robots", rendezvous, {"n": 10_000, "steps": 20 if quick else 100, "swarm": True}),
     ]
 
 
