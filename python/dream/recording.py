@@ -16,7 +16,10 @@ The entities: ``arena`` (its border), ``robots`` (points, with a class per fault
 byzantine, stuck, crashed, coloured as in :mod:`dream.viz`), ``robots/heading`` and
 ``robots/velocity`` (arrows: the heading, one robot radius long, and the velocity carried out
 over one second), ``goals``, ``obstacles``, the links and cell of the focus robot (robot 0) when
-the experiment's frame has them (``focus/links``, ``focus/cell``), and ``measures/<name>``
+the experiment's frame has them (``focus/links``, ``focus/cell``), for a
+:class:`~dream.swarm.SwarmRobot` what the focus robot read and heard at its last decision
+(``focus/seen``: where it saw the others; ``focus/heard``: lines to the senders of its inbox;
+``focus/inbox``: its messages as a table), and ``measures/<name>``
 (time series: the experiment's measures, and ``messages/sent``, ``heard`` and ``lost``: the
 whole swarm's so far). Two timelines: ``step`` and ``time`` (s).
 
@@ -243,6 +246,8 @@ class Recorder:
         exp = stepper.exp
         if self._recording is None:
             self._recording = Recording(self.target, exp.label(), exp.arena, GRITSBOT.radius).__enter__()
+            if exp.engine is not None:  # keep the focus robot's readings and inbox as it decides
+                exp.engine.focus = FOCUS
         recording = self._recording
         frame = stepper.frame(step, poses)
         seconds = float(frame.time if frame.time is not None else step * sim.time_step)
@@ -261,6 +266,40 @@ class Recorder:
         if len(frame.cells) > FOCUS:
             cell = frame.cells[FOCUS]
             recording.log(step, seconds, "focus/cell", rr.LineStrips2D([np.vstack((cell, cell[:1]))]))
+        if exp.engine is not None and exp.engine.focus_view:
+            _log_focus(recording, step, seconds, exp.engine.focus_view, poses)
+
+
+#: The most inbox messages :func:`_log_focus` lists in its text.
+LISTED = 20
+
+
+def _log_focus(recording: Recording, step: int, seconds: float, view: Mapping[str, Any], poses: np.ndarray) -> None:
+    """The focus robot's last decision (a swarm robot's): lines to the senders it heard, points
+    where it saw the others, and its inbox as a text."""
+    rr, me = recording.rr, poses[:2, FOCUS]
+    heard, seen = view["heard"], view["seen"]
+    senders = heard["sender"]
+    lines = [np.vstack((me, poses[:2, sender])) for sender in senders]
+    recording.log(step, seconds, "focus/heard", rr.LineStrips2D(lines, colors=[(44, 160, 44)]))
+    if "dx" in seen:
+        recording.log(step, seconds, "focus/seen", rr.Points2D(me + np.column_stack((seen["dx"], seen["dy"]))))
+    fields = [name for name in heard if name != "sender"]
+    rows = [
+        f"| {sender} | " + " | ".join(f"{heard[name][k]:.4g}" for name in fields) + " |"
+        for k, sender in enumerate(senders[:LISTED])
+    ]
+    text = "\n".join(
+        [
+            f"Robot {FOCUS} at its decision of step {view['step']}: saw {len(seen.get('distance', []))} robots, "
+            f"heard {len(senders)} messages" + (f" (the first {LISTED}):" if len(senders) > LISTED else ":"),
+            "",
+            "| sender | " + " | ".join(fields) + " |",
+            "|---" * (len(fields) + 1) + "|",
+            *rows,
+        ]
+    )
+    recording.log(step, seconds, "focus/inbox", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN))
 
 
 def from_log(path: str | os.PathLike[str], target: str | os.PathLike[str]) -> int:

@@ -120,3 +120,28 @@ def test_served_recording_listens_on_localhost_only(capfd):
     finally:
         recording._stop_served()
     assert not recording._served and server.poll() is not None
+
+
+def test_recording_of_a_swarm_robot_shows_what_the_focus_robot_read_and_heard(tmp_path):
+    import importlib.util
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    spec = importlib.util.spec_from_file_location("rendezvous_example", root / "examples" / "rendezvous.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    path = tmp_path / "run.rrd"
+    dream.run(module.Rendezvous, n=12, backend="fast", steps=30, swarm=True, rerun=path)
+    found: dict[str, dict[int, object]] = {}
+    for chunk in RrdReader(path).stream().to_chunks():
+        if chunk.entity_path.startswith("/focus/"):
+            batch = chunk.to_record_batch()
+            column = next(name for name in batch.schema.names if name.endswith((":strips", ":text", ":positions")))
+            steps = batch.column("step").to_pylist()
+            found.setdefault(chunk.entity_path, {}).update(zip(steps, batch.column(column).to_pylist()))
+    assert set(found) == {"/focus/heard", "/focus/seen", "/focus/inbox"}
+    last = {entity: values[30] for entity, values in found.items()}
+    heard, text = len(last["/focus/heard"]), last["/focus/inbox"][0]
+    assert heard > 0 and f"heard {heard} messages" in text
+    assert len(text.splitlines()) == 4 + heard  # a line per message
+    assert f"saw {len(last['/focus/seen'])} robots" in text

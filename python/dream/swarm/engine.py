@@ -90,6 +90,9 @@ class Engine:
         }
         self.lossy = np.zeros(0, dtype=np.int64)  #: links (receiver * n + sender) in a loss burst
         self.traffic = Traffic(n)  #: each robot's messages sent, heard and lost so far
+        self.focus: int | None = None  #: a robot whose last readings and inbox to keep (for a recording)
+        #: robot :attr:`focus`'s last decision: its ``step``, and the columns of what it ``seen`` and ``heard``
+        self.focus_view: dict[str, Any] = {}
 
     def attach(self, simulator: SimulatorSpec) -> None:
         """Keep to the limits of the simulator the robots run on."""
@@ -159,6 +162,8 @@ class Engine:
             self._hear(t, rows, heard, faults).frozen(),
             memory,
         )
+        if self.focus is not None:
+            self._keep_focus(t, rows, view, self.focus)
         wished = np.asarray(robot.decide(view), dtype=np.float64)
         name = type(robot).__name__
         if wished.shape != (len(rows), 2) or not np.isfinite(wished).all():
@@ -213,6 +218,18 @@ class Engine:
             offsets = -np.column_stack((seen["dx"], seen["dy"]))
             out[0, stopping(out[0], pose[:, 2], seen.owner, offsets, near)] = 0.0
         return out
+
+    def _keep_focus(self, t: int, rows: np.ndarray, view: View, focus: int) -> None:
+        """Keep what robot ``focus`` reads and hears now, if it is among ``rows`` (increasing)."""
+        at = int(np.searchsorted(rows, focus))
+        if at == len(rows) or rows[at] != focus:
+            return
+
+        def own(hood: Neighbourhood) -> dict[str, np.ndarray]:
+            cut = slice(hood.offsets[at], hood.offsets[at + 1])
+            return {name: values[cut].copy() for name, values in hood.columns.items()}
+
+        self.focus_view = {"step": t, "seen": own(view.seen), "heard": own(view.heard)}
 
     # -- time --------------------------------------------------------------------------------
     def _clock(self, t: int, faults: FaultState | None) -> np.ndarray:
