@@ -95,9 +95,11 @@ class Recording:
     steps not sent yet. A context manager: the sink closes when the block ends, and a file is
     kept only if the block ends without an error."""
 
-    def __init__(self, target: str | os.PathLike[str], name: str, arena: ArenaSpec, radius: float) -> None:
+    def __init__(
+        self, target: str | os.PathLike[str], name: str, arena: ArenaSpec, radius: float, inbox: bool = False
+    ) -> None:
         check_target(target)
-        self.target, self.name, self.arena, self.radius = target, name, arena, radius
+        self.target, self.name, self.arena, self.radius, self.inbox = target, name, arena, radius, inbox
         self._kept: list[dict[str, np.ndarray]] = []
         self._points = 0
         self._sent_at = time.monotonic()
@@ -108,14 +110,26 @@ class Recording:
         rr = rerun_module()
         self.rr = rr
         self.stream = rr.RecordingStream("dream-" + re.sub(r"[^A-Za-z0-9_-]", "-", self.name))
+        layout = self._layout()
         if self.target == "spawn":
-            self.stream.spawn()
+            self.stream.spawn(default_blueprint=layout)
         elif self.target == "serve":
-            self.stream.connect_grpc(_serve())
+            self.stream.connect_grpc(_serve(), default_blueprint=layout)
         else:
-            self.stream.save(self._outputs.enter_context(replaced_path(self.target)))
+            self.stream.save(self._outputs.enter_context(replaced_path(self.target)), default_blueprint=layout)
         self._static()
         return self
+
+    def _layout(self) -> Any:
+        """The viewer's default layout: the arena large, the measures (and the focus robot's inbox,
+        ``inbox``) beside it."""
+        import rerun.blueprint as rrb
+
+        side: list[Any] = [rrb.TimeSeriesView(origin="/measures", name="measures")]
+        if self.inbox:
+            side.append(rrb.TextDocumentView(origin="/focus/inbox", name=f"robot {FOCUS}'s inbox"))
+        arena = rrb.Spatial2DView(origin="/", contents=["+ /**", "- /measures/**"], name=self.name)
+        return rrb.Blueprint(rrb.Horizontal(arena, rrb.Vertical(*side), column_shares=[3, 1]))
 
     def __exit__(
         self, kind: type[BaseException] | None, error: BaseException | None, trace: TracebackType | None
@@ -245,7 +259,8 @@ class Recorder:
         self._last = step
         exp = stepper.exp
         if self._recording is None:
-            self._recording = Recording(self.target, exp.label(), exp.arena, GRITSBOT.radius).__enter__()
+            recording = Recording(self.target, exp.label(), exp.arena, GRITSBOT.radius, exp.engine is not None)
+            self._recording = recording.__enter__()
             if exp.engine is not None:  # keep the focus robot's readings and inbox as it decides
                 exp.engine.focus = FOCUS
         recording = self._recording
