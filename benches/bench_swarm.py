@@ -54,23 +54,26 @@ def scene(n: int) -> tuple[Engine, np.ndarray, np.ndarray]:
 
 def kernels_alone(engine: Engine, x: np.ndarray) -> float:
     """The median time of one step's kernels (perception, the radio mean's reductions of the
-    messages gathered from the board, HRVO, the unicycle conversion and limits) called directly
-    on this step's inputs."""
+    messages read from the board, HRVO, the unicycle conversion and limits, the motion guard)
+    called directly on this step's inputs."""
     n = engine.n
     positions, everyone = x[:2].T.copy(), np.arange(n)
     talking = np.ones(n, dtype=bool)
     (offsets, _, distances, bearings, *_), heard = kernels.perceive(
         positions, x[2], everyone, sight=(0.5, 2 * np.pi, 0.0), radio_range=1.0, talking=talking
     )
-    detections = np.column_stack((distances, bearings, np.zeros(len(distances)), np.zeros(len(distances))))
+    still = np.zeros(len(distances))
+    detections = (distances, bearings, still, still)
+    dx, dy = distances * np.cos(bearings), distances * np.sin(bearings)
     bounds = engine.arena.shrunk(0.055)
 
     def run() -> None:
         kernels.perceive(positions, x[2], everyone, sight=(0.5, 2 * np.pi, 0.0), radio_range=1.0, talking=talking)
-        for column in positions.T:
-            kernels.segment_reduce(column[heard[1]], heard[0], "sum")
+        for column in positions.T:  # the board's fields, read at the senders
+            kernels.segment_reduce(column, heard[0], "sum", heard[1])
         kernels.hrvo_rows(engine.dxi, np.zeros((n, 2)), positions, offsets, detections, safety=0.2, bounds=bounds)
-        kernels.actuator_limit(kernels.dxi_to_dxu(engine.dxi.T, x, 0.8, 3.0))
+        dxu = kernels.actuator_limit(kernels.dxi_to_dxu(engine.dxi.T, x, 0.8, 3.0))
+        kernels.motion_guard(dxu[0], x[2], offsets, dx, dy, near=0.12, horizon=0.25)
 
     return median_seconds(run, repeat=5, min_time=0.0)
 

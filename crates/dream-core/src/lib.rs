@@ -18,6 +18,7 @@
 //! - [`perceive`]: who the robots deciding now see and hear, in one neighbour query.
 //! - [`reduce`]: sums, means, extremes and nearest entries of ragged rows (a robot's neighbourhood).
 //! - [`hrvo`]: Hybrid Reciprocal Velocity Obstacles, for the whole swarm or on each robot's detections.
+//! - [`guard`]: the motion guard, the last check of each robot's command against the robots it sees.
 //! - [`voronoi`]: disc-bounded Voronoi cells and their centroids.
 //! - [`heard`]: Voronoi cells of robots that know the others by range radio, in one pass.
 //! - [`obstacles`]: virtual agents that keep robots off convex obstacles.
@@ -28,6 +29,7 @@ pub mod dynamics;
 pub mod error;
 pub mod geom;
 pub mod grid;
+pub mod guard;
 pub mod heard;
 pub mod hrvo;
 pub mod neighbours;
