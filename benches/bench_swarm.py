@@ -6,8 +6,8 @@ per robot-step), the set-up time before the first step and the peak RSS per robo
 counts are set with ``RAYON_NUM_THREADS`` (the Rust kernels' pool), so one table also shows how
 the whole step scales with cores. The step is the mean past the first three (decisions on
 robots' own periods make steps unequal); the memory per robot is the peak RSS above a fixed
-:data:`FIXED` (the interpreter, NumPy, DREAM and their tables), over N: the cost issue's measure. Every table starts with the machine,
-its load and the date.
+:data:`FIXED` (the interpreter, NumPy, DREAM and their tables), over N: the cost issue's
+measure. Every table starts with the machine, its load and the date.
 
 Run::
 
