@@ -144,4 +144,5 @@ def test_recording_of_a_swarm_robot_shows_what_the_focus_robot_read_and_heard(tm
     heard, text = len(last["/focus/heard"]), last["/focus/inbox"][0]
     assert heard > 0 and f"heard {heard} messages" in text
     assert len(text.splitlines()) == 4 + heard  # a line per message
+    assert "| sender | x | y |" in text  # with the fields of each (rendezvous's robots send x and y)
     assert f"saw {len(last['/focus/seen'])} robots" in text

@@ -233,7 +233,12 @@ class Engine:
 
         def own(hood: Neighbourhood) -> dict[str, np.ndarray]:
             cut = slice(hood.offsets[at], hood.offsets[at + 1])
-            return {name: values[cut].copy() for name, values in hood.columns.items()}
+            found = {name: values[cut].copy() for name, values in hood.columns.items()}
+            if hood.index is not None:  # the fields still on the board: this robot's entries only
+                found.update(
+                    {name: source[hood.index[cut]] for name, source in hood.sources.items() if name not in found}
+                )
+            return found
 
         self.focus_view = {"step": t, "seen": own(view.seen), "heard": own(view.heard)}
 
