@@ -8,6 +8,8 @@
     dream run hrvo-circle -n 10000 --swarm --checkpoint big.ckpt   # saved as it goes...
     dream resume big.ckpt                                # ...and resumed where it stopped
     dream resume theirs.ckpt --trust                     # a colleague's: loading a checkpoint runs its code
+    dream run hrvo-circle --log run.parquet --rerun run.rrd   # a trajectory log and a Rerun recording
+    dream view run.parquet                               # a trajectory log in the Rerun viewer
     dream new my_experiment                              # a starter file that runs as is
     dream bench                                          # the repository's benches/
 
@@ -28,14 +30,14 @@ import warnings
 from collections.abc import Sequence
 from typing import Any
 
-from dream.cli import bench, export, new, resume, run, sweep
+from dream.cli import bench, export, new, resume, run, sweep, view
 from dream.cli import list as listing
 from dream.cli._usage import UsageError
 
 __all__ = ["UsageError", "main"]
 
 #: The commands, in the order ``dream --help`` lists them.
-COMMANDS = (listing, run, resume, new, bench, sweep, export)
+COMMANDS = (listing, run, resume, view, new, bench, sweep, export)
 
 
 def _parser() -> argparse.ArgumentParser:

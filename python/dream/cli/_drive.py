@@ -45,17 +45,18 @@ def _size(text: str) -> tuple[int, int]:
         raise argparse.ArgumentTypeError(str(err)) from None
 
 
-def check_outputs(args: argparse.Namespace, saved: tuple[str | None, str]) -> None:
+def check_outputs(args: argparse.Namespace, *saved: tuple[str | None, str]) -> None:
     """Refuse, before the run, drawing options that draw nothing, a ``--json`` path that cannot be
     written (the video's is the recorder's to check) and two outputs on one file (``--json``,
-    ``--video`` and ``saved``, the checkpoint the run writes: ``(path, what)``)."""
+    ``--video`` and ``saved``, the other files the run writes, such as the checkpoint: ``(path,
+    what)``)."""
     if args.realtime and not (args.show or args.video):
         raise UsageError("--realtime paces what is drawn: give --show or --video too")
     if args.hold and not args.show:
         raise UsageError("--hold keeps the live window open: give --show too")
     if args.json:
         writable(args.json, "--json")
-    outputs = [(path, option) for path, option in ((args.json, "--json"), (args.video, "--video"), saved) if path]
+    outputs = [(path, option) for path, option in ((args.json, "--json"), (args.video, "--video"), *saved) if path]
     for i, (path, option) in enumerate(outputs):
         for other, other_option in outputs[i + 1 :]:
             if os.path.realpath(path) == os.path.realpath(other):

@@ -7,6 +7,7 @@ import argparse
 from dream.backends import BACKENDS
 from dream.backends.robotarium import MAX_ROBOTS
 from dream.cli._drive import add_options, check_outputs, drive
+from dream.cli._looking import add_log, add_rerun, check_looking
 from dream.cli._usage import Commands, UsageError, assignments, experiment, whole, writable
 from dream.experiments import EXPERIMENTS, run
 from dream.experiments.checkpoint import CHECKPOINT_EVERY
@@ -39,6 +40,8 @@ def add(commands: Commands) -> None:
     )
     runner.add_argument("--checkpoint", metavar="PATH", help="save the run to PATH as it goes (see `dream resume`)")
     add_options(runner)
+    add_log(runner)
+    add_rerun(runner, "live in a viewer it spawns")
     runner.set_defaults(handler=command)
 
 
@@ -57,14 +60,22 @@ def command(args: argparse.Namespace) -> int:
         raise UsageError(f"-n {n}: the Robotarium backend runs at most {MAX_ROBOTS} robots; use --backend fast")
     if args.checkpoint:
         writable(args.checkpoint, "--checkpoint")
-    check_outputs(args, (args.checkpoint, "--checkpoint"))
+    check_outputs(args, (args.checkpoint, "--checkpoint"), *check_looking(args))
     every = CHECKPOINT_EVERY if args.checkpoint_every is None else args.checkpoint_every
-    return drive(
+    code = drive(
         args,
         n,
         lambda recorder, progress: run(
             cls, n=n, seed=args.seed, backend=args.backend, steps=args.steps, progress=progress, faults=faults,
             rules=args.rules, swarm=args.swarm, record=recorder, checkpoint=args.checkpoint, checkpoint_every=every,
-            **params,
+            log=args.log, log_every=args.log_every or 1, rerun=args.rerun, **params,
         ),
     )  # fmt: skip
+    for path, what in ((args.log, "log"), (args.rerun, "recording")):
+        if path not in (None, "spawn", "serve"):
+            print(f"{what}: {path}")
+    if args.rerun == "serve":
+        from dream.recording import wait_served
+
+        wait_served()
+    return code
