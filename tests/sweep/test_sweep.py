@@ -485,3 +485,14 @@ def test_sweep_writes_each_runs_log_beside_its_csv(drift, tmp_path):
     assert len({log_name(task) for task in plan(drift, [0, 1], params={"speed": [0.05, 0.1]}).tasks}) == 4
     with pytest.raises(ValueError, match="give out too"):
         dream.sweep(drift, seeds=[0], workers=1, log=True)
+
+
+def test_sweep_command_logs_each_run(drift, tmp_path, capsys):
+    out = tmp_path / "s.csv"
+    assert (
+        main(["sweep", drift, "--seeds", "0:2", "--workers", "1", "--out", str(out), "--log", "--log-every", "3"]) == 0
+    )
+    assert f"logs in {tmp_path / 's-logs'}" in capsys.readouterr().out
+    assert len(list((tmp_path / "s-logs").glob("drift-n3-seed*.parquet"))) == 2
+    assert main(["sweep", drift, "--seeds", "0", "--out", str(tmp_path / "t.csv"), "--log-every", "3"]) == 2
+    assert "give --log too" in capsys.readouterr().err

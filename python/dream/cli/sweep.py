@@ -10,7 +10,7 @@ from collections.abc import Sequence
 from dream.backends import BACKENDS
 from dream.cli._usage import Commands, UsageError, assignments, whole
 from dream.experiments import EXPERIMENTS
-from dream.sweep import sweep
+from dream.sweep import logs_folder, sweep
 
 
 def add(commands: Commands) -> None:
@@ -33,6 +33,10 @@ def add(commands: Commands) -> None:
     sweeper.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="use a running Dask scheduler instead")
     sweeper.add_argument("--out", metavar="PATH", required=True, help="CSV of one row per run (resumes what it holds)")
     sweeper.add_argument("--plot", metavar="PATH", help="PNG of success rate and measures against the swept values")
+    sweeper.add_argument(
+        "--log", action="store_true", help="write each run's trajectory log into OUT-logs beside --out"
+    )
+    sweeper.add_argument("--log-every", metavar="K", type=whole(1), default=None, help="log one step in K (default: 1)")
     sweeper.add_argument("--no-progress", action="store_true", help="no progress bar")
     sweeper.add_argument(
         "--dashboard", action="store_true", help="serve the local cluster's Dask dashboard on 127.0.0.1 (default: off)"
@@ -43,12 +47,15 @@ def add(commands: Commands) -> None:
 def command(args: argparse.Namespace) -> int:
     """The parsed command line to :func:`dream.sweep.sweep`, bad input as one line (exit 2)."""
     grid, fault_grid = _grid(args.param, "--param", "NAME"), _grid(args.fault, "--fault", "KIND")
+    if args.log_every is not None and not args.log:
+        raise UsageError("--log-every sets how often each run's log looks: give --log too")
     start = time.perf_counter()
     try:
         rows = sweep(
             args.experiment, args.seeds, args.n, grid, workers=args.workers, scheduler=args.scheduler,
             out=args.out, plot=args.plot, backend=args.backend, steps=args.steps, faults=fault_grid,
-            swarm=args.swarm, progress=not args.no_progress, dashboard=args.dashboard,
+            swarm=args.swarm, progress=not args.no_progress, dashboard=args.dashboard, log=args.log,
+            log_every=args.log_every or 1,
         )  # fmt: skip
     except ValueError as err:  # bad values or parameters, an unreachable scheduler, --out not a sweep table
         raise UsageError(str(err)) from None
@@ -61,6 +68,7 @@ def command(args: argparse.Namespace) -> int:
         f"{len(rows)} runs of {rows[0]['experiment']}: {succeeded} succeeded, {failed} raised; "
         f"{rows.new} new, {rows.kept} kept; {time.perf_counter() - start:.1f} s; rows in {args.out}"
         + (f", plot in {args.plot}" if args.plot else "")
+        + (f", logs in {logs_folder(args.out)}" if args.log else "")
     )
     return 0
 
