@@ -57,6 +57,8 @@ LEFT_OUT = {
     "sweep": "sweeps (Dask)",
     "sweep_plot": "sweeps (Dask)",
     "templates": "`dream new`'s templates",
+    "trajectory_log": "the trajectory log (pyarrow)",
+    "recording": "Rerun recordings (rerun-sdk)",
     "onboard": "onboard sensors, which DREAM simulates from the poses; the lab's robots need rps 2.1's own "
     "(use_distance_sensors=True, get_distances(), get_encoders())",
 }
