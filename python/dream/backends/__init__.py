@@ -83,6 +83,11 @@ def make_robotarium(
 ) -> Backend:
     """A simulator for ``n`` robots, for a script: the robots of the script's world keep to it.
 
+    The current world (the script's) is given the simulator's arena and limits
+    (:meth:`dream.World.keep_to`), so that its robots keep to them, made before or after it.
+    :func:`dream.run` makes its simulator with :func:`make_simulator`, which reads and writes no
+    world, and gives its own world the same.
+
     Parameters
     ----------
     backend : {"auto", "robotarium", "fast"}
@@ -91,16 +96,15 @@ def make_robotarium(
     initial_conditions : (3, n) array_like, optional
         Initial poses; default: :func:`initial_poses` drawn from ``rng``, else from a generator
         seeded with ``seed``, else from the current world's generator.
+    seed : int, optional
+        Seed of the initial poses' generator.
+    rng : numpy.random.Generator, optional
+        The initial poses' generator (not with ``seed``).
     arena : ArenaSpec, optional
         Default: the Robotarium arena.
     rules : {"rps0", "rps2"}, optional
         Which rps generation's dynamics and validation to follow (:data:`dream.specs.RULES`);
         default: the installed rps's, else "rps0". The Robotarium backend only has its own.
-
-    The current world (the script's) is given the simulator's arena and limits
-    (:meth:`dream.World.keep_to`), so that its robots keep to them, made before or after it.
-    :func:`dream.run` makes its simulator with :func:`make_simulator`, which reads and writes no
-    world, and gives its own world the same.
     """
     _check_request(n, backend, rules)
     if initial_conditions is None:
