@@ -2,25 +2,7 @@
 //! The neighbour lists, a robot's detections or messages, virtual agents: every ragged result
 //! of the kernels, and the checks of every ragged input.
 
-use rayon::prelude::*;
-
 use crate::error::{GeomError, Result};
-
-/// Rows from which a per-row kernel runs on every thread (below, the thread pool costs more).
-const PARALLEL_ROWS: usize = 4096;
-
-/// `row(r)` for every row `r < rows`, in order: in parallel for many rows.
-pub fn rows_of<T: Send>(rows: usize, row: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
-    if rows >= PARALLEL_ROWS {
-        (0..rows)
-            .into_par_iter()
-            .with_min_len(PARALLEL_ROWS / 4)
-            .map(row)
-            .collect()
-    } else {
-        (0..rows).map(row).collect()
-    }
-}
 
 /// Ragged rows: row i is `indices[indptr[i]..indptr[i + 1]]` (with matching `distances`).
 #[derive(Debug, Clone, Default, PartialEq)]

@@ -2,8 +2,9 @@
 //! within a distance of a robot they see (taken as standing) in the next `horizon` seconds.
 //! The last check of a command before it is sent; a guarded robot keeps turning, at no speed.
 
-use crate::csr::{check_offsets, rows_of};
+use crate::csr::check_offsets;
 use crate::error::{check_finite, check_len, check_positive, Result};
+use crate::parallel::map_range;
 
 /// Whether each robot stops: row r (speed `speeds[r]` m/s, heading `headings[r]`) sees the
 /// robots at `dx`, `dy` `[offsets[r]..offsets[r + 1]]` (their positions less its own, m). A
@@ -31,7 +32,7 @@ pub fn stopping(
     }
     check_positive("near", near)?;
     check_positive("horizon", horizon)?;
-    Ok(rows_of(m, |r| {
+    Ok(map_range(m, |r| {
         let speed = speeds[r];
         // The reach test first (as the NumPy reference filters): farther robots cannot be hit.
         let reach = near + speed.abs() * horizon + 1e-9;

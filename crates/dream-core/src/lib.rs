@@ -8,6 +8,7 @@
 //! Shared types:
 //! - [`geom`]: the 2-D vector and the arena;
 //! - [`csr`]: ragged rows (one per robot) and the checks of ragged inputs;
+//! - [`parallel`]: the one way kernels spread independent work over threads;
 //! - [`error`]: the one error type, [`GeomError`], and the input checks every kernel shares.
 //!
 //! Kernels:
@@ -34,6 +35,7 @@ pub mod heard;
 pub mod hrvo;
 pub mod neighbours;
 pub mod obstacles;
+pub mod parallel;
 pub mod perceive;
 pub mod raycast;
 pub mod reduce;

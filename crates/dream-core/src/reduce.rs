@@ -6,8 +6,9 @@
 //! or a maximum (nothing to take them of); NaN entries are skipped by the minimum, the maximum
 //! and the nearest, and carried by the sum and the mean.
 
-use crate::csr::{check_offsets, rows_of};
+use crate::csr::check_offsets;
 use crate::error::{GeomError, Result};
+use crate::parallel::map_range;
 
 /// What a row's entries become.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,7 +61,7 @@ pub fn reduce(values: &[f64], width: usize, offsets: &[i64], index: Option<&[i64
         }
         out
     };
-    Ok(rows_of(offsets.len() - 1, row).into_iter().flatten().collect())
+    Ok(map_range(offsets.len() - 1, row).into_iter().flatten().collect())
 }
 
 /// Every entry of `index` must name one of `rows` rows.
@@ -81,7 +82,7 @@ fn check_indices(arg: &'static str, index: &[i64], rows: usize) -> Result<()> {
 /// An invalid CSR.
 pub fn any(flags: &[bool], offsets: &[i64]) -> Result<Vec<bool>> {
     check_offsets("offsets", offsets, flags.len(), "flags")?;
-    Ok(rows_of(offsets.len() - 1, |r| {
+    Ok(map_range(offsets.len() - 1, |r| {
         flags[offsets[r] as usize..offsets[r + 1] as usize].iter().any(|&f| f)
     }))
 }
@@ -93,7 +94,7 @@ pub fn any(flags: &[bool], offsets: &[i64]) -> Result<Vec<bool>> {
 /// An invalid CSR.
 pub fn nearest(keys: &[f64], offsets: &[i64]) -> Result<Vec<i64>> {
     check_offsets("offsets", offsets, keys.len(), "keys")?;
-    Ok(rows_of(offsets.len() - 1, |r| {
+    Ok(map_range(offsets.len() - 1, |r| {
         let (start, end) = (offsets[r] as usize, offsets[r + 1] as usize);
         let mut best = -1i64;
         let mut least = f64::INFINITY;
