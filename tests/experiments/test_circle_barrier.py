@@ -60,11 +60,10 @@ def test_barrier_releases_a_ring_within_a_pass_around_it():
     mine = (state, zeros, zeros, zeros)
     rows = np.repeat(np.arange(n), 4)
     senders = (rows + np.tile([-2, -1, 1, 2], n)) % n
-    for rounds in range(1, n):
+    rounds, released = 0, zeros
+    while not np.all(released == 1) and rounds < n:
         left, right, released = _round(n, mine, np.stack(mine), rows, senders)
-        mine = (state, left, right, released)
-        if np.all(released == 1):
-            break
+        mine, rounds = (state, left, right, released), rounds + 1
     assert np.all(released == 1) and rounds <= n // 4 + 2
 
 

@@ -1,10 +1,24 @@
 """HRVO circle (thesis 3.1): robots cross a circle three times without touching.
 
 N robots start at random poses. Each has a goal on a circle, then the antipodal point, then
-its first goal again. A robot that reaches its goal (within 0.05 m) raises its state; range
-radios spread every robot's known states (element-wise max); when a robot knows that all
-states equal its own, it heads for its next goal. Robots avoid each other with HRVO using a
-movement sensor. Success: every robot finishes the third circle with zero collisions.
+its first goal again. A robot that reaches its goal (within 0.05 m) raises its state; when it
+knows that every robot has reached at least its state, it heads for its next goal. Robots
+avoid each other with HRVO using a movement sensor. Success: every robot finishes the third
+circle with zero collisions.
+
+Barrier. Robot ids run around the ring (robot i's goals are neighbours of robot i+1's), and a
+range-radio message holds four integers whatever N (:func:`dream.rules.arc_merge`): the
+sender's state, the arc of ids ``i - left .. i + right`` it knows to have reached that state,
+and the highest state it knows every robot to have reached (``released``). Arcs that overlap
+or touch merge; an arc covering all N releases its state, and releases spread to all. Each
+message states facts that stay true (states only rise), so stale, late, repeated or lost
+messages and a split radio graph can delay a release but never make one early: a robot never
+moves on while a robot has not arrived. The price: a robot keeps one arc, not a set, so what
+it hears of robots beyond a gap in its arc is dropped and must be heard again once the gap
+closes. On the ring, whose neighbouring goals are within radio range, arcs grow as fast as
+the N-entry vectors of known states spread: once the last robot arrives, the release reaches
+every robot in the radio hops half-way round the ring. Robot by robot, the heartbeat failure
+detector still holds N entries a robot; an arc grows over a robot taken for crashed.
 
 Robots choose their preferred velocity, step aside and count arrivals with the shared rules
 of :mod:`dream.rules` (the per-robot :class:`CircleRobot` and the swarm mode,
@@ -504,8 +518,7 @@ def default_steps(n: int) -> int:
 class CircleSwarm:
     """Every robot's decision state in swarm mode, one row each (see :meth:`HrvoCircle.swarm_step`).
 
-    The arrival barrier is :class:`CircleRobot`'s (:func:`dream.rules.arc_merge`): three
-    integers a robot, merged over the radio links every ``radio_gap`` steps.
+    The barrier (see the module docs) is :class:`CircleRobot`'s, exchanged every ``radio_gap`` steps.
 
     Attributes
     ----------
