@@ -2,10 +2,10 @@
 
 A run's arrays grow linearly with its robots (poses, commands, the neighbour lists of a
 bounded density, each robot's decision state). :data:`PER_ROBOT` is the least a robot costs:
-hrvo-circle in swarm mode, the leanest path, peaked at 0.8-1.0 KiB a robot above the
-interpreter's own at 100,000 and 300,000 robots (docs/benchmarks.md), doubled for the
-step's temporaries. Robot-by-robot runs cost more (a Python object a robot), so the check
-refuses only what cannot fit in any mode.
+hrvo-circle in swarm mode, the leanest path, peaked at 0.6-1.6 KiB a robot above a 10-robot
+run from 10,000 to 1,000,000 robots (docs/benchmarks.md, "Memory"); robot-by-robot runs cost
+more (a Python object a robot). The check refuses only what cannot fit in any mode: a run it
+lets through may still run out, and then fails with ``MemoryError``.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from __future__ import annotations
 import os
 
 FIXED = 200 * 2**20  #: bytes: the interpreter, NumPy and the extension, whatever the count
-PER_ROBOT = 2 * 2**10  #: bytes a robot needs at least (see the module docs)
+PER_ROBOT = 512  #: bytes a robot needs at least (see the module docs)
 
 
 def estimate(n: int) -> int:
@@ -37,7 +37,7 @@ def check_fits(n: int) -> None:
     need, have = estimate(n), machine_memory()
     if need > have:
         raise ValueError(
-            f"n={n:,} robots need about {_size(need)} of memory ({PER_ROBOT // 2**10} KiB a robot over "
+            f"n={n:,} robots need about {_size(need)} of memory ({PER_ROBOT} bytes a robot over "
             f"{_size(FIXED)}), more than this machine's {_size(have)}: run at most {(have - FIXED) // PER_ROBOT:,}"
         )
 
