@@ -33,4 +33,5 @@ def test_cli_refuses_it_in_one_line(monkeypatch, capsys):
 
 
 def test_sizes_read_in_binary_units():
-    assert [memory._size(b) for b in (512, 1536, 2**30, int(15.7 * 2**40))] == ["512.0 B", "1.5 KiB", "1.0 GiB", "15.7 TiB"]
+    sizes = (512, 1536, 2**30, int(15.7 * 2**40))
+    assert [memory._size(b) for b in sizes] == ["512.0 B", "1.5 KiB", "1.0 GiB", "15.7 TiB"]
