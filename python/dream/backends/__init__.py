@@ -11,6 +11,7 @@ from dream._checks import FloatArray, as_poses
 from dream.backends.base import Backend
 from dream.backends.fast import Fast
 from dream.backends.robotarium import MAX_ROBOTS, Robotarium, rps_available, rps_generation
+from dream.backends.startup import reachable_starts
 from dream.specs import ROBOTARIUM, RULES, ArenaSpec, SimulatorSpec
 from dream.world import current_world
 
@@ -18,11 +19,13 @@ __all__ = [
     "Backend",
     "Fast",
     "Robotarium",
+    "backend_for",
     "initial_poses",
     "make_robotarium",
     "rps_available",
     "rules_named",
     "rps_generation",
+    "runs_startup",
 ]
 
 BACKENDS = ("auto", "robotarium", "fast")
@@ -78,6 +81,7 @@ def make_robotarium(
     arena: ArenaSpec | None = None,
     seed: int | None = None,
     rules: str | None = None,
+    startup: bool = True,
 ) -> Backend:
     """A simulator for ``n`` robots.
 
@@ -94,20 +98,38 @@ def make_robotarium(
     rules : {"rps0", "rps2"}, optional
         Which rps generation's dynamics and validation to follow (:data:`dream.specs.RULES`);
         default: the installed rps's, else "rps0". The Robotarium backend only has its own.
+    startup : bool
+        On the Robotarium backend with rps 2.x: drive the robots from the chargers to the initial
+        conditions with rps's start-up phase first, as the lab's verifier does (rps 2.x's own
+        default). The initial conditions are then moved apart where that phase could not reach
+        them (:func:`dream.backends.startup.reachable_starts`), and the run begins where it
+        ended. ``False`` starts at the initial conditions (``skip_initialization=True``).
     """
-    if backend not in BACKENDS:
-        raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
         raise ValueError(f"the number of robots must be an integer >= 0, got {n!r}")
-    rules = rules_named(rules).rules
     arena = ROBOTARIUM if arena is None else arena
+    kind = backend_for(n, backend, arena, rules)
     if initial_conditions is None:
         rng = current_world().rng if seed is None else np.random.default_rng(seed)
         initial_conditions = initial_poses(n, rng, arena)
     poses = as_poses(initial_conditions, "initial_conditions", n)
+    if kind == "robotarium":
+        if runs_startup(n, kind, arena, rules, startup):
+            return Robotarium(reachable_starts(poses, arena), skip_initialization=False)
+        return Robotarium(poses)
+    return Fast(poses, arena, rules_named(rules))
+
+
+def backend_for(n: int, backend: str = "auto", arena: ArenaSpec | None = None, rules: str | None = None) -> str:
+    """The backend, ``"robotarium"`` or ``"fast"``, that :func:`make_robotarium` builds with these
+    arguments (``"auto"`` resolved); a ``ValueError`` for a Robotarium backend that cannot be."""
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
+    rules = rules_named(rules).rules
+    arena = ROBOTARIUM if arena is None else arena
     if backend == "auto":
         real = rps_available() and n <= MAX_ROBOTS and arena == ROBOTARIUM and rules == rps_generation()
-        backend = "robotarium" if real else "fast"
+        return "robotarium" if real else "fast"
     if backend == "robotarium":
         if n > MAX_ROBOTS:
             raise ValueError(f"the Robotarium runs at most {MAX_ROBOTS} robots, got {n}: use backend='fast'")
@@ -115,5 +137,12 @@ def make_robotarium(
             raise ValueError("the Robotarium backend only has the Robotarium arena: use backend='fast'")
         if rules != rps_generation():
             raise ValueError(f"the installed rps follows {rps_generation()!r}, not rules={rules!r}: use backend='fast'")
-        return Robotarium(poses)
-    return Fast(poses, arena, RULES[rules])
+    return backend
+
+
+def runs_startup(
+    n: int, backend: str = "auto", arena: ArenaSpec | None = None, rules: str | None = None, startup: bool = True
+) -> bool:
+    """Whether :func:`make_robotarium` with these arguments runs rps 2.x's start-up phase (then
+    :meth:`dream.Experiment.reachable_poses` gives a run's initial poses)."""
+    return startup and backend_for(n, backend, arena, rules) == "robotarium" and rps_generation() == "rps2"
