@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
-from dream import _reference, kernels
+from dream import _reference, cli, kernels
 from dream.backends import Fast, Robotarium, make_robotarium, rps_generation
 from dream.backends.startup import RPS2_BARRIER_SPACING, RPS2_PROJECTION, START_SPACING, charger_poses, reachable_starts
 from dream.specs import ROBOTARIUM, RPS0, RPS2, RULES
@@ -263,6 +263,10 @@ def test_run_on_rps2_goes_through_its_start_up_phase_unless_told_not_to(fake_rps
     # hrvo-circle's own starts are 0.2 m apart, which 2.1's start-up never reaches: those are moved.
     assert_array_equal(started["initial_conditions"], reachable_starts(skipped["initial_conditions"]))
     assert not np.array_equal(started["initial_conditions"], skipped["initial_conditions"])
+    # The command line: the phase unless --skip-startup.
+    run = ["run", "line-consensus", "--backend", "robotarium", "--steps", "1", "--no-progress"]
+    assert cli.main(run) == 0 and fake_rps2.made[-1]["skip_initialization"] is False
+    assert cli.main([*run, "--skip-startup"]) == 0 and fake_rps2.made[-1]["skip_initialization"] is True
 
 
 def test_robotarium_backend_stops_a_deadlocked_rps2_start_up_with_an_error(fake_rps2, monkeypatch):
