@@ -28,8 +28,8 @@ from dream.specs import ROBOTARIUM, RULES
 #: rps refuses more robots than this.
 MAX_ROBOTS = 50
 #: rps 2.x's start-up phase took 546-5,337 steps to reach the built-ins' starts at their lab sizes
-#: (``tests/data/rps21``); it loops forever when two initial conditions are closer than its barrier
-#: certificate lets robots come: stop it with an error instead.
+#: (experiment seeds 0-4; seed 0 in ``tests/data/rps21/lab_startup.json``); it loops forever when two
+#: initial conditions are closer than its barrier certificate lets robots come: stop it with an error.
 MAX_STARTUP_STEPS = 20_000
 
 
