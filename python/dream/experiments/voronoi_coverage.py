@@ -18,7 +18,7 @@ each robot from its messages, the robots it sees but does not hear (:func:`dream
 and its virtual agents. The trajectories equal the per-robot mode's to the bit (tested).
 
 Success: no robot-robot collision, no contact with the static obstacles, and the team covers
-the arena: its locational coverage cost falls below ``COVERED`` (0.2) of its start and within
+the arena: its locational coverage cost falls below ``COVERED`` (0.2) of its packed start's and within
 ``SPREAD`` (5) times the cost of an ideal spread (:func:`ideal_cost`). Without moving obstacles it
 must do so at rest; with them it never rests (the wandering obstacles keep reshaping the cells),
 so it must do so for ``HOLD_STEPS`` (10 s). Beyond 15 robots the arena and the obstacles grow so
@@ -395,7 +395,7 @@ class VoronoiCoverage(Experiment):
     has_swarm_mode = True
     success = (
         "zero collisions and no contact with the static obstacles, and the team covers the arena (coverage "
-        "cost below 0.2 of its start and within 5 times an ideal spread's): without moving obstacles at "
+        "cost below 0.2 of its packed start's and within 5 times an ideal spread's): without moving obstacles at "
         "rest (no command for 60 steps); with them (the team never rests) for 300 steps (10 s)"
     )
     moving_obstacles: bool = param(True, "two small obstacles wander and bounce off the walls")
