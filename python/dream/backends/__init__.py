@@ -22,6 +22,7 @@ __all__ = [
     "backend_for",
     "initial_poses",
     "make_robotarium",
+    "make_simulator",
     "rps_available",
     "rules_named",
     "rps_generation",
@@ -80,10 +81,16 @@ def make_robotarium(
     *,
     arena: ArenaSpec | None = None,
     seed: int | None = None,
+    rng: np.random.Generator | None = None,
     rules: str | None = None,
     startup: bool = True,
 ) -> Backend:
-    """A simulator for ``n`` robots.
+    """A simulator for ``n`` robots, for a script: the robots of the script's world keep to it.
+
+    The current world (the script's) is given the simulator's arena and limits
+    (:meth:`dream.World.keep_to`), so that its robots keep to them, made before or after it.
+    :func:`dream.run` makes its simulator with :func:`make_simulator`, which reads and writes no
+    world, and gives its own world the same.
 
     Parameters
     ----------
@@ -91,8 +98,12 @@ def make_robotarium(
         ``"auto"`` is the real Robotarium simulator when ``rps`` is installed, ``n <= 50`` and
         the arena is the Robotarium's, else the Fast backend.
     initial_conditions : (3, n) array_like, optional
-        Initial poses; default: :func:`initial_poses` drawn from ``seed`` (or the current
-        world's generator).
+        Initial poses; default: :func:`initial_poses` drawn from ``rng``, else from a generator
+        seeded with ``seed``, else from the current world's generator.
+    seed : int, optional
+        Seed of the initial poses' generator.
+    rng : numpy.random.Generator, optional
+        The initial poses' generator (not with ``seed``).
     arena : ArenaSpec, optional
         Default: the Robotarium arena.
     rules : {"rps0", "rps2"}, optional
@@ -105,13 +116,34 @@ def make_robotarium(
         them (:func:`dream.backends.startup.reachable_starts`), and the run begins where it
         ended. ``False`` starts at the initial conditions (``skip_initialization=True``).
     """
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
-        raise ValueError(f"the number of robots must be an integer >= 0, got {n!r}")
+    _check_request(n, backend, rules)
+    if initial_conditions is None:
+        if seed is not None and rng is not None:
+            raise ValueError("give the initial poses' generator (rng) or its seed, not both")
+        arena_for_poses = ROBOTARIUM if arena is None else arena
+        if rng is None:
+            rng = current_world().rng if seed is None else np.random.default_rng(seed)
+        initial_conditions = initial_poses(n, rng, arena_for_poses)
+    sim = make_simulator(n, backend, initial_conditions, arena=arena, rules=rules, startup=startup)
+    current_world().keep_to(sim.arena, sim.spec)
+    return sim
+
+
+def make_simulator(
+    n: int,
+    backend: str,
+    initial_conditions: Any,
+    *,
+    arena: ArenaSpec | None = None,
+    rules: str | None = None,
+    startup: bool = True,
+) -> Backend:
+    """A simulator for ``n`` robots starting at ``initial_conditions`` ``(3, n)``; the parameters
+    are :func:`make_robotarium`'s. It touches no world: the caller gives the simulator's arena and
+    limits to the world its robots live in (:meth:`dream.World.keep_to`)."""
+    _check_request(n, backend, rules)
     arena = ROBOTARIUM if arena is None else arena
     kind = backend_for(n, backend, arena, rules)
-    if initial_conditions is None:
-        rng = current_world().rng if seed is None else np.random.default_rng(seed)
-        initial_conditions = initial_poses(n, rng, arena)
     poses = as_poses(initial_conditions, "initial_conditions", n)
     if kind == "robotarium":
         if runs_startup(n, kind, arena, rules, startup):
@@ -121,10 +153,9 @@ def make_robotarium(
 
 
 def backend_for(n: int, backend: str = "auto", arena: ArenaSpec | None = None, rules: str | None = None) -> str:
-    """The backend, ``"robotarium"`` or ``"fast"``, that :func:`make_robotarium` builds with these
+    """The backend, ``"robotarium"`` or ``"fast"``, that :func:`make_simulator` builds with these
     arguments (``"auto"`` resolved); a ``ValueError`` for a Robotarium backend that cannot be."""
-    if backend not in BACKENDS:
-        raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
+    _check_request(n, backend, rules)
     rules = rules_named(rules).rules
     arena = ROBOTARIUM if arena is None else arena
     if backend == "auto":
@@ -143,6 +174,15 @@ def backend_for(n: int, backend: str = "auto", arena: ArenaSpec | None = None, r
 def runs_startup(
     n: int, backend: str = "auto", arena: ArenaSpec | None = None, rules: str | None = None, startup: bool = True
 ) -> bool:
-    """Whether :func:`make_robotarium` with these arguments runs rps 2.x's start-up phase (then
+    """Whether :func:`make_simulator` with these arguments runs rps 2.x's start-up phase (then
     :meth:`dream.Experiment.reachable_poses` gives a run's initial poses)."""
     return startup and backend_for(n, backend, arena, rules) == "robotarium" and rps_generation() == "rps2"
+
+
+def _check_request(n: int, backend: str, rules: str | None) -> None:
+    """Refuse an unknown backend or rules, or a bad number of robots, before drawing poses."""
+    rules_named(rules)
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+        raise ValueError(f"the number of robots must be an integer >= 0, got {n!r}")

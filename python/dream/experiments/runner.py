@@ -15,7 +15,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from dream._files import check_writable
-from dream.backends import BACKENDS, make_robotarium, rules_named, runs_startup
+from dream.backends import BACKENDS, make_simulator, rules_named, runs_startup
 from dream.backends.base import Backend
 from dream.experiments.checkpoint import CHECKPOINT_EVERY, Checkpoint, CheckpointError, load, save
 from dream.experiments.result import ExperimentResult
@@ -130,7 +130,7 @@ def run(
             stepper = Stepper(exp, n, world, rules_named(rules), swarm=swarm, startup=startup)
         except ValueError as err:  # from the layers below, in their terms: say which parameters the run set
             raise _naming_params(exp, err) from err
-        sim = make_robotarium(
+        sim = make_simulator(
             n, backend, stepper.initial_conditions, arena=exp.arena, rules=exp.rules.rules, startup=startup
         )
         stepper.attach(sim, faults)
@@ -329,8 +329,10 @@ class Stepper:
         self._limits = GRITSBOT
 
     def attach(self, sim: Backend, faults: Faults | None = None) -> None:
-        """Give the experiment its simulator and command array, and draw the run's faults."""
+        """Give the experiment its simulator and command array, the world the simulator's arena
+        and limits (which its robots keep to), and draw the run's faults."""
         exp = self.exp
+        self.world.keep_to(sim.arena, sim.spec)
         exp.sim, exp.dxu = sim, np.zeros((2, exp.n))
         self.state = self.world.inject(faults, exp.n)
         self._limits = GRITSBOT.within(sim.spec)
