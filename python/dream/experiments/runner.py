@@ -22,6 +22,7 @@ from dream.experiments.result import ExperimentResult
 from dream.experiments.spec import Experiment
 from dream.faults import Faults, FaultState
 from dream.frames import Frame, fault_status, measures_title
+from dream.memory import check_fits
 from dream.specs import GRITSBOT, RPS, SimulatorSpec
 from dream.swarm import Engine
 from dream.world import World
@@ -119,6 +120,7 @@ def run(
         raise ValueError(f"faults must be a dream.Faults, such as Faults(loss=0.3), got {faults!r}")
     record = _callback(record, "record", "record(frame)")
     progress = _callback(progress, "progress", "progress(step, cap)")
+    check_fits(n)  # before the experiment sizes anything by n
     exp.check(n, backend)
     every = _count(checkpoint_every, "checkpoint_every", 1)
     if checkpoint is not None:
