@@ -35,6 +35,7 @@ import numpy as np
 from dream._checks import FloatArray, as_poses
 from dream.backends.base import Backend
 from dream.backends.robotarium import rps_generation
+from dream.backends.startup import START_SPACING
 from dream.experiments import EXPERIMENTS, ExperimentResult, find, load_file
 from dream.experiments.runner import Stepper
 from dream.specs import ROBOTARIUM, RULES, SimulatorSpec
@@ -43,9 +44,6 @@ from dream.world import World, reset_default_world
 #: The lab's testbed takes at most 20 robots (Robotarium Python Guide, section 2.7.3); rps itself
 #: accepts 50, and rps 2.1's start-up phase has 22 charger slots.
 LAB_MAX_ROBOTS = 20
-#: rps 2.1 draws initial conditions this far apart (m); its start-up phase from the chargers, which
-#: the lab's verifier runs, stalls in its barrier certificates when they are much closer.
-LAB_START_SPACING = 0.5
 #: Third-party packages a bundle may import: what the lab installs for every script.
 LAB_PACKAGES = ("numpy", "scipy", "matplotlib", "cvxopt", "rps")
 #: DREAM modules left out of a bundle, and why a script that uses one cannot go to the lab.
@@ -135,7 +133,7 @@ class ExportError(ValueError):
 
 
 class ExportWarning(UserWarning):
-    """A bundle that runs, but that the lab's rps 2.1 may not take as it is."""
+    """A bundle that runs, but not quite as `dream run` does here (on rps 2.1, say)."""
 
 
 # -- in the bundle: DREAM's side of main.py -----------------------------------------------------
@@ -184,6 +182,8 @@ class LabRun:
         Where the experiment's file is.
     world : World, optional
         The run's world; default: a fresh default world (:func:`dream.reset_default_world`).
+    rules : {"rps0", "rps2"}, optional
+        The rps generation to run with; default: the installed rps's (else rps 2.x's, the lab's).
     """
 
     def __init__(
@@ -194,15 +194,18 @@ class LabRun:
         params: Mapping[str, Any],
         folder: str | Path = ".",
         world: World | None = None,
+        rules: str | None = None,
     ) -> None:
         source = experiment if experiment in EXPERIMENTS else str(Path(folder) / experiment)
         exp = find(source)(**params)
         exp.check(n, "robotarium")
-        rules = RULES[rps_generation() or "rps2"]  # the lab's, should the bundle run without rps
-        self.stepper = Stepper(exp, n, reset_default_world(seed) if world is None else world, rules)
+        spec = RULES[rules or rps_generation() or "rps2"]  # the lab's, should the bundle run without rps
+        # rps 2.x drives the robots from the chargers first: start where that phase gets them.
+        startup = spec.rules == "rps2"
+        self.stepper = Stepper(exp, n, reset_default_world(seed) if world is None else world, spec, startup=startup)
         #: ``(3, n)`` poses to start the lab's simulator at.
         self.initial_conditions: FloatArray = self.stepper.initial_conditions
-        self.sim = LabSimulator(self.initial_conditions, rules)
+        self.sim = LabSimulator(self.initial_conditions, spec)
         self.stepper.attach(self.sim)
         self.done_at: int | None = None
         self._everyone = np.arange(n)
@@ -349,18 +352,18 @@ def export(
         baked = cls(**dict(params or {})).params
         with World(seed) as world:  # a dry build: errors show now, not at the lab
             name, folder = (cls.name, ".") if script is None else (script.name, script.parent)
-            lab = LabRun(name, n, seed, baked, folder, world)
+            lab = LabRun(name, n, seed, baked, folder, world, rules="rps2")  # as the lab's rps 2.1 runs it
     except ValueError as err:
         raise ExportError(str(err)) from None
     exp = lab.stepper.exp
     if exp.arena != ROBOTARIUM:
         raise ExportError(f"{exp.label()} with {n} robots needs a larger arena than the Robotarium's")
-    closest = _closest(lab.initial_conditions)
-    if closest < LAB_START_SPACING:
+    moved = np.hypot(*(lab.initial_conditions - lab.stepper.requested)[:2])
+    if moved.any():
         warnings.warn(
-            f"{exp.label()}'s robots start {closest:.2f} m apart: rps 2.1's start-up phase, which the lab's "
-            f"verifier runs, drives them there from the chargers and stalls when starts are closer than "
-            f"~{LAB_START_SPACING} m (the bundle runs on rps 0.0.0; on 2.1 give the experiment wider initial_poses)",
+            f"on rps 2.x, {np.count_nonzero(moved)} of {exp.label()}'s {n} robots start up to {moved.max():.2f} m "
+            f"from the experiment's initial poses: its start-up phase, which the lab's verifier runs, cannot reach "
+            f"poses closer than {START_SPACING} m apart (the bundle keeps them on rps 0.0.0)",
             ExportWarning,
             stacklevel=2,
         )
@@ -398,12 +401,6 @@ def export(
         shutil.rmtree(folder, ignore_errors=True)
         raise
     return target
-
-
-def _closest(poses: FloatArray) -> float:
-    """The smallest distance between two robots of ``poses`` ``(3, n)`` (m; inf for one robot)."""
-    gaps = np.hypot(*(poses[:2, :, None] - poses[:2, None, :]))
-    return float(gaps[~np.eye(poses.shape[1], dtype=bool)].min(initial=np.inf))
 
 
 def _bundled_name(script: Path) -> str:

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
-from dream import _reference, kernels
+from dream import _reference, cli, kernels
 from dream.backends import Fast, Robotarium, make_robotarium, rps_generation
-from dream.backends.startup import charger_poses
+from dream.backends.startup import RPS2_BARRIER_SPACING, RPS2_PROJECTION, START_SPACING, charger_poses, reachable_starts
 from dream.specs import ROBOTARIUM, RPS0, RPS2, RULES
 
 GOLDEN = Path(__file__).parents[1] / "data" / "rps21"  # recorded from rps 2.1 by its record.py
@@ -238,6 +238,37 @@ def test_robotarium_backend_drives_rps2_without_throttling_and_passes_its_option
     assert make_robotarium(2, initial_conditions=start).spec == RPS2  # auto: the installed generation
 
 
+def test_make_robotarium_runs_rps2s_start_up_phase_to_starts_it_reaches_unless_told_not_to(fake_rps2):
+    close = np.array([[0.0, 0.2, -1.0], [0.0, 0.0, 0.5], [0.0, 3.0, 1.0]])  # the first two block each other
+    sim = make_robotarium(3, backend="robotarium", initial_conditions=close)
+    options = fake_rps2.made[-1]
+    assert options["skip_initialization"] is False
+    assert_array_equal(options["initial_conditions"], reachable_starts(close))
+    assert np.hypot(*(options["initial_conditions"][:2, 0] - options["initial_conditions"][:2, 1])) >= START_SPACING
+    assert_allclose(sim.poses[:2], options["initial_conditions"][:2] + 0.01)  # where the phase left them
+    make_robotarium(3, backend="robotarium", initial_conditions=close, startup=False)
+    assert fake_rps2.made[-1]["skip_initialization"] is True
+    assert_array_equal(fake_rps2.made[-1]["initial_conditions"], close)
+
+
+def test_run_on_rps2_goes_through_its_start_up_phase_unless_told_not_to(fake_rps2):
+    import dream
+
+    dream.run("hrvo-circle", n=10, seed=0, backend="robotarium", steps=1)
+    started = fake_rps2.made[-1]
+    assert started["skip_initialization"] is False and started["number_of_robots"] == 10
+    dream.run("hrvo-circle", n=10, seed=0, backend="robotarium", steps=1, startup=False)
+    skipped = fake_rps2.made[-1]
+    assert skipped["skip_initialization"] is True
+    # hrvo-circle's own starts are 0.2 m apart, which 2.1's start-up never reaches: those are moved.
+    assert_array_equal(started["initial_conditions"], reachable_starts(skipped["initial_conditions"]))
+    assert not np.array_equal(started["initial_conditions"], skipped["initial_conditions"])
+    # The command line: the phase unless --skip-startup.
+    run = ["run", "line-consensus", "--backend", "robotarium", "--steps", "1", "--no-progress"]
+    assert cli.main(run) == 0 and fake_rps2.made[-1]["skip_initialization"] is False
+    assert cli.main([*run, "--skip-startup"]) == 0 and fake_rps2.made[-1]["skip_initialization"] is True
+
+
 def test_robotarium_backend_stops_a_deadlocked_rps2_start_up_with_an_error(fake_rps2, monkeypatch):
     monkeypatch.setattr(fake_rps2, "stuck", True)
     with pytest.raises(RuntimeError, match="skip_initialization=True"):
@@ -253,6 +284,32 @@ def test_charger_poses_are_distinct_slots_on_the_edges_facing_inwards(rng):
     assert_allclose(poses[2], np.where(poses[1] < 0, np.pi / 2, -np.pi / 2))
     with pytest.raises(ValueError, match="22 charger slots"):
         charger_poses(23, rng)
+
+
+def _gaps(points):
+    gaps = np.hypot(*(points[:, :, None] - points[:, None, :]))
+    return gaps[~np.eye(points.shape[1], dtype=bool)]
+
+
+def test_reachable_starts_moves_only_starts_too_close_and_keeps_headings(rng):
+    # A cluster 0.2 m apart in a corner, and robots already far apart elsewhere.
+    cluster = np.array([[x, y] for x in (-1.1, -0.9, -0.7) for y in (-0.6, -0.4)]).T
+    spread = np.array([[0.5, 1.0, 0.5], [0.5, 0.0, -0.5]])
+    poses = np.vstack((np.hstack((cluster, spread)), rng.uniform(-np.pi, np.pi, 9)))
+    starts = reachable_starts(poses)
+    assert _gaps(starts[:2]).min() >= START_SPACING - 1e-12
+    assert_array_equal(starts[2], poses[2])
+    assert_array_equal(starts[:, 6:], poses[:, 6:])  # already far apart: kept
+    assert_array_equal(starts[:, 0], poses[:, 0])  # the first of the cluster stays, the next moves
+    assert np.hypot(*(starts - poses)[:2]).max() < 1.0  # moved to nearby free points
+    assert np.all(np.abs(starts[0]) <= 1.25 + 1e-9) and np.all(np.abs(starts[1]) <= 0.75 + 1e-9)
+    # Whatever the headings, the points rps 2.1's barrier keeps apart are then far enough apart.
+    for headings in rng.uniform(-np.pi, np.pi, (50, 9)):
+        ahead = starts[:2] + RPS2_PROJECTION * np.vstack((np.cos(headings), np.sin(headings)))
+        assert _gaps(ahead).min() >= RPS2_BARRIER_SPACING
+    assert_array_equal(reachable_starts(starts), starts)
+    with pytest.raises(ValueError, match="20 robots do not fit 1.0 m apart"):
+        reachable_starts(np.zeros((3, 20)), spacing=1.0)
 
 
 @pytest.mark.parametrize("case", CASES["startup_cases"], ids=lambda case: f"n={case['n']}")

@@ -11,6 +11,7 @@ from dream._checks import FloatArray, as_poses
 from dream.backends.base import Backend
 from dream.backends.fast import Fast
 from dream.backends.robotarium import MAX_ROBOTS, Robotarium, rps_available, rps_generation
+from dream.backends.startup import reachable_starts
 from dream.specs import ROBOTARIUM, RULES, ArenaSpec, SimulatorSpec
 from dream.world import current_world
 
@@ -18,12 +19,14 @@ __all__ = [
     "Backend",
     "Fast",
     "Robotarium",
+    "backend_for",
     "initial_poses",
     "make_robotarium",
     "make_simulator",
     "rps_available",
     "rules_named",
     "rps_generation",
+    "runs_startup",
 ]
 
 BACKENDS = ("auto", "robotarium", "fast")
@@ -96,6 +99,7 @@ def make_robotarium(
     seed: int | None = None,
     rng: np.random.Generator | None = None,
     rules: str | None = None,
+    startup: bool = True,
 ) -> Backend:
     """A simulator for ``n`` robots, for a script: the robots of the script's world keep to it.
 
@@ -121,6 +125,12 @@ def make_robotarium(
     rules : {"rps0", "rps2"}, optional
         Which rps generation's dynamics and validation to follow (:data:`dream.specs.RULES`);
         default: the installed rps's, else "rps0". The Robotarium backend only has its own.
+    startup : bool
+        On the Robotarium backend with rps 2.x: drive the robots from the chargers to the initial
+        conditions with rps's start-up phase first, as the lab's verifier does (rps 2.x's own
+        default). The initial conditions are then moved apart where that phase could not reach
+        them (:func:`dream.backends.startup.reachable_starts`), and the run begins where it
+        ended. ``False`` starts at the initial conditions (``skip_initialization=True``).
     """
     _check_request(n, backend, rules)
     if initial_conditions is None:
@@ -130,24 +140,43 @@ def make_robotarium(
         if rng is None:
             rng = current_world().rng if seed is None else np.random.default_rng(seed)
         initial_conditions = initial_poses(n, rng, arena_for_poses)
-    sim = make_simulator(n, backend, initial_conditions, arena=arena, rules=rules)
+    sim = make_simulator(n, backend, initial_conditions, arena=arena, rules=rules, startup=startup)
     current_world().keep_to(sim.arena, sim.spec)
     return sim
 
 
 def make_simulator(
-    n: int, backend: str, initial_conditions: Any, *, arena: ArenaSpec | None = None, rules: str | None = None
+    n: int,
+    backend: str,
+    initial_conditions: Any,
+    *,
+    arena: ArenaSpec | None = None,
+    rules: str | None = None,
+    startup: bool = True,
 ) -> Backend:
     """A simulator for ``n`` robots starting at ``initial_conditions`` ``(3, n)``; the parameters
     are :func:`make_robotarium`'s. It touches no world: the caller gives the simulator's arena and
     limits to the world its robots live in (:meth:`dream.World.keep_to`)."""
     _check_request(n, backend, rules)
+    arena = ROBOTARIUM if arena is None else arena
+    kind = backend_for(n, backend, arena, rules)
+    poses = as_poses(initial_conditions, "initial_conditions", n)
+    if kind == "robotarium":
+        if runs_startup(n, kind, arena, rules, startup):
+            return Robotarium(reachable_starts(poses, arena), skip_initialization=False)
+        return Robotarium(poses)
+    return Fast(poses, arena, rules_named(rules))
+
+
+def backend_for(n: int, backend: str = "auto", arena: ArenaSpec | None = None, rules: str | None = None) -> str:
+    """The backend, ``"robotarium"`` or ``"fast"``, that :func:`make_simulator` builds with these
+    arguments (``"auto"`` resolved); a ``ValueError`` for a Robotarium backend that cannot be."""
+    _check_request(n, backend, rules)
     rules = rules_named(rules).rules
     arena = ROBOTARIUM if arena is None else arena
-    poses = as_poses(initial_conditions, "initial_conditions", n)
     if backend == "auto":
         real = rps_available() and n <= MAX_ROBOTS and arena == ROBOTARIUM and rules == rps_generation()
-        backend = "robotarium" if real else "fast"
+        return "robotarium" if real else "fast"
     if backend == "robotarium":
         if n > MAX_ROBOTS:
             raise ValueError(f"the Robotarium runs at most {MAX_ROBOTS} robots, got {n}: use backend='fast'")
@@ -155,8 +184,15 @@ def make_simulator(
             raise ValueError("the Robotarium backend only has the Robotarium arena: use backend='fast'")
         if rules != rps_generation():
             raise ValueError(f"the installed rps follows {rps_generation()!r}, not rules={rules!r}: use backend='fast'")
-        return Robotarium(poses)
-    return Fast(poses, arena, RULES[rules])
+    return backend
+
+
+def runs_startup(
+    n: int, backend: str = "auto", arena: ArenaSpec | None = None, rules: str | None = None, startup: bool = True
+) -> bool:
+    """Whether :func:`make_simulator` with these arguments runs rps 2.x's start-up phase (then
+    :meth:`dream.Experiment.reachable_poses` gives a run's initial poses)."""
+    return startup and backend_for(n, backend, arena, rules) == "robotarium" and rps_generation() == "rps2"
 
 
 def _check_request(n: int, backend: str, rules: str | None) -> None:

@@ -6,9 +6,11 @@ itself with the rules of the generation found (:data:`dream.specs.RPS0` or
 :data:`dream.specs.RPS2`), so its counts equal rps's own. rps always runs without its own
 figure (0.0.0's figure fails on matplotlib >= 3.8); DREAM draws.
 
-On 2.x, real-time throttling (on by default there) is off unless asked for, and so is the
-start-up phase from the chargers (``skip_initialization=False`` runs it; the backend's poses are
-then the ones rps reached at its end).
+On 2.x, real-time throttling (on by default there) is off unless asked for. So is the start-up
+phase from the chargers in this class (``skip_initialization=False`` runs it; the backend's poses
+are then the ones rps reached at its end); :func:`dream.make_robotarium` and :func:`dream.run` run
+it by default, as the lab's verifier does, from starts it reaches
+(:func:`dream.backends.startup.reachable_starts`).
 """
 
 from __future__ import annotations
@@ -25,9 +27,10 @@ from dream.specs import ROBOTARIUM, RULES
 
 #: rps refuses more robots than this.
 MAX_ROBOTS = 50
-#: rps 2.x's start-up phase normally ends in ~500-1,100 steps; it loops forever when its barrier
-#: certificates deadlock (initial conditions too close together): stop it with an error instead.
-MAX_STARTUP_STEPS = 5_000
+#: rps 2.x's start-up phase took 546-5,337 steps to reach the built-ins' starts at their lab sizes
+#: (experiment seeds 0-4; seed 0 in ``tests/data/rps21/lab_startup.json``); it loops forever when two
+#: initial conditions are closer than its barrier certificate lets robots come: stop it with an error.
+MAX_STARTUP_STEPS = 20_000
 
 
 def rps_available() -> bool:
@@ -71,9 +74,9 @@ def _bounded(simulator: type) -> type:
             if getattr(self, "initializing", False) and self._iteration > MAX_STARTUP_STEPS:
                 raise RuntimeError(
                     f"rps's start-up phase did not bring the robots to their initial conditions in "
-                    f"{MAX_STARTUP_STEPS} steps (its barrier certificates deadlock when initial conditions "
-                    "are too close together; rps itself draws them 0.5 m apart): spread them out or pass "
-                    "skip_initialization=True"
+                    f"{MAX_STARTUP_STEPS} steps (it never reaches two initial conditions closer than its "
+                    "barrier certificate lets robots come): move them apart with "
+                    "dream.backends.startup.reachable_starts, or pass skip_initialization=True"
                 )
 
     return Bounded
@@ -90,9 +93,10 @@ class Robotarium(Backend):
         Passed to rps: with 2.x it makes every step wait for 0.033 s of wall time.
     skip_initialization : bool, optional
         rps 2.x only. ``False`` first drives the robots from the chargers to
-        ``initial_conditions`` (2.x's own default, and what the lab's verifier does; its barrier
-        certificates deadlock when initial conditions are closer than ~0.45 m). DREAM's default
-        (``None``) starts at the initial conditions, as rps 0.0.0 does.
+        ``initial_conditions`` (2.x's own default, and what the lab's verifier does; it never
+        reaches initial conditions closer than ~0.35 m apart: see
+        :func:`dream.backends.startup.reachable_starts`). This class's default (``None``) starts at
+        the initial conditions, as rps 0.0.0 does.
     obstacles : (m, 2, 2) array_like, optional
         rps 2.x only: line-segment walls that its distance sensors see.
     use_distance_sensors : bool

@@ -12,17 +12,24 @@ robot that has not moved ``UNSTUCK_DISTANCE`` in ``STALL_STEPS`` heads for a ran
 point nearby until it gets there or stalls again (rps 2.1 breaks deadlocks the same way).
 Start-up ends when every robot is within ``POSITION_TOLERANCE`` of its position and
 ``HEADING_TOLERANCE`` of its heading.
+
+:func:`reachable_starts` moves initial conditions that rps 2.1's own start-up phase cannot
+reach to nearby ones that it can (see there).
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
 from dream import kernels
 from dream._checks import FloatArray
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS2, ArenaSpec, SimulatorSpec
+
+if TYPE_CHECKING:
+    from dream.obstacles import Obstacle
 
 #: Charger slots per edge (rps 2.1: 11 on the top edge and 11 on the bottom one).
 SLOTS_PER_EDGE = 11
@@ -38,6 +45,15 @@ DETOUR = 0.4  #: m: half-size of the square a detour point is drawn from
 POSITION_TOLERANCE = 0.015  #: m: arrival, with margin for rps 2.1's 0.02
 HEADING_TOLERANCE = 0.05  #: rad: aligned, with margin for rps 2.1's 0.18
 MAX_ITERATIONS = 20_000
+#: m: rps 2.1's start-up keeps points 0.05 m ahead of the robots 0.15 + 2 x 0.05 m apart (its unicycle
+#: barrier certificate's defaults); two initial conditions whose points are closer are never both reached.
+RPS2_BARRIER_SPACING = 0.25
+RPS2_PROJECTION = 0.05  #: m: how far ahead of a robot that point lies
+#: m: the spacing :func:`reachable_starts` keeps: the barrier's whatever the two headings (0.25 + 2 x 0.05),
+#: plus a 0.05 m margin.
+START_SPACING = 0.4
+START_GRID = 0.05  #: m: the grid of points a start that is too close moves to
+START_CLEARANCE = GRITSBOT.radius + 0.05  #: m: how far from an obstacle a moved start's centre stays
 
 
 class StartUp(NamedTuple):
@@ -69,6 +85,54 @@ def charger_poses(
     poses[1] = np.where(bottom, cy - half_height, cy + half_height)
     poses[2] = np.where(bottom, np.pi / 2, -np.pi / 2)
     return poses
+
+
+def reachable_starts(
+    poses: FloatArray,
+    arena: ArenaSpec = ROBOTARIUM,
+    spacing: float = START_SPACING,
+    obstacles: Sequence[Obstacle] = (),
+) -> FloatArray:
+    """``poses`` ``(3, n)`` with no two positions closer than ``spacing``: a copy in which rps 2.1's
+    start-up phase reaches every pose.
+
+    That phase never ends when two initial conditions lie closer than its barrier certificate
+    lets the robots come (:data:`RPS2_BARRIER_SPACING` between points :data:`RPS2_PROJECTION`
+    ahead of them): the two robots jostle near their poses for ever, too close to them for its
+    deadlock breaker to act. Robots are kept in order while they are ``spacing`` from those kept;
+    each other robot moves to the nearest point of a :data:`START_GRID` grid, in the central part
+    of ``arena`` where :func:`dream.backends.initial_poses` draws, that is ``spacing`` from every
+    robot placed and :data:`START_CLEARANCE` from ``obstacles``. Headings are kept.
+
+    Raises
+    ------
+    ValueError
+        If the robots do not all fit ``spacing`` apart there.
+    """
+    width, height = arena.width * 2.5 / 3.2, arena.height * 1.5 / 2.0
+    cx, cy = (arena.xmin + arena.xmax) / 2, (arena.ymin + arena.ymax) / 2
+    xs = cx + np.arange(-width / 2, width / 2 + START_GRID / 2, START_GRID)
+    ys = cy + np.arange(-height / 2, height / 2 + START_GRID / 2, START_GRID)
+    grid = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
+    for obstacle in obstacles:
+        grid = grid[obstacle.distances(grid) >= START_CLEARANCE]
+    starts = np.array(poses, dtype=np.float64)
+    placed: list[int] = []
+    moved: list[int] = []
+    for i in range(starts.shape[1]):
+        close = np.hypot(*(starts[:2, placed] - starts[:2, i : i + 1])) < spacing
+        (moved if close.any() else placed).append(i)
+    for i in moved:
+        free = np.all(np.hypot(*(grid.T[:, :, None] - starts[:2, None, placed])) >= spacing, axis=1)
+        if not free.any():
+            raise ValueError(
+                f"{starts.shape[1]} robots do not fit {spacing} m apart in the central {width:.2f} x {height:.2f} m "
+                "of the arena (off its obstacles), as rps 2.1's start-up phase needs"
+            )
+        options = grid[free]
+        starts[:2, i] = options[np.argmin(np.hypot(*(options.T - starts[:2, i : i + 1])))]
+        placed.append(i)
+    return starts
 
 
 def _heading_errors(poses: FloatArray, targets: FloatArray) -> FloatArray:

@@ -39,6 +39,12 @@ def add(commands: Commands) -> None:
         help="inject a fault (repeatable): " + ", ".join(f"{kind}={form}" for kind, form in KINDS.items()),
     )
     runner.add_argument("--checkpoint", metavar="PATH", help="save the run to PATH as it goes (see `dream resume`)")
+    runner.add_argument(
+        "--skip-startup",
+        action="store_true",
+        help="rps 2.x: start at the experiment's own poses, without rps's start-up phase from the chargers "
+        "(skip_initialization=True; the lab's verifier always runs it)",
+    )
     add_options(runner)
     add_log(runner)
     add_rerun(runner, "live in a viewer it spawns")
@@ -68,7 +74,8 @@ def command(args: argparse.Namespace) -> int:
         lambda recorder, progress: run(
             cls, n=n, seed=args.seed, backend=args.backend, steps=args.steps, progress=progress, faults=faults,
             rules=args.rules, swarm=args.swarm, record=recorder, checkpoint=args.checkpoint, checkpoint_every=every,
-            log=args.log, log_every=args.log_every or 1, rerun=args.rerun, **params,
+            log=args.log, log_every=args.log_every or 1, rerun=args.rerun,
+            startup=not args.skip_startup, **params,
         ),
     )  # fmt: skip
     for path, what in ((args.log, "log"), (args.rerun, "recording")):

@@ -16,7 +16,7 @@ from typing import Any, Protocol, TypeVar
 import numpy as np
 
 from dream._files import check_writable
-from dream.backends import BACKENDS, make_simulator, rules_named
+from dream.backends import BACKENDS, make_simulator, rules_named, runs_startup
 from dream.backends.base import Backend
 from dream.experiments.checkpoint import CHECKPOINT_EVERY, Checkpoint, CheckpointError, load, save
 from dream.experiments.result import ExperimentResult
@@ -65,6 +65,7 @@ def run(
     log: str | os.PathLike[str] | None = None,
     log_every: int = 1,
     rerun: str | os.PathLike[str] | None = None,
+    startup: bool = True,
     **params: Any,
 ) -> ExperimentResult:
     """Run ``experiment`` until it is done or ``steps`` have run.
@@ -114,6 +115,10 @@ def run(
     rerun : path, "spawn" or "serve", optional
         Record the run for the Rerun viewer (:mod:`dream.recording`; needs the ``rerun`` extra):
         into a ``.rrd`` file, live into a viewer it spawns, or served to a web viewer.
+    startup : bool
+        On the Robotarium backend with rps 2.x: first run rps's start-up phase from the chargers,
+        as the lab's verifier does, to the experiment's initial poses moved apart where that
+        phase could not reach them (see :func:`dream.make_robotarium`); ``False`` skips it.
     **params
         Values of the experiment's declared parameters.
 
@@ -148,13 +153,16 @@ def run(
     if checkpoint is not None:
         check_writable(checkpoint, "checkpoint")
     watch = _watchers(log, _count(log_every, "log_every", 1), rerun)
+    startup = runs_startup(n, backend, exp.arena_for(n), rules, startup)  # then the starts must be reachable
     world = World(seed)
     with world:
         try:
-            stepper = Stepper(exp, n, world, rules_named(rules), swarm=swarm)
+            stepper = Stepper(exp, n, world, rules_named(rules), swarm=swarm, startup=startup)
         except ValueError as err:  # from the layers below, in their terms: say which parameters the run set
             raise _naming_params(exp, err) from err
-        sim = make_simulator(n, backend, stepper.initial_conditions, arena=exp.arena, rules=exp.rules.rules)
+        sim = make_simulator(
+            n, backend, stepper.initial_conditions, arena=exp.arena, rules=exp.rules.rules, startup=startup
+        )
         stepper.attach(sim, faults)
     cap = exp.steps(n) if exp.steps_cap is None else exp.steps_cap
     state = Checkpoint(stepper, sim, 0, cap, every, poses=[sim.poses] if trace else None)
@@ -332,6 +340,9 @@ class Stepper:
     swarm : bool
         Swarm mode: the experiment's :meth:`~Experiment.build_swarm` instead of its
         :meth:`~Experiment.build`, and its :meth:`~Experiment.swarm_step` instead of the timers.
+    startup : bool
+        The simulator is rps 2.x and drives the robots from the chargers first (its start-up
+        phase): start from the experiment's :meth:`~Experiment.reachable_poses`.
 
     Raises
     ------
@@ -339,7 +350,15 @@ class Stepper:
         ``swarm`` for an experiment without a swarm mode.
     """
 
-    def __init__(self, exp: Experiment, n: int, world: World, rules: SimulatorSpec = RPS, swarm: bool = False) -> None:
+    def __init__(
+        self,
+        exp: Experiment,
+        n: int,
+        world: World,
+        rules: SimulatorSpec = RPS,
+        swarm: bool = False,
+        startup: bool = False,
+    ) -> None:
         if swarm and not exp.has_swarm_mode:
             raise ValueError(
                 f"{exp.label()} has no swarm mode (swarm=True, --swarm): run it robot by robot, or write its "
@@ -354,8 +373,11 @@ class Stepper:
         else:
             exp.build(n)
         self.exp, self.world, self.swarm = exp, world, bool(swarm)
-        #: ``(3, n)`` poses the simulator starts from (m, m, rad).
-        self.initial_conditions = exp.initial_poses(n, world.rng)
+        #: ``(3, n)`` poses the experiment starts from (m, m, rad).
+        self.requested = exp.initial_poses(n, world.rng)
+        #: ``(3, n)`` poses the simulator starts from: :attr:`requested`, or with ``startup`` (the
+        #: simulator is rps 2.x and runs its start-up phase first) :meth:`~Experiment.reachable_poses`.
+        self.initial_conditions = exp.reachable_poses(self.requested) if startup else self.requested
         self.state: FaultState | None = None
         self.held = 0  # steps in a row that the experiment has been done
         self._limits = GRITSBOT

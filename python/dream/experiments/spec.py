@@ -47,6 +47,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from dream.backends import Backend, initial_poses
+from dream.backends.startup import reachable_starts
 from dream.frames import Frame
 from dream.specs import ROBOTARIUM, ArenaSpec, SimulatorSpec
 from dream.swarm import Engine, SwarmRobot
@@ -205,9 +206,10 @@ class Experiment:
     Hooks, in the order the runner calls them (all but :meth:`build` optional)
     --------------------------------------------------------------------------
     :meth:`check` (refuse sizes that cannot succeed), :meth:`arena_for`, :meth:`build`,
-    :meth:`initial_poses`, :meth:`steps`; then every step :meth:`before_step`, the timers with
-    :meth:`timer_params`, the simulator's step, :meth:`after_step`, :meth:`frame` (when recording)
-    and :meth:`done`, :meth:`robot_measures` (when logging); at the end :meth:`measures`.
+    :meth:`initial_poses` (then :meth:`reachable_poses` before rps 2.x's start-up phase),
+    :meth:`steps`; then every step :meth:`before_step`, the timers with :meth:`timer_params`, the
+    simulator's step, :meth:`after_step`, :meth:`frame` (when recording) and :meth:`done`,
+    :meth:`robot_measures` (when logging); at the end :meth:`measures`.
 
     Swarm mode (``dream.run(..., swarm=True)``) calls :meth:`build_swarm` instead of :meth:`build`
     (the swarm's arrays instead of robot objects and timers) and, every step,
@@ -332,6 +334,14 @@ class Experiment:
     def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """Initial poses ``(3, n)`` (default: random grid points in the arena's centre, as rps)."""
         return initial_poses(n, rng, self.arena)
+
+    def reachable_poses(self, poses: np.ndarray) -> np.ndarray:
+        """The initial poses ``(3, n)`` of a run that goes through rps 2.x's start-up phase (a lab
+        bundle on 2.x, the Robotarium backend on 2.x), from those of :meth:`initial_poses`: that
+        phase never reaches poses closer than 0.35 m apart (default:
+        :func:`dream.backends.startup.reachable_starts`, which moves the robots too close to
+        nearby free points; override it to keep clear of obstacles, say)."""
+        return reachable_starts(poses, self.arena)
 
     def steps(self, n: int) -> int:
         """The step cap when the run does not give one."""

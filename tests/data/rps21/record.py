@@ -3,7 +3,7 @@
 Run it with rps 2.1 installed from its repository, outside DREAM's environment::
 
     git clone https://github.com/robotarium/robotarium_python_simulator /tmp/rps21src
-    python -m venv /tmp/rps21 && /tmp/rps21/bin/pip install /tmp/rps21src
+    python -m venv /tmp/rps21 && /tmp/rps21/bin/pip install /tmp/rps21src scipy
     /tmp/rps21/bin/python tests/data/rps21/record.py            # writes the .npz files and cases.json here
     /tmp/rps21/bin/python tests/data/rps21/record.py --check    # records, and compares with the files here
 
@@ -14,6 +14,11 @@ from NumPy's ``default_rng(seed)``: poses drawn one by one in 2.8 x 1.6 m until 
 ``straight``: ``v = 0.15`` m/s and ``w`` in [-0.3, 0.3] rad/s). The start-up phase draws its
 charger slots with :mod:`random` and its waypoints with NumPy's global generator: both are
 seeded with the case's seed. The tests never import this file (rps 2.1 is no test dependency).
+
+``lab_startup.json`` holds what 2.1's start-up phase does with the built-in experiments at their lab
+size (seed 0): from the experiment's own initial poses, and from those that an exported bundle hands
+rps 2.1 (:func:`dream.backends.startup.reachable_starts`); and the last lines of each bundle run on
+2.1 as the lab's verifier runs it. This part takes DREAM from this checkout (its pure-Python part).
 """
 
 from __future__ import annotations
@@ -22,18 +27,29 @@ import argparse
 import contextlib
 import io
 import json
+import os
 import random
+import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
 from rps.robotarium import Robotarium
+from rps.utilities.misc import create_at_pose
 
 HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[2]
 STEPS = 300
 #: (mode, seed, robots, walls) of the recorded runs, and (seed, robots) of the recorded start-up phases.
 RUNS = [("random", 0, 5, True), ("random", 1, 20, True), ("random", 2, 12, False), ("straight", 5, 20, True)]
 STARTUPS = [(3, 6), (4, 12)]
+#: The built-ins at their lab size, the seed of their runs, the seeds of 2.1's start-up draws for each, and
+#: the iterations after which a start-up phase counts as stuck.
+LAB_CASES = [("hrvo-circle", 10), ("line-consensus", 6), ("voronoi-coverage", 15), ("affine-formation", 7)]
+LAB_SEED = 0
+LAB_STARTUP_SEEDS = range(5)
+STUCK_AFTER = 20_000
 #: Three line-segment walls (M, 2, 2) inside the arena, in every run but one.
 WALLS = np.array([[[-0.5, -0.6], [-0.5, 0.6]], [[0.4, 0.3], [1.2, 0.3]], [[0.0, -0.9], [0.9, -0.5]]])
 #: 2.1's constants as ``cases.json`` holds them, in this order.
@@ -123,6 +139,61 @@ def record_startup(seed: int, n: int) -> dict:
     }
 
 
+def startup_from(targets: np.ndarray, seed: int) -> dict:
+    """2.1's start-up phase to ``targets`` with its draws seeded: its iterations (``None`` when stuck
+    after :data:`STUCK_AFTER`) and which robots were at their poses (by its own test) when it ended."""
+
+    class Bounded(Robotarium):
+        def step(self) -> None:
+            super().step()
+            if self.initializing and self._iteration >= STUCK_AFTER:
+                raise TimeoutError
+
+    random.seed(seed)
+    np.random.seed(seed)
+    simulator = Bounded.__new__(Bounded)  # built apart from __init__, so that a stuck phase leaves it to read
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            simulator.__init__(number_of_robots=targets.shape[1], show_figure=False, initial_conditions=targets,
+                               sim_in_real_time=False)  # fmt: skip
+        iterations = simulator._iteration
+    except TimeoutError:
+        iterations = None
+    at_pose = create_at_pose(position_error=0.05, rotation_error=0.2)(simulator._poses, targets)[1]
+    return {"seed": seed, "iterations": iterations, "at_pose": at_pose.tolist()}
+
+
+def record_lab() -> list[dict]:
+    """For each of :data:`LAB_CASES`: 2.1's start-up phase from the experiment's poses (seed 0) and from
+    the bundle's (every seed of :data:`LAB_STARTUP_SEEDS`), and the last lines of the bundle's run."""
+    sys.path.insert(0, str(ROOT / "python"))
+    from dream import export
+    from dream.experiments import find
+
+    cases = []
+    for name, n in LAB_CASES:
+        lab = export.LabRun(name, n, LAB_SEED, find(name)().params)
+        own, starts = lab.stepper.requested, lab.initial_conditions  # 2.1 installed: the bundle's
+        with tempfile.TemporaryDirectory() as folder:
+            bundle = export.export(name, Path(folder) / "bundle", n=n, seed=LAB_SEED)
+            seeded = (
+                "import random, runpy, numpy; random.seed(0); numpy.random.seed(0); "
+                f"runpy.run_path({str(bundle / 'main.py')!r}, run_name='__main__')"
+            )
+            env = {**os.environ, "DREAM_HEADLESS": "1", "MPLBACKEND": "Agg"}  # the bundle's dream/ comes first
+            done = subprocess.run([sys.executable, "-c", seeded], env=env, cwd=folder, capture_output=True, text=True)
+        kept = ("At initial", "No ", "Errors", "dream:")  # start-up done, rps's verdict, DREAM's
+        cases.append({
+            "experiment": name, "n": n, "seed": LAB_SEED,
+            "own_starts": own.tolist(), "own_startup": startup_from(own, 0),
+            "bundle_starts": starts.tolist(),
+            "bundle_startups": [startup_from(starts, seed) for seed in LAB_STARTUP_SEEDS],
+            "bundle_exit": done.returncode,
+            "bundle_lines": [line for line in done.stdout.splitlines() if line.startswith(kept)],
+        })  # fmt: skip
+    return cases
+
+
 def record() -> tuple[dict[str, dict[str, np.ndarray]], dict]:
     """Every run's arrays by file name, and the contents of ``cases.json``."""
     silence_noise()
@@ -165,14 +236,18 @@ def main() -> int:
     parser.add_argument("--check", action="store_true", help="compare with the files here instead of writing them")
     check = parser.parse_args().check
     files, table = record()
+    lab = record_lab()
     if check:
         found = differences(files, table)
-        print("\n".join(found) or f"the recording matches the {len(files)} runs and cases.json in {HERE}")
+        stored = json.loads((HERE / "lab_startup.json").read_text())
+        found += [f"lab_startup.json: {case['experiment']} differs" for case, old in zip(lab, stored) if case != old]
+        print("\n".join(found) or f"the recording matches the {len(files)} runs, cases.json and lab_startup.json")
         return 1 if found else 0
     for name, arrays in files.items():
         np.savez_compressed(HERE / name, **arrays)
     (HERE / "cases.json").write_text(json.dumps(table, indent=1) + "\n")
-    print(f"wrote {', '.join(files)} and cases.json in {HERE}")
+    (HERE / "lab_startup.json").write_text(json.dumps(lab, indent=1) + "\n")
+    print(f"wrote {', '.join(files)}, cases.json and lab_startup.json in {HERE}")
     return 0
 
 
