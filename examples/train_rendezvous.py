@@ -25,13 +25,13 @@ from pathlib import Path
 
 import numpy as np
 
-from dream.rl import LinearPolicy, batch_env
+from dream.rl import BatchEnv, LinearPolicy, batch_env
 
 EXPERIMENT = str(Path(__file__).with_name("rendezvous.py"))
 Policy = Callable[[np.ndarray], np.ndarray]
 
 
-def episode_return(env, policy: Policy, seed: int) -> float:  # type: ignore[no-untyped-def]
+def episode_return(env: BatchEnv, policy: Policy, seed: int) -> float:
     """The mean return per robot of one episode from ``seed``."""
     obs, _ = env.reset(seed=seed)
     total = 0.0
@@ -42,21 +42,23 @@ def episode_return(env, policy: Policy, seed: int) -> float:  # type: ignore[no-
             return total
 
 
-def mean_return(env, policy: Policy, seeds: list[int]) -> float:  # type: ignore[no-untyped-def]
+def mean_return(env: BatchEnv, policy: Policy, seeds: list[int]) -> float:
     return float(np.mean([episode_return(env, policy, seed) for seed in seeds]))
 
 
-def train(env, iterations: int, population: int, elite: int, seeds: list[int], rng: np.random.Generator) -> LinearPolicy:  # type: ignore[no-untyped-def]
+def train(
+    env: BatchEnv, iterations: int, population: int, elite: int, seeds: list[int], rng: np.random.Generator
+) -> LinearPolicy:
     """The cross-entropy method over the linear policy's parameters."""
-    size = env.single_observation_space.shape[0]
-    mean, spread = LinearPolicy.zeros(size).flat, np.full(2 * size + 2, 0.5)
+    start = LinearPolicy.zeros(env.single_observation_space.shape[0], k=env.team.layout.k, avoid=True)
+    mean, spread = start.flat, np.full(len(start.flat), 0.5)
     for iteration in range(iterations):
         candidates = mean + spread * rng.standard_normal((population, len(mean)))
-        scores = np.array([mean_return(env, LinearPolicy.from_flat(c, size), seeds) for c in candidates])
+        scores = np.array([mean_return(env, start.with_flat(c), seeds) for c in candidates])
         best = candidates[np.argsort(scores)[-elite:]]
         mean, spread = best.mean(axis=0), best.std(axis=0) + 0.02  # a floor keeps it searching
         print(f"iteration {iteration + 1}/{iterations}: best {scores.max():.3f}, mean {scores.mean():.3f}", flush=True)
-    return LinearPolicy.from_flat(mean, size)
+    return start.with_flat(mean)
 
 
 def main(argv: list[str] | None = None) -> None:

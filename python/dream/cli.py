@@ -178,6 +178,9 @@ def _parser() -> argparse.ArgumentParser:
     exporter.add_argument(
         "--force", action="store_true", help=f"replace DIR if it holds a previous export (a {export.MARKER} file)"
     )
+    exporter.add_argument(
+        "--policy", metavar="FILE", default=None, help="a trained dream.rl.LinearPolicy (.npz) for the robots to run"
+    )
     exporter.set_defaults(handler=export.command)
     return parser
 

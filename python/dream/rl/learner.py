@@ -28,6 +28,8 @@ from dream.experiments import Experiment, find
 from dream.experiments.hrvo_circle import HrvoCircle, circle_goals
 from dream.experiments.line_consensus import LineConsensus
 from dream.frames import Frame
+from dream.rl.observation import Layout
+from dream.rl.policy import LinearPolicy
 from dream.swarm import Avoid, Movement, Radio, SwarmRobot, View
 
 PERIOD = 5  #: steps between two decisions of a learner lent no clock
@@ -66,6 +68,25 @@ class Learner(SwarmRobot):
         raise RuntimeError("a Learner's decisions come from a policy: step it through dream.rl's environments")
 
 
+class Driven(Learner):
+    """A learner whose decisions a :class:`~dream.rl.policy.LinearPolicy` makes on its own view: how a
+    trained policy runs robot by robot, in ``dream run`` or a lab bundle, without an environment."""
+
+    def __init__(self, lent: SwarmRobot | None, policy: LinearPolicy, goals: np.ndarray | None) -> None:
+        super().__init__(lent, Avoid() if policy.avoid else None)
+        self.policy, self.goals = policy, goals
+        self.layout = Layout(policy.k, goals is not None)
+        if self.layout.size != policy.size:
+            raise ValueError(
+                f"the policy takes observations of {policy.size} values, but this experiment's robots observe "
+                f"{self.layout.size} (k={policy.k}, {'with' if goals is not None else 'without'} goals)"
+            )
+
+    def decide(self, view: View) -> np.ndarray:
+        view.send(x=view.pose[:, 0], y=view.pose[:, 1])
+        return self.policy(self.layout.rows(view, self.goals)) * self.spec.v_max
+
+
 @dataclasses.dataclass(frozen=True)
 class BuiltIn:
     """What a built-in experiment not yet written as a swarm robot gives a learner: each robot's
@@ -94,7 +115,9 @@ BUILT_INS: dict[type[Experiment], BuiltIn] = {
 def learning_class(experiment: type[Experiment] | str) -> type[Experiment]:
     """The experiment ``experiment`` (a class, a built-in's name or a ``.py`` file) with its robots
     replaced by a :class:`Learner` (see the module docs); its ``avoid`` attribute (an
-    :class:`~dream.swarm.Avoid` or ``None``) sets the learner's safety layer.
+    :class:`~dream.swarm.Avoid` or ``None``) sets the learner's safety layer, and its ``policy``
+    attribute (a :class:`~dream.rl.policy.LinearPolicy`), if set, makes the robots
+    :class:`Driven` by it.
 
     Raises
     ------
@@ -114,9 +137,11 @@ def learning_class(experiment: type[Experiment] | str) -> type[Experiment]:
 
     def swarm_robot(self: Any, n: int) -> Learner:
         lent = None if builtin is not None else cls.swarm_robot(self, n)
+        if self.policy is not None:
+            return Driven(lent, self.policy, goals_of(self, n))
         return Learner(lent, self.avoid)
 
-    body: dict[str, Any] = {"swarm_robot": swarm_robot, "avoid": None, "__module__": cls.__module__}
+    body: dict[str, Any] = {"swarm_robot": swarm_robot, "avoid": None, "policy": None, "__module__": cls.__module__}
     if builtin is not None:  # the built-in's own robots are gone: so are its hooks that read them
         body.update(
             done=builtin.done,
@@ -137,7 +162,9 @@ def goals_of(exp: Experiment, n: int) -> np.ndarray | None:
         return None
     goals = np.asarray(hook(n), dtype=np.float64)
     if goals.shape != (n, 2) or not np.isfinite(goals).all():
-        raise ValueError(f"{exp.label()}.goals(n) must return finite goals of shape (n, 2) = ({n}, 2), got {goals.shape}")
+        raise ValueError(
+            f"{exp.label()}.goals(n) must return finite goals of shape (n, 2) = ({n}, 2), got {goals.shape}"
+        )
     return goals
 
 
@@ -146,3 +173,9 @@ def _frame(exp: Any, step: int, poses: np.ndarray) -> Frame:
     frame = Experiment.frame(exp, step, poses)
     frame.goals = goals_of(exp, exp.n)
     return frame
+
+
+def driven(experiment: type[Experiment] | str, policy: LinearPolicy) -> type[Experiment]:
+    """``experiment`` with its robots driven by ``policy`` (:class:`Driven`): it runs as any
+    experiment does (``dream.run``, a lab bundle), robot by robot or as one swarm."""
+    return type(f"Driven{learning_class(experiment).__name__}", (learning_class(experiment),), {"policy": policy})

@@ -21,10 +21,14 @@ alone knows.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-from gymnasium import spaces
 
 from dream.swarm import Neighbourhood, View
+
+if TYPE_CHECKING:
+    from gymnasium import spaces
 
 SEEN = ("dx", "dy", "vx", "vy")  #: the detection columns a learner observes
 
@@ -44,7 +48,7 @@ class Layout:
         if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 0:
             raise ValueError(f"k (detections and messages observed) must be a whole number >= 0, got {k!r}")
         self.k = int(k)
-        shapes = {"pose": (4,), **({"goal": (2,)} if goals else {})}
+        shapes: dict[str, tuple[int, ...]] = {"pose": (4,), **({"goal": (2,)} if goals else {})}
         shapes |= {"seen": (k, len(SEEN)), "seen_mask": (k,), "heard": (k, 2), "heard_mask": (k,)}
         self.shapes = shapes
         self.slices: dict[str, slice] = {}
@@ -57,14 +61,22 @@ class Layout:
 
     def flat_space(self) -> spaces.Box:
         """The space of one row."""
+        from gymnasium import spaces  # here: a lab bundle's policy observes without gymnasium
+
         return spaces.Box(-np.inf, np.inf, (self.size,), np.float32)
 
     def dict_space(self) -> spaces.Dict:
         """The space of one row as named parts (masks as :class:`~gymnasium.spaces.MultiBinary`)."""
+        from gymnasium import spaces
+
         parts: dict[str, spaces.Space] = {}
         for name, shape in self.shapes.items():
-            parts[name] = spaces.MultiBinary(shape) if name.endswith("mask") else spaces.Box(-np.inf, np.inf, shape, np.float32)
-        parts["pose"] = spaces.Box(np.array([-np.inf, -np.inf, -1, -1], np.float32), np.array([np.inf, np.inf, 1, 1], np.float32))
+            parts[name] = (
+                spaces.MultiBinary(shape) if name.endswith("mask") else spaces.Box(-np.inf, np.inf, shape, np.float32)
+            )
+        parts["pose"] = spaces.Box(
+            np.array([-np.inf, -np.inf, -1, -1], np.float32), np.array([np.inf, np.inf, 1, 1], np.float32)
+        )
         return spaces.Dict(parts)
 
     def as_dict(self, row: np.ndarray) -> dict[str, np.ndarray]:

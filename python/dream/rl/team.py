@@ -127,8 +127,11 @@ class Team:
         self.world = World(self.seed)
         with self.world:
             self.stepper = Stepper(exp, self.n, self.world, self.rules, swarm=True)
-            self.sim = make_robotarium(self.n, "fast", self.stepper.initial_conditions, arena=exp.arena, rules=self.rules.rules)
+            self.sim = make_robotarium(
+                self.n, "fast", self.stepper.initial_conditions, arena=exp.arena, rules=self.rules.rules
+            )
             self.stepper.attach(self.sim, self.faults)
+        assert exp.engine is not None  # the learning class's swarm_robot always gives one
         self.engine = exp.engine
         self.goals = goals_of(exp, self.n)
         self.cap = exp.steps(self.n) if self.max_steps is None else self.max_steps
@@ -163,7 +166,8 @@ class Team:
             exp.dxu = engine.act(self.t, self.views, wishes, exp.dxu, self.stepper.state)
             if self.action == "unicycle":
                 rows = np.flatnonzero(self.acting)
-                exp.dxu[:, rows] = kernels.actuator_limit(actions[rows].T * [[spec.max_linear], [spec.max_angular]], engine.limits)
+                top = engine.limits
+                exp.dxu[:, rows] = kernels.actuator_limit(actions[rows].T * [[top.v_max], [top.w_max]], top)
             self.sim.set_velocities(np.arange(self.n), self.stepper.carried_out())
             collisions = self.sim.violations.collision
             self.sim.step()
