@@ -18,7 +18,7 @@ ROOT = Path(__file__).parents[2]
 RENDEZVOUS = str(ROOT / "examples" / "rendezvous.py")
 
 
-@pytest.mark.parametrize("experiment", ["hrvo-circle", RENDEZVOUS])
+@pytest.mark.parametrize("experiment", ["hrvo-circle", "line-consensus", RENDEZVOUS])
 def test_parallel_env_passes_pettingzoos_api_test(experiment):
     parallel_api_test(parallel_env(experiment, n=10), num_cycles=200)
 
