@@ -1,103 +1,115 @@
-"""The swarm engine's step at scale: its whole cost, its kernels' share, and what is left per robot.
+"""Whole swarm runs at scale: every built-in and the rendezvous example, in swarm mode on Fast.
 
-A rendezvous-like rule (radio mean plus HRVO, every robot deciding every step, the worst case)
-on a swarm spread as rps spreads it, at each N: the median step, the median of the same step's
-kernels called alone on the same inputs, and the difference per robot (the engine's own
-Python and NumPy, the figure the swarm-engine issue bounds at 0.5 us per robot). Also the peak
-RSS of the process. Run: ``python benches/bench_swarm.py [N ...]``.
+For each experiment, robot count and thread count, one fresh process runs ``--steps`` steps of
+``dream.run(..., swarm=True, backend="fast")`` and reports the step (robot-steps/s, µs
+per robot-step), the set-up time before the first step and the peak RSS per robot. Thread
+counts are set with ``RAYON_NUM_THREADS`` (the Rust kernels' pool), so one table also shows how
+the whole step scales with cores. The step is the mean past the first three (decisions on
+robots' own periods make steps unequal); the memory per robot is the peak RSS above a fixed
+:data:`FIXED` (the interpreter, NumPy, DREAM and their tables), over N: the cost issue's
+measure. Every table starts with the machine, its load and the date.
+
+Run::
+
+    python benches/bench_swarm.py                                  # 1,000 and 10,000 robots
+    python benches/bench_swarm.py -n 1000 10000 100000 1000000 --threads 1 2 4 8 16
+    python benches/bench_swarm.py -e hrvo-circle examples/rendezvous.py --steps 30
 """
 
 from __future__ import annotations
 
-import resource
+import argparse
+import json
+import os
+import subprocess
 import sys
-import time
-from collections.abc import Callable
+from pathlib import Path
 
-import numpy as np
+sys.path.insert(0, str(Path(__file__).parent))
+from harness import machine  # noqa: E402
 
+ROOT = Path(__file__).resolve().parent.parent
+EXPERIMENTS = ["hrvo-circle", "line-consensus", "affine-formation", "voronoi-coverage", "examples/rendezvous.py"]
+FIXED = 200 * 2**20  #: bytes of a run's peak RSS that do not grow with N
+GROUPS = {"affine-formation": 7}  #: experiments whose robots come in groups: n is rounded down to whole groups
+
+# One run in its own process (so that its peak RSS is its own): the step times come from the
+# progress callback, which the runner calls after every step.
+ONE_RUN = """
+import json, resource, statistics, sys, time
 import dream
-from dream import kernels
-from dream.backends import initial_poses
-from dream.specs import ROBOTARIUM, ArenaSpec
-from dream.swarm import Avoid, Engine, Movement, Radio, SwarmRobot, View
+from dream.experiments import find
 
-sys.path.insert(0, __file__.rsplit("/", 1)[0])
-from harness import machine, median_seconds  # noqa: E402
-
-
-class Meet(SwarmRobot):
-    """Heads for the mean of the positions it hears, HRVO on what it sees: every step."""
-
-    period = 0
-    movement = Movement(range=0.5)
-    radio = Radio(range=1.0, fields=("x", "y"))
-    avoid = Avoid(safety=0.2)
-
-    def decide(self, view: View) -> np.ndarray:
-        here = view.pose[:, :2]
-        view.send(x=here[:, 0], y=here[:, 1])
-        centre = (view.heard.sum(["x", "y"]) + here) / (view.heard.count + 1)[:, None]
-        return np.clip(0.5 * (centre - here), -0.1, 0.1)
+name, n, steps = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+stamps = []
+start = time.perf_counter()
+result = dream.run(find(name), n=n, steps=steps, backend="fast", swarm=True,
+                   progress=lambda step, cap: stamps.append(time.perf_counter()))
+gaps = [b - a for a, b in zip(stamps, stamps[1:])][2:] or [stamps[0] - start]  # past the warm-up
+print(json.dumps({
+    "n": result.n, "steps": result.steps, "step_s": statistics.mean(gaps), "setup_s": stamps[0] - start - gaps[0],
+    "rss": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, "collisions": result.collisions,
+}))
+"""
 
 
-def scene(n: int) -> tuple[Engine, np.ndarray, np.ndarray]:
-    scale = np.sqrt(2 * n / 84)
-    arena = ArenaSpec.centred(ROBOTARIUM.width * scale, ROBOTARIUM.height * scale)
-    x = initial_poses(n, np.random.default_rng(0), arena)
-    engine = Engine(Meet(), n, 0, arena)
-    commands = np.zeros((2, n))
-    for t in range(2):  # a first message from everyone on the board
-        engine.step(t, x, commands)
-    return engine, x, commands
-
-
-def kernels_alone(engine: Engine, x: np.ndarray) -> float:
-    """The median time of one step's kernels (perception, the radio mean's reductions of the
-    messages gathered from the board, HRVO, the unicycle conversion and limits) called directly
-    on this step's inputs."""
-    n = engine.n
-    positions, everyone = x[:2].T.copy(), np.arange(n)
-    talking = np.ones(n, dtype=bool)
-    (offsets, _, distances, bearings, *_), heard = kernels.perceive(
-        positions, x[2], everyone, sight=(0.5, 2 * np.pi, 0.0), radio_range=1.0, talking=talking
-    )
-    detections = np.column_stack((distances, bearings, np.zeros(len(distances)), np.zeros(len(distances))))
-    bounds = engine.arena.shrunk(0.055)
-
-    def run() -> None:
-        kernels.perceive(positions, x[2], everyone, sight=(0.5, 2 * np.pi, 0.0), radio_range=1.0, talking=talking)
-        for column in positions.T:
-            kernels.segment_reduce(column[heard[1]], heard[0], "sum")
-        kernels.hrvo_rows(engine.dxi, np.zeros((n, 2)), positions, offsets, detections, safety=0.2, bounds=bounds)
-        kernels.actuator_limit(kernels.dxi_to_dxu(engine.dxi.T, x, 0.8, 3.0))
-
-    return median_seconds(run, repeat=5, min_time=0.0)
-
-
-def stepper(engine: Engine, x: np.ndarray, commands: np.ndarray) -> Callable[[], None]:
-    """One engine step per call, the clock going on."""
-    clock = iter(range(2, 10**9))
-
-    def step() -> None:
-        engine.step(next(clock), x, commands)
-
-    return step
+def one_run(name: str, n: int, steps: int, threads: int | None, timeout: float) -> dict[str, float] | str:
+    """The figures of one run, or why there are none."""
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    if threads is not None:
+        env["RAYON_NUM_THREADS"] = str(threads)
+    try:
+        done = subprocess.run(
+            [sys.executable, "-c", ONE_RUN, name, str(n), str(steps)],
+            capture_output=True,
+            text=True,
+            env=env,
+            cwd=ROOT,
+            timeout=timeout,
+            check=False,
+        )
+    except subprocess.TimeoutExpired:
+        return f"over {timeout:.0f} s"
+    if done.returncode:
+        lines = (done.stderr or done.stdout).strip().splitlines()
+        return lines[-1][:100] if lines else f"exit {done.returncode}"
+    return json.loads(done.stdout.strip().splitlines()[-1])
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("-e", "--experiments", nargs="+", default=EXPERIMENTS)
+    parser.add_argument("-n", "--robots", nargs="+", type=int, default=[1_000, 10_000])
+    parser.add_argument("--threads", nargs="+", type=int, default=None, help="RAYON_NUM_THREADS values")
+    parser.add_argument("--steps", type=int, default=20, help="steps a run (the median step is past the first 3)")
+    parser.add_argument("--timeout", type=float, default=900.0, help="seconds a run may take")
+    args = parser.parse_args()
     print(machine())
-    sizes = [int(a) for a in sys.argv[1:]] or [1_000, 10_000, 100_000]
-    print(f"{'robots':>9} {'step (ms)':>10} {'kernels (ms)':>13} {'engine per robot (us)':>22} {'robot-steps/s':>14}")
-    for n in sizes:
-        engine, x, commands = scene(n)
-        whole = median_seconds(stepper(engine, x, commands), repeat=5, min_time=0.0)
-        alone = kernels_alone(engine, x)
-        own = (whole - alone) / n * 1e6
-        print(f"{n:>9,} {whole * 1e3:>10.1f} {alone * 1e3:>13.1f} {own:>22.2f} {n / whole:>14,.0f}")
-    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
-    print(f"peak RSS {rss:,.0f} MiB; {when}; kernels: {dream.kernels.IMPLEMENTATION}")
+    threads: list[int | None] = list(args.threads) if args.threads else [None]
+    print(f"{args.steps} steps a run, swarm mode on Fast; threads: {'all' if threads == [None] else threads}")
+    print(
+        f"| experiment | robots | threads | step (ms) | robot-steps/s | µs per robot-step | set-up (s) "
+        f"| peak RSS | above 200 MiB, per robot | scaling |\n|{'---|' * 10}"
+    )
+    for name in args.experiments:
+        for asked in args.robots:
+            n = asked - asked % GROUPS.get(name, 1)
+            first: float | None = None
+            for count in threads:
+                got = one_run(name, n, args.steps, count, args.timeout)
+                shown = "all" if count is None else str(count)
+                if isinstance(got, str):
+                    print(f"| {name} | {n:,} | {shown} | {got} | | | | | | |", flush=True)
+                    continue
+                step = got["step_s"]
+                first = step if first is None else first
+                rss = got["rss"] / 2**20
+                print(
+                    f"| {name} | {n:,} | {shown} | {step * 1e3:,.1f} | {n / step:,.0f} | {step / n * 1e6:.2f} "
+                    f"| {got['setup_s']:.1f} | {rss:,.0f} MiB | {max(got['rss'] - FIXED, 0) / n / 1024:.2f} KiB "
+                    f"| {first / step:.1f}x |",
+                    flush=True,
+                )
 
 
 if __name__ == "__main__":

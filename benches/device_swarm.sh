@@ -11,11 +11,11 @@ export PYTHONUNBUFFERED=1
 echo "cores $(nproc); $(uptime); $(python3 --version); $(date -u +%FT%TZ)"
 for threads in 1 2 4 8 16; do
     echo "== RAYON_NUM_THREADS=$threads"
-    RAYON_NUM_THREADS=$threads python3 benches/bench_swarm.py 100000
+    RAYON_NUM_THREADS=$threads python3 benches/bench_engine.py 100000
 done
 for threads in 4 16; do
     echo "== RAYON_NUM_THREADS=$threads"
-    RAYON_NUM_THREADS=$threads python3 benches/bench_swarm.py 1000000
+    RAYON_NUM_THREADS=$threads python3 benches/bench_engine.py 1000000
 done
 echo "== dream run examples/rendezvous.py --swarm -n 1000000 --steps 30 --backend fast"
 python3 - <<'PY'

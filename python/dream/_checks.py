@@ -61,6 +61,21 @@ def as_offsets(value: Any, name: str, length: int, rows: int | None = None, part
     return cuts
 
 
+def as_index(value: Any, name: str) -> NDArray[np.int64]:
+    """``value`` as int64 rows ``(e,)`` of some array (the kernel checks that they are its rows)."""
+    array = np.asarray(value)
+    if array.ndim != 1 or (array.size and array.dtype.kind not in "iu"):
+        raise ValueError(f"`{name}` must be integer rows of shape (e,), got dtype {array.dtype} shape {array.shape}")
+    return np.ascontiguousarray(array, dtype=np.int64)
+
+
+def check_rows(index: np.ndarray, name: str, length: int) -> None:
+    """Every entry of ``index`` must be a row of an array of ``length`` rows."""
+    if len(index) and (index.min() < 0 or index.max() >= length):
+        bad = index[(index < 0) | (index >= length)][0]
+        raise ValueError(f"`{name}` holds {bad}, which is not a row of the {length} it indexes")
+
+
 def all_finite(array: np.ndarray) -> bool:
     """Whether every value of the float ``array`` is finite; a robot's small arrays through
     :func:`math.isfinite` (several times faster there than NumPy's per-call cost)."""

@@ -28,6 +28,7 @@ __all__ = [
     "segment_reduce",
     "segment_any",
     "segment_nearest",
+    "motion_guard",
 ]
 
 _Bounds = tuple[float, float, float, float]
@@ -117,7 +118,7 @@ def hrvo_rows(
     preferred: _Floats,
     positions: _Floats,
     offsets: _Ints,
-    detections: _Floats,
+    detections: _Floats | tuple[_Floats, _Floats, _Floats, _Floats],
     *,
     safety: float,
     v_max: float,
@@ -125,7 +126,7 @@ def hrvo_rows(
     candidates: _Floats,
     include_preferred: bool,
 ) -> _Floats:
-    """HRVO velocities (m, 2) of the deciding robots, each from its own detections (k, 4) cut by offsets (m+1,)."""
+    """HRVO velocities (m, 2) of the deciding robots, each from its own detections (k, 4) or their four columns, cut by offsets (m+1,)."""
 
 def perceive(
     positions: _Floats,
@@ -138,7 +139,7 @@ def perceive(
 ) -> tuple[tuple[_Ints, _Ints, _Floats, _Floats, _Floats, _Floats], tuple[_Ints, _Ints, _Floats]]:
     """(seen (offsets, ids, distances, bearings, dx, dy), heard (offsets, ids, distances)) of the robots `rows`."""
 
-def segment_reduce(values: _Floats, offsets: _Ints, op: str) -> _Floats:
+def segment_reduce(values: _Floats, offsets: _Ints, op: str, index: _Ints | None = None) -> _Floats:
     """op (sum, mean, min, max) of each row's entries of values (k, w): (m, w)."""
 
 def segment_any(flags: NDArray[np.bool_], offsets: _Ints) -> NDArray[np.bool_]:
@@ -146,6 +147,11 @@ def segment_any(flags: NDArray[np.bool_], offsets: _Ints) -> NDArray[np.bool_]:
 
 def segment_nearest(keys: _Floats, offsets: _Ints) -> _Ints:
     """(m,) int: the entry of each row with the smallest key, -1 for none."""
+
+def motion_guard(
+    speeds: _Floats, headings: _Floats, offsets: _Ints, dx: _Floats, dy: _Floats, *, near: float, horizon: float
+) -> NDArray[np.bool_]:
+    """(m,) bool: which robots stop short of a robot they see at (dx, dy) (CSR rows by offsets)."""
 
 @final
 class HrvoPlanner:

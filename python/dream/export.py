@@ -18,7 +18,6 @@ matplotlib, cvxopt), without DREAM's compiled extension. :func:`export` writes a
 
 from __future__ import annotations
 
-import argparse
 import ast
 import contextlib
 import os
@@ -545,33 +544,3 @@ def _command(
 ) -> str:
     settings = "".join(f" --param {key}={value}" for key, value in (params or {}).items())
     return f"{source} -o {output} -n {n} --seed {seed}{settings}" + ("" if policy is None else f" --policy {policy}")
-
-
-def command(args: argparse.Namespace) -> int:
-    """``dream export``: the parsed command line to :func:`export`, bad input as one line (exit 2)."""
-    from dream.cli import UsageError
-
-    params: dict[str, str] = {}
-    for pair in args.param:
-        name, equals, value = pair.partition("=")
-        if not equals or not name.strip():
-            raise UsageError(f"--param takes NAME=VALUE, got {pair!r}")
-        params[name.strip()] = value
-    try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", ExportWarning)
-            folder = export(
-                args.experiment,
-                args.output,
-                n=args.n,
-                seed=args.seed,
-                params=params,
-                force=args.force,
-                policy=args.policy,
-            )
-    except ExportError as err:
-        raise UsageError(str(err)) from None
-    for warning in caught:
-        print(f"dream: warning: {warning.message}", file=sys.stderr)
-    print(f"wrote {folder}: run `DREAM_HEADLESS=1 python {folder / 'main.py'}` to check it, then submit the folder")
-    return 0

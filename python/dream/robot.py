@@ -14,6 +14,7 @@ import numpy as np
 
 from dream import kernels, rules
 from dream._checks import FloatArray, as_array
+from dream._reference.guard import closing_in, in_reach
 from dream.kernels import Bounds
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec, RobotSpec
 from dream.world import current_world
@@ -127,7 +128,7 @@ class Robot:
         if not len(offsets):
             return
         moving = speed * np.array([math.cos(self.rot_w), math.sin(self.rot_w)])
-        if rules.closing_in(offsets, np.broadcast_to(moving, offsets.shape), near, self.guard_horizon).any():
+        if closing_in(offsets, np.broadcast_to(moving, offsets.shape), near, self.guard_horizon).any():
             self.dxu[0] = 0.0
 
     def actuator_limit(self) -> None:
@@ -160,13 +161,6 @@ class Robot:
         return self._limits[1]
 
 
-def in_reach(distances: np.ndarray, speeds: Any, near: float, horizon: float = GUARD_HORIZON) -> np.ndarray:
-    """``(k,)`` bool: which robots at ``distances`` ``(k,)`` (m) a robot driving at ``speeds``
-    ``(k,)`` or ``()`` (m/s) could come within ``near`` (m) of in the next ``horizon`` seconds;
-    the guard need not look at the others (the margin covers rounding)."""
-    return distances < near + np.abs(speeds) * horizon + 1e-9
-
-
 def guard_distance(diameter: float, safety: float) -> float:
     """How close (centre to centre, m) the motion guard of an HRVO robot of ``diameter`` (m) lets it
     drive to a robot it sees: its body and :data:`GUARD_MARGIN`, or less where HRVO's combined
@@ -180,12 +174,15 @@ def stopping(
     """The motion guard of a whole swarm (:meth:`RobotHRVO.guard`): whether each robot, driving at
     ``speeds`` ``(n,)`` (m/s) along ``headings`` ``(n,)``, comes within ``near`` (m) of a robot it
     sees in the next :data:`GUARD_HORIZON` seconds, ``(n,)`` bool. ``owners`` ``(k,)`` and
-    ``offsets`` ``(k, 2)``: who sees each other robot, and its position less that robot's (m)."""
-    close = np.flatnonzero(in_reach(np.hypot(offsets[:, 0], offsets[:, 1]), speeds[owners], near))
-    owners, offsets = owners[close], offsets[close]
-    moving = speeds[owners, None] * np.column_stack((np.cos(headings[owners]), np.sin(headings[owners])))
-    hit = rules.closing_in(offsets, moving, near, GUARD_HORIZON)
-    return np.bincount(owners[hit], minlength=len(speeds)) > 0
+    ``offsets`` ``(k, 2)``: who sees each other robot, and its position less that robot's (m).
+    The rows of :func:`dream.kernels.motion_guard`."""
+    if np.any(owners[1:] < owners[:-1]):
+        order = np.argsort(owners, kind="stable")
+        owners, offsets = owners[order], offsets[order]
+    rows = np.concatenate(([0], np.cumsum(np.bincount(owners, minlength=len(speeds)))))
+    return kernels.motion_guard(
+        speeds, headings, rows, -offsets[:, 0], -offsets[:, 1], near=near, horizon=GUARD_HORIZON
+    )
 
 
 def guard_swarm(

@@ -339,22 +339,6 @@ def wmsr_keep(values: Any, own: float, trimmed: int) -> np.ndarray:
     return np.concatenate(kept)
 
 
-def closing_in(offsets: Any, closing: Any, distance: float, horizon: float) -> np.ndarray:
-    """For pairs of robots, whether each comes closer than ``distance`` (m) within ``horizon``
-    seconds while closing in, if both keep their velocities; a pair already closer only counts
-    when it closes in further.
-
-    ``offsets`` ``(k, 2)``: this robot's position less the other's (m); ``closing`` ``(k, 2)``:
-    this robot's velocity less the other's (m/s).
-    """
-    offsets = np.asarray(offsets, dtype=np.float64).reshape(-1, 2)
-    closing = np.asarray(closing, dtype=np.float64).reshape(-1, 2)
-    speed2 = np.einsum("ij,ij->i", closing, closing)
-    when = np.clip(-np.einsum("ij,ij->i", offsets, closing) / np.where(speed2 > 0, speed2, 1.0), 0.0, horizon)
-    nearest = np.hypot(*(offsets + closing * when[:, None]).T)
-    return nearest < np.minimum(distance, np.hypot(*offsets.T))
-
-
 def seen_positions(position: Any, detections: Any) -> FloatArray:
     """World positions ``(k, 2)`` of the robots in movement-sensor ``detections`` ``(k, 4)`` (rows
     ``[distance, angle, vx, vy]``, ``angle`` pointing from the robot seen to the one at

@@ -25,7 +25,6 @@ so it leaves the file as it is and the researcher mends or deletes the line.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import csv
 import fcntl
@@ -590,72 +589,6 @@ def _ignoring_ctrl_c() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGINT, previous)
-
-
-def command(args: argparse.Namespace) -> int:
-    """``dream sweep``: the parsed command line to :func:`sweep`, bad input as one line (exit 2)."""
-    from dream.cli import UsageError
-
-    grid, fault_grid = _grid(args.param, "--param", "NAME"), _grid(args.fault, "--fault", "KIND")
-    start = time.perf_counter()
-    try:
-        rows = sweep(
-            args.experiment, args.seeds, args.n, grid, workers=args.workers, scheduler=args.scheduler,
-            out=args.out, plot=args.plot, backend=args.backend, steps=args.steps, faults=fault_grid,
-            swarm=args.swarm, progress=not args.no_progress, dashboard=args.dashboard,
-        )  # fmt: skip
-    except ValueError as err:  # bad values or parameters, an unreachable scheduler, --out not a sweep table
-        raise UsageError(str(err)) from None
-    except KeyboardInterrupt:
-        print(f"\ninterrupted: the runs done so far are in {args.out}; run again to finish", file=sys.stderr)
-        return 130
-    failed = sum(1 for row in rows if row.get("error"))
-    succeeded = sum(1 for row in rows if row.get("success") is True)
-    print(
-        f"{len(rows)} runs of {rows[0]['experiment']}: {succeeded} succeeded, {failed} raised; "
-        f"{rows.new} new, {rows.kept} kept; {time.perf_counter() - start:.1f} s; rows in {args.out}"
-        + (f", plot in {args.plot}" if args.plot else "")
-    )
-    return 0
-
-
-def _grid(pairs: Sequence[str], option: str, what: str) -> dict[str, list[str]]:
-    """``NAME=V1,V2,...`` options as ``{NAME: [V1, V2, ...]}``."""
-    from dream.cli import UsageError
-
-    grid: dict[str, list[str]] = {}
-    for pair in pairs:
-        name, equals, values = pair.partition("=")
-        name = name.strip()
-        if not equals or not name:
-            raise UsageError(f"{option} takes {what}=V1,V2,..., got {pair!r}")
-        if name in grid:
-            raise UsageError(f"{option} {name} given twice: list its values once, separated by commas")
-        grid[name] = values.split(",")
-    return grid
-
-
-def parse_seeds(text: str) -> list[int]:
-    """``A:B`` (B exclusive) or ``1,5,9``, for argparse."""
-    start, colon, stop = text.partition(":")
-    try:
-        seeds = list(range(int(start), int(stop))) if colon else [int(part) for part in text.split(",")]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected A:B or a list 1,5,9 of integers, got {text!r}") from None
-    if not seeds or min(seeds) < 0:
-        raise argparse.ArgumentTypeError(f"expected seeds >= 0 (A:B with A < B), got {text!r}")
-    return seeds
-
-
-def parse_counts(text: str) -> list[int]:
-    """``10,20``: robot counts, for argparse."""
-    try:
-        counts = [int(part) for part in text.split(",")]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected integers >= 1 separated by commas, got {text!r}") from None
-    if min(counts) < 1:
-        raise argparse.ArgumentTypeError(f"expected integers >= 1, got {text!r}")
-    return counts
 
 
 def _source(experiment: type[Experiment] | Experiment | str) -> tuple[str | type[Experiment], type[Experiment], Row]:

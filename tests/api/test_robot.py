@@ -6,9 +6,9 @@ import math
 
 import numpy as np
 import pytest
-from numpy.testing import assert_array_equal
+from numpy.testing import assert_allclose, assert_array_equal
 
-from dream import MovementSensor, OdometrySensor, Robot, RobotHRVO, create_timer, update_timers
+from dream import MovementSensor, OdometrySensor, Robot, RobotHRVO, create_timer, kernels, update_timers
 from dream.specs import RobotSpec
 
 
@@ -82,6 +82,28 @@ def test_robot_actuator_limit_uses_the_robot_spec():
     robot.actuator_limit()
     assert robot.dxu[0] == pytest.approx(0.1)
     assert robot.dxu[1] == pytest.approx(-1.0)
+
+
+def test_robot_conversion_and_limits_are_the_kernels_robot_by_robot(rng):
+    """The object robot's own conversion and limits (scalar Python, for speed on one robot) give
+    the whole-swarm kernels' commands, on random poses, velocities, gains and limits."""
+    n = 300
+    poses = np.vstack((rng.uniform(-1, 1, (2, n)), rng.uniform(-4, 4, n)))
+    dxi = rng.normal(0, 0.15, (2, n))
+    dxi[:, :5] = 0.0  # standing still: atan2(0, 0)
+    spec = RobotSpec(v_max=0.15, w_max=2.5)
+    for gains in ((0.8, 3.0), (1.3, 0.7)):
+        converted = kernels.dxi_to_dxu(dxi, poses, *gains)
+        limited = kernels.actuator_limit(converted, spec)
+        for i in range(n):
+            robot = _placed(Robot(i, vel_gain=gains[0], ang_gain=gains[1], spec=spec), *poses[:, i])
+            robot.dxi = dxi[:, i].copy()
+            robot.dxi_to_dxu()
+            assert_allclose(robot.dxu, converted[:, i], rtol=1e-12, atol=1e-15)
+            robot.dxu = converted[:, i].copy()
+            robot.actuator_limit()
+            assert_allclose(robot.dxu, limited[:, i], rtol=1e-12, atol=1e-15)
+    assert (np.abs(limited[0]) < np.abs(converted[0])).any()  # the limits were put to work
 
 
 def test_robot_has_the_gritsbot_limits():

@@ -238,7 +238,7 @@ def test_a_json_that_cannot_be_written_after_the_run_is_one_line(tmp_path, monke
     def full(path, data):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr("dream.cli._write_json", full)
+    monkeypatch.setattr("dream.cli._drive._write_json", full)
     assert main([*SHORT, "--json", str(tmp_path / "m.json")]) == 2
     err = capsys.readouterr().err
     assert err == f"dream: error: --json {tmp_path / 'm.json'}: not written: No space left on device\n"

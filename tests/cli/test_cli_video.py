@@ -8,8 +8,8 @@ from typing import ClassVar
 import pytest
 from PIL import Image
 
-from dream import cli
 from dream.cli import _parser, main
+from dream.cli import bench as cli  # `dream bench` and where it finds benches/
 from dream.experiments import EXPERIMENTS, Experiment
 
 

@@ -36,6 +36,21 @@ def test_segment_reduce_matches_the_reference(rng, rows, op):
         assert_allclose(got, want, rtol=1e-12, atol=1e-12, equal_nan=True)
 
 
+@pytest.mark.parametrize("rows", [0, 1, 7, 5000])
+@pytest.mark.parametrize("op", OPS)
+def test_segment_reduce_through_an_index_is_the_gathered_reduce(rng, rows, op):
+    """Entry e taken from row index[e] of a per-robot array: bit for bit the reduce of the
+    gathered copy, on both paths."""
+    source = rng.normal(0, 3, (50, 2))
+    source[rng.random(source.shape) < 0.1] = np.nan
+    _, offsets = ragged(rng, rows, 1)
+    index = rng.integers(0, len(source), offsets[-1])
+    want = _reference.segment_reduce(source[index], offsets, op)
+    assert_array_equal(_core.segment_reduce(source, offsets, op, index), want)
+    assert_array_equal(_reference.segment_reduce(source, offsets, op, index), want)
+    assert_array_equal(kernels.segment_reduce(source[:, 1], offsets, op, index), want[:, 1])
+
+
 def test_segment_reduce_empty_rows_and_nan():
     values = np.array([1.0, np.nan, 3.0, 4.0])
     offsets = [0, 0, 3, 4]
@@ -76,6 +91,12 @@ def test_nearest_takes_the_first_of_equals():
         (lambda: kernels.segment_any([True], [0.0, 1.0]), "integer offsets"),
         (lambda: kernels.segment_nearest(np.zeros((2, 2)), [0, 2]), "`keys` must have shape (k,)"),
         (lambda: _core.segment_reduce(np.zeros((2, 1)), np.array([0, 3]), "sum"), "not a valid CSR"),
+        (
+            lambda: kernels.segment_reduce([1.0, 2.0], [0, 1], "sum", [2]),
+            "`index` holds 2, which is not a row of the 2",
+        ),
+        (lambda: kernels.segment_reduce([1.0, 2.0], [0, 1], "sum", [0.5]), "`index` must be integer rows"),
+        (lambda: _core.segment_reduce(np.zeros((2, 1)), np.array([0, 1]), "sum", np.array([-1])), "`index` holds -1"),
         (lambda: _core.segment_reduce(np.zeros((2, 1)), np.array([0, 2]), "avg"), "`op` must be"),
     ],
 )
@@ -105,6 +126,11 @@ def test_hrvo_rows_is_the_planner_row_by_row(rng, rows):
     got = _core.hrvo_rows(velocities, preferred, positions, offsets, seen, candidates=grid, **options)
     want = _reference.hrvo_rows(velocities, preferred, positions, offsets, seen, candidates=grid, **options)
     assert_allclose(got, want, atol=1e-12)
+    columns = tuple(seen.T.copy())  # a neighbourhood's four columns, unstacked: the same answer
+    assert_array_equal(
+        _core.hrvo_rows(velocities, preferred, positions, offsets, columns, candidates=grid, **options), got
+    )
+    assert_array_equal(kernels.hrvo_rows(velocities, preferred, positions, offsets, columns, **options), got)
     planner = _core.HrvoPlanner(grid, **options)
     for r in range(0, rows, max(rows // 40, 1)):  # exactly the per-robot planner's answer
         row = seen[offsets[r] : offsets[r + 1]]
@@ -119,6 +145,23 @@ def test_hrvo_rows_bad_input_is_named(rng):
     bad[0, 0] = -0.1
     with pytest.raises(ValueError, match="detection distance"):
         kernels.hrvo_rows(velocities, preferred, positions, offsets, bad)
+    with pytest.raises(ValueError, match="detection distance"):
+        kernels.hrvo_rows(velocities, preferred, positions, offsets, tuple(bad.T))
+    with pytest.raises(ValueError, match=r"columns must be \(distance, angle, vx, vy\), got 3"):
+        kernels.hrvo_rows(velocities, preferred, positions, offsets, tuple(bad.T[:3]))
+    with pytest.raises(ValueError, match="columns must be"):
+        _core.hrvo_rows(
+            velocities,
+            preferred,
+            positions,
+            offsets,
+            tuple(bad.T[:3]),
+            safety=0.2,
+            v_max=0.2,
+            bounds=None,
+            candidates=_grid(0.2, 20, 10),
+            include_preferred=True,
+        )
     with pytest.raises(ValueError, match="detection distance"):
         _core.hrvo_rows(
             velocities,
@@ -189,3 +232,51 @@ def test_a_perceived_row_does_not_depend_on_the_other_rows(rng):
 def test_perceive_bad_input_is_named(options, message):
     with pytest.raises(ValueError, match=message):
         kernels.perceive(np.zeros((3, 2)), np.zeros(3), **options)
+
+
+# -- the motion guard ------------------------------------------------------------------------------
+@pytest.mark.parametrize("rows", [0, 1, 30, 5000])
+def test_motion_guard_matches_the_reference(rng, rows):
+    counts = rng.integers(0, 6, rows)
+    offsets = np.concatenate(([0], np.cumsum(counts))).astype(np.int64)
+    k = offsets[-1]
+    speeds = rng.uniform(-0.2, 0.2, rows)
+    speeds[rng.random(rows) < 0.1] = 0.0  # standing robots never stop
+    headings = rng.uniform(-np.pi, np.pi, rows)
+    dx, dy = rng.uniform(-0.3, 0.3, k), rng.uniform(-0.3, 0.3, k)
+    got = _core.motion_guard(speeds, headings, offsets, dx, dy, near=0.12, horizon=0.25)
+    want = _reference.motion_guard(speeds, headings, offsets, dx, dy, near=0.12, horizon=0.25)
+    assert_array_equal(got, want)
+    assert not got[speeds == 0].any()
+    if rows == 5000:
+        assert 0 < got.sum() < rows  # some stop, some drive on
+
+
+def test_motion_guard_stops_short_of_a_robot_ahead_only():
+    ahead = kernels.motion_guard([0.2, -0.2], [0.0, 0.0], [0, 1, 2], [0.1, 0.1], [0.0, 0.0], near=0.12, horizon=0.25)
+    assert_array_equal(ahead, [True, False])  # the second backs away from it
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"dx": [np.nan]}, "`dx` contains a non-finite value"),
+        ({"offsets": [0, 2]}, "`offsets` must be offsets"),
+        ({"near": 0.0}, "`near` must be finite and > 0"),
+        ({"headings": [0.0, 1.0]}, "`headings` must have shape (1,)"),
+    ],
+)
+def test_motion_guard_bad_input_is_named(options, message):
+    args = {
+        "speeds": [0.1],
+        "headings": [0.0],
+        "offsets": [0, 1],
+        "dx": [0.1],
+        "dy": [0.0],
+        "near": 0.1,
+        "horizon": 0.2,
+    }
+    args.update(options)
+    near, horizon = args.pop("near"), args.pop("horizon")
+    with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        kernels.motion_guard(*args.values(), near=near, horizon=horizon)

@@ -137,7 +137,7 @@ class Recorder(SwarmRobot):
         return np.zeros(len(ids), dtype=np.int64) if self.starts is None else self.starts[ids]
 
     def decide(self, view: View) -> np.ndarray:
-        self.views.append((int(view.clock[0]), view.ids.copy(), {k: v.copy() for k, v in view.heard.columns.items()}))
+        self.views.append((int(view.clock[0]), view.ids.copy(), {k: view.heard[k].copy() for k in view.heard.names}))
         if self.radio is not None:
             fields = {key: view.ids * 1.0 + view.clock / 1000 for key in self.radio.kinds}
             view.send(**{key: view.ids if kind is int else fields[key] for key, kind in self.radio.kinds.items()})

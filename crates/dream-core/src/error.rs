@@ -31,6 +31,9 @@ pub enum GeomError {
         rows: usize,
         reason: String,
     },
+    /// An index into a per-robot array that names no row of it.
+    #[error("`{arg}` holds {index}, which is not a row of the {len} it indexes")]
+    IndexOutOfBounds { arg: &'static str, index: i64, len: usize },
     /// An obstacle whose vertices enclose no area.
     #[error("obstacle {0} is degenerate: its vertices enclose no area")]
     DegenerateObstacle(usize),

@@ -17,6 +17,8 @@
 use rustc_hash::FxHashMap;
 use std::ops::Range;
 
+use crate::parallel::map_range;
+
 /// Points bucketed by cell; a cell's points are contiguous in `members`, in increasing index.
 #[derive(Debug, Clone)]
 pub struct Grid {
@@ -54,7 +56,7 @@ impl Grid {
     /// `reach` must be finite and > 0 and the coordinates finite (the callers check).
     pub fn new(xs: &[f64], ys: &[f64], reach: f64) -> Self {
         let cell = reach * (1.0 + 1e-9);
-        let keys: Vec<(i64, i64)> = xs.iter().zip(ys).map(|(&x, &y)| cell_of(x, y, cell)).collect();
+        let keys: Vec<(i64, i64)> = map_range(xs.len(), |i| cell_of(xs[i], ys[i], cell));
         let (mut x0, mut y0, mut x1, mut y1) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
         for &(cx, cy) in &keys {
             x0 = x0.min(cx);
@@ -67,10 +69,7 @@ impl Grid {
         let budget = 4 * keys.len() as i64 + 1024;
         let (table, starts, members) =
             if !keys.is_empty() && columns <= budget && rows <= budget && columns * rows <= budget {
-                let slots: Vec<usize> = keys
-                    .iter()
-                    .map(|&(cx, cy)| ((cx - x0) * rows + (cy - y0)) as usize)
-                    .collect();
+                let slots = map_range(keys.len(), |i| ((keys[i].0 - x0) * rows + (keys[i].1 - y0)) as usize);
                 let (starts, members) = bucket(&slots, (columns * rows) as usize);
                 (CellTable::Dense { x0, y0, columns, rows }, starts, members)
             } else if !keys.is_empty() && columns <= budget {
@@ -111,8 +110,8 @@ impl Grid {
                 let (starts, members) = bucket(&slots, index.len());
                 (CellTable::Sparse(index), starts, members)
             };
-        let sorted_xs = members.iter().map(|&j| xs[j]).collect();
-        let sorted_ys = members.iter().map(|&j| ys[j]).collect();
+        let sorted_xs = map_range(members.len(), |k| xs[members[k]]);
+        let sorted_ys = map_range(members.len(), |k| ys[members[k]]);
         Self {
             cell,
             table,

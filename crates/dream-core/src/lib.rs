@@ -8,6 +8,7 @@
 //! Shared types:
 //! - [`geom`]: the 2-D vector and the arena;
 //! - [`csr`]: ragged rows (one per robot) and the checks of ragged inputs;
+//! - [`parallel`]: the one way kernels spread independent work over threads;
 //! - [`error`]: the one error type, [`GeomError`], and the input checks every kernel shares.
 //!
 //! Kernels:
@@ -18,6 +19,7 @@
 //! - [`perceive`]: who the robots deciding now see and hear, in one neighbour query.
 //! - [`reduce`]: sums, means, extremes and nearest entries of ragged rows (a robot's neighbourhood).
 //! - [`hrvo`]: Hybrid Reciprocal Velocity Obstacles, for the whole swarm or on each robot's detections.
+//! - [`guard`]: the motion guard, the last check of each robot's command against the robots it sees.
 //! - [`voronoi`]: disc-bounded Voronoi cells and their centroids.
 //! - [`heard`]: Voronoi cells of robots that know the others by range radio, in one pass.
 //! - [`obstacles`]: virtual agents that keep robots off convex obstacles.
@@ -28,10 +30,12 @@ pub mod dynamics;
 pub mod error;
 pub mod geom;
 pub mod grid;
+pub mod guard;
 pub mod heard;
 pub mod hrvo;
 pub mod neighbours;
 pub mod obstacles;
+pub mod parallel;
 pub mod perceive;
 pub mod raycast;
 pub mod reduce;

@@ -6,13 +6,9 @@
 //! or a maximum (nothing to take them of); NaN entries are skipped by the minimum, the maximum
 //! and the nearest, and carried by the sum and the mean.
 
-use rayon::prelude::*;
-
 use crate::csr::check_offsets;
 use crate::error::{GeomError, Result};
-
-/// Rows from which a reduction runs on every thread (below, the thread pool costs more).
-const PARALLEL_ROWS: usize = 4096;
+use crate::parallel::map_range;
 
 /// What a row's entries become.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -23,23 +19,15 @@ pub enum Reduce {
     Max,
 }
 
-fn rows_of<T: Send>(rows: usize, row: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
-    if rows >= PARALLEL_ROWS {
-        (0..rows)
-            .into_par_iter()
-            .with_min_len(PARALLEL_ROWS / 4)
-            .map(row)
-            .collect()
-    } else {
-        (0..rows).map(row).collect()
-    }
-}
-
 /// `op` of each row's entries, column by column: `(m, width)` row-major.
 ///
+/// Entry e is row e of `values` (`(k, width)` row-major), or with `index`, row `index[e]`: a
+/// neighbourhood's column gathered from a per-robot array (a message field from the board)
+/// without copying it out first.
+///
 /// # Errors
-/// `values` not a whole number of entries of `width`, or an invalid CSR.
-pub fn reduce(values: &[f64], width: usize, offsets: &[i64], op: Reduce) -> Result<Vec<f64>> {
+/// `values` not a whole number of rows of `width`, an index out of bounds, or an invalid CSR.
+pub fn reduce(values: &[f64], width: usize, offsets: &[i64], index: Option<&[i64]>, op: Reduce) -> Result<Vec<f64>> {
     if width == 0 || values.len() % width != 0 {
         return Err(GeomError::LengthMismatch {
             arg: "values",
@@ -47,13 +35,22 @@ pub fn reduce(values: &[f64], width: usize, offsets: &[i64], op: Reduce) -> Resu
             got: values.len(),
         });
     }
-    check_offsets("offsets", offsets, values.len() / width, "entries")?;
+    let rows = values.len() / width;
+    let entries = match index {
+        Some(index) => {
+            check_indices("index", index, rows)?;
+            index.len()
+        }
+        None => rows,
+    };
+    check_offsets("offsets", offsets, entries, "entries")?;
+    let at = |e: usize| index.map_or(e, |index| index[e] as usize);
     let row = |r: usize| {
         let (start, end) = (offsets[r] as usize, offsets[r + 1] as usize);
         let mut out = vec![0.0; width];
         for (c, slot) in out.iter_mut().enumerate() {
             // In entry order from +0.0, as the NumPy reference adds: the same bits on both paths.
-            let column = (start..end).map(|e| values[e * width + c]);
+            let column = (start..end).map(|e| values[at(e) * width + c]);
             *slot = match op {
                 Reduce::Sum => column.fold(0.0, |a, b| a + b),
                 Reduce::Mean if end > start => column.fold(0.0, |a, b| a + b) / (end - start) as f64,
@@ -64,7 +61,19 @@ pub fn reduce(values: &[f64], width: usize, offsets: &[i64], op: Reduce) -> Resu
         }
         out
     };
-    Ok(rows_of(offsets.len() - 1, row).into_iter().flatten().collect())
+    Ok(map_range(offsets.len() - 1, row).into_iter().flatten().collect())
+}
+
+/// Every entry of `index` must name one of `rows` rows.
+fn check_indices(arg: &'static str, index: &[i64], rows: usize) -> Result<()> {
+    match index.iter().find(|&&i| i < 0 || i as usize >= rows) {
+        Some(&i) => Err(GeomError::IndexOutOfBounds {
+            arg,
+            index: i,
+            len: rows,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Whether any entry of each row is set.
@@ -73,7 +82,7 @@ pub fn reduce(values: &[f64], width: usize, offsets: &[i64], op: Reduce) -> Resu
 /// An invalid CSR.
 pub fn any(flags: &[bool], offsets: &[i64]) -> Result<Vec<bool>> {
     check_offsets("offsets", offsets, flags.len(), "flags")?;
-    Ok(rows_of(offsets.len() - 1, |r| {
+    Ok(map_range(offsets.len() - 1, |r| {
         flags[offsets[r] as usize..offsets[r + 1] as usize].iter().any(|&f| f)
     }))
 }
@@ -85,7 +94,7 @@ pub fn any(flags: &[bool], offsets: &[i64]) -> Result<Vec<bool>> {
 /// An invalid CSR.
 pub fn nearest(keys: &[f64], offsets: &[i64]) -> Result<Vec<i64>> {
     check_offsets("offsets", offsets, keys.len(), "keys")?;
-    Ok(rows_of(offsets.len() - 1, |r| {
+    Ok(map_range(offsets.len() - 1, |r| {
         let (start, end) = (offsets[r] as usize, offsets[r + 1] as usize);
         let mut best = -1i64;
         let mut least = f64::INFINITY;
@@ -107,11 +116,11 @@ mod tests {
     fn empty_rows_and_nan() {
         let values = [1.0, 2.0, f64::NAN, 4.0];
         let offsets = [0, 0, 3, 4];
-        let sums = reduce(&values, 1, &offsets, Reduce::Sum).unwrap();
+        let sums = reduce(&values, 1, &offsets, None, Reduce::Sum).unwrap();
         assert_eq!(sums[0], 0.0);
         assert!(sums[1].is_nan());
         assert_eq!(sums[2], 4.0);
-        let mins = reduce(&values, 1, &offsets, Reduce::Min).unwrap();
+        let mins = reduce(&values, 1, &offsets, None, Reduce::Min).unwrap();
         assert!(mins[0].is_nan());
         assert_eq!(mins[1], 1.0);
         assert_eq!(nearest(&values, &offsets).unwrap(), vec![-1, 0, 3]);
@@ -122,9 +131,18 @@ mod tests {
     }
 
     #[test]
+    fn an_index_gathers_rows() {
+        let values = [10.0, 20.0, 30.0];
+        let sums = reduce(&values, 1, &[0, 2, 3], Some(&[2, 2, 0]), Reduce::Sum).unwrap();
+        assert_eq!(sums, vec![60.0, 10.0]);
+        assert!(reduce(&values, 1, &[0, 1], Some(&[3]), Reduce::Sum).is_err());
+        assert!(reduce(&values, 1, &[0, 1], Some(&[-1]), Reduce::Sum).is_err());
+    }
+
+    #[test]
     fn bad_offsets_are_named() {
-        assert!(reduce(&[1.0], 1, &[0, 2], Reduce::Sum).is_err());
-        assert!(reduce(&[1.0, 2.0], 1, &[0, 2, 1, 2], Reduce::Sum).is_err());
-        assert!(reduce(&[1.0, 2.0, 3.0], 2, &[0, 1], Reduce::Sum).is_err());
+        assert!(reduce(&[1.0], 1, &[0, 2], None, Reduce::Sum).is_err());
+        assert!(reduce(&[1.0, 2.0], 1, &[0, 2, 1, 2], None, Reduce::Sum).is_err());
+        assert!(reduce(&[1.0, 2.0, 3.0], 2, &[0, 1], None, Reduce::Sum).is_err());
     }
 }

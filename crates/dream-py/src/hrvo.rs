@@ -5,9 +5,10 @@ use dream_core::geom::Vec2;
 use dream_core::hrvo::{self as core, HrvoParams, Neighbour};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
+use pyo3::types::PyTuple;
 
 use crate::arrays::{both, indices_of, points_of, vector_of};
-use crate::errors::PyDreamResult;
+use crate::errors::{value_error, PyDreamResult};
 
 fn params(
     safety: f64,
@@ -87,12 +88,33 @@ pub fn hrvo_rows<'py>(
     let pref = points_of::<2>("preferred", &preferred)?;
     let p = points_of::<2>("positions", &positions)?;
     let offsets = indices_of("offsets", &offsets)?;
-    let seen = points_of::<4>("detections", &detections)?;
+    let seen = detections_of(&detections)?;
     let grid = points_of::<2>("candidates", &candidates)?;
     let params = params(safety, v_max, bounds, include_preferred)?;
     let chosen = py.detach(|| core::hrvo_rows(&v, &pref, &p, &offsets, &seen, &grid, &params))?;
     let m = chosen.len();
     Ok(chosen.into_flattened().into_pyarray(py).reshape([m, 2])?)
+}
+
+/// Detections `(k, 4)`, or their four columns `(k,)` each (distance, angle, vx, vy): a movement
+/// sensor's columns go in without being stacked first.
+fn detections_of(object: &Bound<'_, PyAny>) -> PyDreamResult<Vec<[f64; 4]>> {
+    let Ok(columns) = object.cast::<PyTuple>() else {
+        return points_of::<4>("detections", object);
+    };
+    if columns.len() != 4 {
+        return Err(value_error(format!(
+            "`detections` columns must be (distance, angle, vx, vy), got {} columns",
+            columns.len()
+        )));
+    }
+    let distance = vector_of("detections", &columns.get_item(0)?, None)?;
+    let rest: Vec<Vec<f64>> = (1..4)
+        .map(|c| vector_of("detections", &columns.get_item(c)?, Some(distance.len())))
+        .collect::<PyDreamResult<_>>()?;
+    Ok((0..distance.len())
+        .map(|e| [distance[e], rest[0][e], rest[1][e], rest[2][e]])
+        .collect())
 }
 
 /// A robot's HRVO planner: parameters and candidate grid, fixed; one call per decision.

@@ -4,6 +4,7 @@
 mod arrays;
 mod dynamics;
 mod errors;
+mod guard;
 mod heard;
 mod hrvo;
 mod neighbours;
@@ -40,5 +41,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(reduce::segment_reduce, m)?)?;
     m.add_function(wrap_pyfunction!(reduce::segment_any, m)?)?;
     m.add_function(wrap_pyfunction!(reduce::segment_nearest, m)?)?;
+    m.add_function(wrap_pyfunction!(guard::motion_guard, m)?)?;
     Ok(())
 }

@@ -7,13 +7,16 @@ use pyo3::prelude::*;
 use crate::arrays::{flags_of, indices_of, matrix_of, vector_of};
 use crate::errors::{value_error, PyDreamResult};
 
-/// `op` ("sum", "mean", "min" or "max") of each row's entries of `values` `(k, w)`: `(m, w)`.
+/// `op` ("sum", "mean", "min" or "max") of each row's entries of `values` `(k, w)`: `(m, w)`;
+/// with `index` `(e,)`, entry e is row `index[e]` of `values`.
 #[pyfunction]
+#[pyo3(signature = (values, offsets, op, index=None))]
 pub fn segment_reduce<'py>(
     py: Python<'py>,
     values: Bound<'py, PyAny>,
     offsets: Bound<'py, PyAny>,
     op: &str,
+    index: Option<Bound<'py, PyAny>>,
 ) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
     let op = match op {
         "sum" => Reduce::Sum,
@@ -29,7 +32,8 @@ pub fn segment_reduce<'py>(
             "`values` must have at least one column, got shape (k, 0)".into(),
         ));
     }
-    let out = py.detach(|| core::reduce(&values, width, &offsets, op))?;
+    let index = index.map(|index| indices_of("index", &index)).transpose()?;
+    let out = py.detach(|| core::reduce(&values, width, &offsets, index.as_deref(), op))?;
     let rows = offsets.len().saturating_sub(1);
     Ok(out.into_pyarray(py).reshape([rows, width])?)
 }

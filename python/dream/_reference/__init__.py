@@ -16,6 +16,7 @@ from dream._reference.dynamics import (
     validate,
     wheel_speeds,
 )
+from dream._reference.guard import motion_guard
 from dream._reference.hrvo import (
     HrvoPlanner,
     candidate_grid,
@@ -33,6 +34,7 @@ from dream._reference.voronoi import heard_cells, voronoi_cell, voronoi_cells
 
 __all__ = [
     "perceive",
+    "motion_guard",
     "segment_any",
     "segment_nearest",
     "segment_reduce",

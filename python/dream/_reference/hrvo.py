@@ -204,7 +204,7 @@ def hrvo_rows(
     preferred: FloatArray,
     positions: FloatArray,
     offsets: np.ndarray,
-    detections: FloatArray,
+    detections: FloatArray | tuple[FloatArray, ...],
     *,
     safety: float,
     v_max: float,
@@ -213,7 +213,10 @@ def hrvo_rows(
     include_preferred: bool,
 ) -> FloatArray:
     """HRVO velocities ``(m, 2)`` of the deciding robots, row r from its own detections
-    ``detections[offsets[r]:offsets[r + 1]]`` ``(k, 4)`` (:meth:`HrvoPlanner.velocity`'s answer)."""
+    ``detections[offsets[r]:offsets[r + 1]]`` ``(k, 4)``, or its four columns (:meth:`HrvoPlanner.velocity`'s
+    answer)."""
+    if isinstance(detections, tuple):
+        detections = np.column_stack(detections)
     planner = HrvoPlanner(candidates, safety=safety, v_max=v_max, bounds=bounds, include_preferred=include_preferred)
     out = np.zeros((len(positions), 2))
     for r in range(len(positions)):

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from dream._checks import FloatArray
+from dream._checks import FloatArray, check_rows
 
 
 def _in_order(column: FloatArray) -> float:
@@ -29,10 +29,14 @@ _OPS: dict[str, Callable[..., Any]] = {
 }
 
 
-def segment_reduce(values: FloatArray, offsets: np.ndarray, op: str) -> FloatArray:
-    """``op`` ("sum", "mean", "min", "max") of each row's entries of ``values`` ``(k, w)``: ``(m, w)``."""
+def segment_reduce(values: FloatArray, offsets: np.ndarray, op: str, index: np.ndarray | None = None) -> FloatArray:
+    """``op`` ("sum", "mean", "min", "max") of each row's entries of ``values`` ``(k, w)``: ``(m, w)``;
+    with ``index`` ``(e,)``, entry e is ``values[index[e]]``."""
     if op not in _OPS:
         raise ValueError(f"`op` must be sum, mean, min or max, got {op!r}")
+    if index is not None:
+        check_rows(index, "index", len(values))
+        values = values[index]
     rows, width = len(offsets) - 1, values.shape[1]
     out = np.full((rows, width), 0.0 if op == "sum" else np.nan)
     for r in range(rows):

@@ -26,6 +26,7 @@ from dream.kernels._dynamics import (
     validate,
     wheel_speeds,
 )
+from dream.kernels._guard import motion_guard
 from dream.kernels._hrvo import HrvoPlanner, hrvo, hrvo_rows
 from dream.kernels._neighbours import far_from, neighbours, neighbours_of, perceive
 from dream.kernels._obstacles import obstacle_agents, virtual_agents
@@ -64,4 +65,5 @@ __all__ = [
     "segment_reduce",
     "segment_any",
     "segment_nearest",
+    "motion_guard",
 ]

@@ -214,7 +214,8 @@ def hrvo_rows(
     """HRVO velocities ``(m, 2)`` of the robots deciding now, each from its own detections.
 
     Row r's detections are ``detections[offsets[r]:offsets[r + 1]]``, movement-sensor rows
-    ``[distance, angle, vx, vy]`` (angle from the detected robot towards this one); row r's
+    ``[distance, angle, vx, vy]`` (angle from the detected robot towards this one), or a tuple
+    of those four columns (a neighbourhood's, unstacked); row r's
     answer is :meth:`HrvoPlanner.velocity`'s for them, with ``velocities``, ``preferred`` and
     ``positions`` ``(m, 2)``: the robots' previous, wanted velocities and believed positions.
     A robot decides from what it perceives, never from the others' true poses (see :func:`hrvo`).
@@ -223,10 +224,17 @@ def hrvo_rows(
     m = pos.shape[0]
     v = as_array(velocities, "velocities", (m, 2))
     pref = _bounded(as_array(preferred, "preferred", (m, 2)))
-    seen = as_array(detections, "detections", (None, 4))
-    if len(seen) and seen[:, 0].min() < 0:
-        raise ValueError(f"`detection distance` must be finite and >= 0, got {seen[:, 0].min()}")
-    cuts = as_offsets(offsets, "offsets", len(seen), m)
+    if isinstance(detections, tuple):
+        if len(detections) != 4:
+            raise ValueError(f"`detections` columns must be (distance, angle, vx, vy), got {len(detections)} columns")
+        distance = as_array(detections[0], "detections", (None,))
+        seen: Any = (distance, *(as_array(column, "detections", (len(distance),)) for column in detections[1:]))
+    else:
+        seen = as_array(detections, "detections", (None, 4))
+        distance = seen[:, 0]
+    if len(distance) and distance.min() < 0:
+        raise ValueError(f"`detection distance` must be finite and >= 0, got {distance.min()}")
+    cuts = as_offsets(offsets, "offsets", len(distance), m)
     return implementation("hrvo_rows")(
         v,
         pref,

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from dream._checks import FloatArray, as_offsets
+from dream._checks import FloatArray, as_index, as_offsets
 from dream.kernels._dispatch import implementation
 
 REDUCTIONS = ("sum", "mean", "min", "max")
@@ -19,21 +19,28 @@ def _values(values: Any, name: str) -> FloatArray:
     return array
 
 
-def segment_reduce(values: Any, offsets: Any, op: str) -> FloatArray:
+def segment_reduce(values: Any, offsets: Any, op: str, index: Any = None) -> FloatArray:
     """``op`` of each row's entries: ``(m,)`` for values ``(k,)``, ``(m, w)`` for ``(k, w)``.
 
     ``op`` is one of "sum", "mean", "min", "max". Row r holds the entries
     ``offsets[r]:offsets[r + 1]``. Empty rows give 0 for a sum, NaN for the others; the minimum
     and maximum skip NaN entries, the sum and the mean carry them. Sums add in entry order, on
     both paths alike.
+
+    With ``index`` ``(e,)`` int, entry e is ``values[index[e]]``: a per-robot array (a message
+    field, say) reduced over each row's robots without gathering it first.
     """
     if op not in REDUCTIONS:
         raise ValueError(f"`op` must be one of {', '.join(REDUCTIONS)}, got {op!r}")
     array = _values(values, "values")
     if array.ndim == 2 and array.shape[1] == 0:
         raise ValueError(f"`values` must have at least one column, got shape {array.shape}")
-    cuts = as_offsets(offsets, "offsets", len(array))
-    out = implementation("segment_reduce")(array.reshape(-1, 1) if array.ndim == 1 else array, cuts, op)
+    rows = array.reshape(-1, 1) if array.ndim == 1 else array
+    if index is None:
+        out = implementation("segment_reduce")(rows, as_offsets(offsets, "offsets", len(array)), op)
+    else:
+        at = as_index(index, "index")  # its bounds: checked by the kernel, in one pass
+        out = implementation("segment_reduce")(rows, as_offsets(offsets, "offsets", len(at)), op, at)
     return out[:, 0] if array.ndim == 1 else out
 
 

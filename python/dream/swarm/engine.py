@@ -31,7 +31,7 @@ from dream import kernels, rules
 from dream._csr import spans
 from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
 from dream.kernels._neighbours import Heard, Perceived
-from dream.robot import guard_distance, stopping
+from dream.robot import GUARD_HORIZON, guard_distance
 from dream.sensors import seen_velocity
 from dream.specs import ArenaSpec, SimulatorSpec
 from dream.swarm import draws
@@ -206,8 +206,12 @@ class Engine:
             if avoid.sidestep:
                 asked, self.sidestep[rows] = rules.sidestep_preference(wished, self.sidestep[rows], self.side[rows])
             bearing = seen["bearing"]
-            detections = np.column_stack(
-                (seen["distance"], np.where(bearing > 0, bearing - math.pi, bearing + math.pi), seen["vx"], seen["vy"])
+            # The sensor's bearing is towards the other robot; HRVO takes the angle from it.
+            detections = (
+                seen["distance"],
+                np.where(bearing > 0, bearing - math.pi, bearing + math.pi),
+                seen["vx"],
+                seen["vy"],
             )
             margin = robot.spec.radius if avoid.margin is None else avoid.margin
             chosen = kernels.hrvo_rows(
@@ -231,8 +235,10 @@ class Engine:
         out = kernels.actuator_limit(kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain), self.limits)
         if avoid is not None and avoid.guard:
             near = guard_distance(robot.spec.diameter, avoid.safety)
-            offsets = -np.column_stack((seen["dx"], seen["dy"]))
-            out[0, stopping(out[0], pose[:, 2], seen.owner, offsets, near)] = 0.0
+            stop = kernels.motion_guard(
+                out[0], pose[:, 2], seen.offsets, seen["dx"], seen["dy"], near=near, horizon=GUARD_HORIZON
+            )
+            out[0, stop] = 0.0
         return out
 
     # -- time --------------------------------------------------------------------------------
@@ -302,9 +308,7 @@ class Engine:
         radio = self.robot.radio
         if radio is None:
             return Neighbourhood(offsets, {"sender": senders})
-        inbox = Neighbourhood(
-            offsets, {"sender": senders, **{key: board[senders] for key, board in self.board.items()}}
-        )
+        inbox = Neighbourhood(offsets, {"sender": senders}, (senders, self.board))
         f = None if faults is None else faults.faults
         keep: float | np.ndarray = 1.0 - radio.loss
         if f is not None:

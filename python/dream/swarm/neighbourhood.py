@@ -30,11 +30,23 @@ class Neighbourhood:
         Row r's entries are ``offsets[r]:offsets[r + 1]``.
     columns : mapping of name to (e,) array
         One value per entry.
+    gathered : (index, sources), optional
+        More columns, read from per-robot arrays ``sources`` (name to ``(n,)``) at the robots
+        ``index`` ``(e,)``: a message field on the board, say. They are copied out only when
+        read whole; reductions read them in place.
     """
 
-    def __init__(self, offsets: np.ndarray, columns: Mapping[str, np.ndarray]) -> None:
+    def __init__(
+        self,
+        offsets: np.ndarray,
+        columns: Mapping[str, np.ndarray],
+        gathered: tuple[np.ndarray, Mapping[str, np.ndarray]] | None = None,
+    ) -> None:
         self.offsets = offsets
         self.columns = dict(columns)
+        self.index: np.ndarray | None = None if gathered is None else gathered[0]
+        self.sources: Mapping[str, np.ndarray] = {} if gathered is None else gathered[1]
+        self.read_only = False
 
     def __len__(self) -> int:
         """The number of rows (robots deciding now)."""
@@ -43,11 +55,20 @@ class Neighbourhood:
     def __getitem__(self, name: str) -> np.ndarray:
         """Column ``name``, one value per entry."""
         if name not in self.columns:
-            raise KeyError(f"no column {name!r} in this neighbourhood (its columns: {', '.join(self.columns)})")
+            if name not in self.sources:
+                raise KeyError(f"no column {name!r} in this neighbourhood (its columns: {', '.join(self.names)})")
+            column = self.sources[name][self.index]
+            column.flags.writeable = not self.read_only
+            self.columns[name] = column
         return self.columns[name]
 
+    @property
+    def names(self) -> list[str]:
+        """The names of the columns."""
+        return [*self.columns, *(name for name in self.sources if name not in self.columns)]
+
     def __repr__(self) -> str:
-        return f"Neighbourhood({len(self)} rows, {self.offsets[-1]} entries, columns {list(self.columns)})"
+        return f"Neighbourhood({len(self)} rows, {self.offsets[-1]} entries, columns {self.names})"
 
     @property
     def count(self) -> np.ndarray:
@@ -69,6 +90,8 @@ class Neighbourhood:
     def _reduce(self, what: str | Sequence[str] | np.ndarray, op: str) -> FloatArray:
         if not isinstance(what, (str, np.ndarray)):  # column by column: no (e, w) copy of them
             return np.column_stack([self._reduce(name, op) for name in what]).reshape(len(self), len(what))
+        if isinstance(what, str) and what not in self.columns and what in self.sources:
+            return kernels.segment_reduce(self.sources[what], self.offsets, op, self.index)
         values = self._values(what)
         if len(values) != self.offsets[-1]:
             raise ValueError(f"values of shape {values.shape} for a neighbourhood of {self.offsets[-1]} entries")
@@ -114,10 +137,12 @@ class Neighbourhood:
         if keep.shape != (self.offsets[-1],):
             raise ValueError(f"`keep` must have shape ({self.offsets[-1]},), one flag per entry, got {keep.shape}")
         kept = np.concatenate(([0], np.cumsum(keep)))[self.offsets]
-        return Neighbourhood(kept, {name: column[keep] for name, column in self.columns.items()})
+        columns = {name: column[keep] for name, column in self.columns.items()}
+        return Neighbourhood(kept, columns, None if self.index is None else (self.index[keep], self.sources))
 
     def frozen(self) -> Neighbourhood:
         """This neighbourhood with read-only arrays (what a decision gets: it reads, never writes)."""
-        for array in (self.offsets, *self.columns.values()):
+        for array in (self.offsets, *self.columns.values(), *([] if self.index is None else [self.index])):
             array.flags.writeable = False
+        self.read_only = True
         return self
