@@ -99,7 +99,7 @@ class Layout:
         out[:, self.slices["seen"]] = found.reshape(m, -1)
         out[:, self.slices["seen_mask"]] = mask
         heard = view.heard
-        if "x" in heard.columns:
+        if "x" in heard.names:
             here = pose[heard.owner, :2]
             offsets = np.column_stack((heard["x"], heard["y"])) - here
             found, mask = padded(heard, offsets, np.hypot(offsets[:, 0], offsets[:, 1]), k)
