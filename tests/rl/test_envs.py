@@ -23,6 +23,7 @@ def test_parallel_env_passes_pettingzoos_api_test(experiment):
     parallel_api_test(parallel_env(experiment, n=10), num_cycles=200)
 
 
+@pytest.mark.filterwarnings("ignore:.*Box observation space m..imum value is .*infinity")
 def test_team_env_passes_gymnasiums_checker():
     check_env(team_env("hrvo-circle", n=5, max_steps=40), skip_render_check=True)
 
