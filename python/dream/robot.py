@@ -136,8 +136,9 @@ class Robot:
 
         ``v`` and ``w`` are clipped to ``v_max`` and ``w_max``; if the faster wheel would then
         exceed ``ac_max`` (``|v|/r + |w| L/(2r) > ac_max``), ``|v|`` becomes
-        ``ac_max r - |w| L/2``, keeping its sign. In a world with a simulator the limits are
-        also those the simulator checks (:meth:`dream.specs.RobotSpec.within`).
+        ``ac_max r - |w| L/2``, keeping its sign. In a world given its simulator's limits
+        (:meth:`dream.World.keep_to`) the limits are also those the simulator checks
+        (:meth:`dream.specs.RobotSpec.within`).
         """
         limits = self.limits
         v = max(-limits.v_max, min(limits.v_max, float(self.dxu[0])))
@@ -152,12 +153,13 @@ class Robot:
     @property
     def limits(self) -> RobotSpec:
         """The limits :meth:`actuator_limit` keeps to: the robot's own (``v_max``, ``w_max``,
-        ``ac_max``, ``r_wheel``, ``r_length``), tightened to its world's simulator's."""
-        simulator = self.world.simulator
-        key = (self.v_max, self.w_max, self.ac_max, self.r_wheel, self.r_length, simulator and simulator.spec)
+        ``ac_max``, ``r_wheel``, ``r_length``), tightened to the simulator's limits its world was
+        given (:meth:`dream.World.keep_to`)."""
+        limits = self.world.limits
+        key = (self.v_max, self.w_max, self.ac_max, self.r_wheel, self.r_length, limits)
         if self._limits is None or self._limits[0] != key:
             own = RobotSpec(*key[:5], diameter=self.spec.diameter)
-            self._limits = (key, own if simulator is None else own.within(simulator.spec))
+            self._limits = (key, own if limits is None else own.within(limits))
         return self._limits[1]
 
 
@@ -296,12 +298,11 @@ class RobotHRVO(Robot):
 
     @property
     def arena(self) -> ArenaSpec:
-        """The arena the robot keeps to: the one given, else its simulator's (the Robotarium's
-        until a simulator exists in the robot's world)."""
+        """The arena the robot keeps to: the one given, else its simulator's as its world was given
+        it (:meth:`dream.World.keep_to`; the Robotarium's until then)."""
         if self._arena is not None:
             return self._arena
-        simulator = self.world.simulator
-        return ROBOTARIUM if simulator is None else simulator.arena
+        return ROBOTARIUM if self.world.arena is None else self.world.arena
 
     @arena.setter
     def arena(self, arena: ArenaSpec) -> None:

@@ -80,6 +80,66 @@ def moves_on(state: Any, everyone_level: Any, unreached: Any, n_goals: int) -> n
     return np.asarray(everyone_level, dtype=bool) & (state < n_goals) & ~np.asarray(unreached, dtype=bool)
 
 
+def arc_merge(
+    n: int, state: Any, left: Any, right: Any, released: Any, rows: Any, offsets: Any, heard: Any
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One radio round of the arrival barrier: robots merge the arcs of ids they know to have
+    arrived, and the highest level known to be complete.
+
+    Robot ``i`` of ``n`` (ids around a ring, cyclic) at level ``state`` (goals reached) knows
+    that robots ``i - left, ..., i + right`` (mod ``n``) have reached at least ``state`` goals,
+    and that every robot has reached at least ``released`` goals. A message from robot ``j``
+    at level ``state_j >= state`` whose arc overlaps or touches robot i's extends it (trying
+    ``j``'s arc shifted by ``-n, 0, n`` about the ring); any message raises ``released`` to
+    the sender's. Each message is compared with the arc the robot had before the round, so the
+    order of messages does not matter. Facts only ever become true (levels never fall), so a
+    stale, late or repeated message never makes an arc claim too much.
+
+    Parameters
+    ----------
+    n : int
+        Robots around the ring.
+    state, left, right, released : (m,) or () int array_like
+        The ``m`` receiving robots' levels, arcs and released levels.
+    rows : (k,) int array_like
+        Each message's receiving robot (index into the ``m``).
+    offsets : (k,) int array_like
+        The sender's id less the receiver's, mod ``n``.
+    heard : (k, 4) int array_like
+        Each message's ``[state, left, right, released]``.
+
+    Returns
+    -------
+    left, right, released : (m,) or () int64 ndarray
+        After the round; an arc covering every robot is capped at ``n - 1`` on either side.
+        Complete arcs release their level in :func:`arc_release`.
+    """
+    state, left, right, released = (np.asarray(v, dtype=np.int64) for v in (state, left, right, released))
+    rows = np.asarray(rows, dtype=np.intp)
+    heard = np.asarray(heard, dtype=np.int64).reshape(-1, 4)
+    offsets = np.asarray(offsets, dtype=np.int64)
+    own_left, own_right = left.reshape(-1)[rows], right.reshape(-1)[rows]
+    useful = heard[:, 0] >= state.reshape(-1)[rows]  # the sender's arc holds at its level, so at any lower one
+    new_left, new_right = own_left.copy(), own_right.copy()
+    for shift in (-n, 0, n):
+        low, high = offsets + shift - heard[:, 1], offsets + shift + heard[:, 2]
+        touch = useful & (low <= own_right + 1) & (high >= -own_left - 1)
+        new_left = np.where(touch, np.maximum(new_left, -low), new_left)
+        new_right = np.where(touch, np.maximum(new_right, high), new_right)
+    out = [left.reshape(-1).copy(), right.reshape(-1).copy(), released.reshape(-1).copy()]
+    for total, values in zip(out, (new_left, new_right, heard[:, 3])):
+        np.maximum.at(total, rows, values)
+    shape = state.shape
+    return np.minimum(out[0], n - 1).reshape(shape), np.minimum(out[1], n - 1).reshape(shape), out[2].reshape(shape)
+
+
+def arc_release(n: int, state: Any, left: Any, right: Any, released: Any) -> np.ndarray:
+    """The released level ``(m,)`` or ``()``: a robot whose arc (:func:`arc_merge`) covers all
+    ``n`` robots knows that every robot has reached its level, and releases it."""
+    full = np.asarray(left) + np.asarray(right) + 1 >= n
+    return np.maximum(np.asarray(released, dtype=np.int64), np.where(full, np.asarray(state, dtype=np.int64), -1))
+
+
 def roundabout_aim(positions: Any, goals: Any, semi_axes: tuple[float, float], island: float) -> FloatArray:
     """The point a robot aims at so that every robot turns the same way around the centre.
 

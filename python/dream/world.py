@@ -32,8 +32,8 @@ from dream.obstacles import sensed
 from dream.timers import Timer
 
 if TYPE_CHECKING:
-    from dream.backends import Backend
     from dream.obstacles import Obstacle
+    from dream.specs import ArenaSpec, SimulatorSpec
 
 
 class World:
@@ -51,7 +51,10 @@ class World:
         self.fault_state: FaultState | None = None  #: the run's faults as drawn (see :meth:`inject`)
         self.time: float = 0  #: the ``current_time`` of the last ``update_timers`` call
         self.timers: list[Timer] = []
-        self.simulator: Backend | None = None  #: the simulator made last in this world
+        #: The arena robots without one of their own keep to, and the limits they tighten theirs to:
+        #: the simulator's, given by whoever runs it (:meth:`keep_to`); ``None`` before that.
+        self.arena: ArenaSpec | None = None
+        self.limits: SimulatorSpec | None = None
         self._board: dict[int, Any] = {}
         self._mutable: set[int] = set()  # senders whose message on the board each reader must copy
         self._in_flight: list[tuple[float, int, Any]] = []  # (visible at, sender, data)
@@ -65,6 +68,11 @@ class World:
         self._checked = np.zeros((3, 0))
         self._commands_input: Any = None  # the last command array checked as is, at `_commands_time`
         self._commands_time: float = -1
+
+    def keep_to(self, arena: ArenaSpec, limits: SimulatorSpec) -> None:
+        """Make the robots of this world keep to ``arena`` (those without one of their own) and to
+        ``limits``: the simulator's, which the runner (or :func:`dream.make_robotarium`) gives."""
+        self.arena, self.limits = arena, limits
 
     # -- poses -----------------------------------------------------------------------------
     def checked_poses(self, x: Any) -> np.ndarray:

@@ -96,14 +96,16 @@ def test_hrvo_circle_full_ring_on_rps_does_not_collide():
 def test_hrvo_circle_robot_moves_on_when_a_robot_is_already_ahead():
     # A robot taken for crashed while out of radio reach lets the others go ahead; the robots it
     # left behind must not wait for states equal to theirs (N = 100 seeds 3, 5, 7-9 waited for good).
+    # Messages: (id, state, left, right, released, heartbeats).
+    beats = np.array([0, 1, 1])
     robot = hrvo_circle.CircleRobot(0, "robot_0", np.zeros((3, 2)), 3)
     robot.state, robot.change_state = 2, False  # it reached its second goal
-    robot.update_radio([(np.array([2, 3, 2]), np.array([0, 1, 1]))])  # robot 1 reached its third
-    assert robot.change_state  # heads for its third goal
+    robot.update_radio([(1, 3, 0, 0, 2, beats), (2, 2, 0, 0, 1, beats)])  # robot 1 reached its third
+    assert robot.change_state and robot.released == 2  # heads for its third goal
     robot = hrvo_circle.CircleRobot(0, "robot_0", np.zeros((3, 2)), 3)
     robot.state, robot.change_state = 2, False
-    robot.update_radio([(np.array([2, 1, 2]), np.array([0, 1, 1]))])  # robot 1 is behind
-    assert not robot.change_state
+    robot.update_radio([(1, 1, 0, 0, 1, beats), (2, 2, 0, 0, 1, beats)])  # robot 1 is behind
+    assert not robot.change_state and (robot.left, robot.right) == (1, 0)  # it knows robots 2 and 0
 
 
 def _stalled_robot(position, detections):
@@ -158,7 +160,7 @@ def test_circle_robot_counts_stalls_only_while_it_travels_to_one_goal():
     robot.squeeze(np.array([a + 0.2, 0.0]))
     assert robot.stalled == 0 and robot.safety == robot.ring_safety  # nobody near: the ring's radius
     robot.stalled, robot.closest = 7, 1.0
-    robot.robot_states[:] = 1
+    robot.released = 1
     robot.update_radio([])  # every robot has reached its first goal: on to the next, counting over
     assert robot.change_state and (robot.stalled, robot.closest) == (0, np.inf)
 

@@ -12,7 +12,7 @@ from dream.cli import _parser, main
 from dream.experiments import EXPERIMENTS, Experiment, run
 from dream.frames import Frame, fault_status
 from dream.specs import ROBOTARIUM, ArenaSpec
-from dream.viz import Recorder, Renderer, VideoWriter, robot_colours
+from dream.viz import Recorder, Renderer, VideoWriter, robot_colours, video
 
 R = viz.ROBOT_DIAMETER / 2
 
@@ -250,7 +250,7 @@ def window(monkeypatch):
     import matplotlib.pyplot as plt
 
     plt.switch_backend("Agg")
-    monkeypatch.setattr(viz, "_interactive", lambda canvas: True)
+    monkeypatch.setattr("dream.viz.recorder._interactive", lambda canvas: True)
     calls: list[str] = []
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
@@ -399,7 +399,7 @@ def test_a_signal_during_a_frame_write_waits_until_the_frame_is_written():
     import signal
 
     steps = []
-    with pytest.raises(KeyboardInterrupt), viz._signals_deferred():
+    with pytest.raises(KeyboardInterrupt), video._signals_deferred():
         os.kill(os.getpid(), signal.SIGINT)
         steps.append("after the signal")  # the block goes on
     assert steps == ["after the signal"]

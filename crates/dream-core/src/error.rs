@@ -1,4 +1,6 @@
-//! The one error type of the core: every kernel validates its input and reports what is wrong.
+//! The one error type of the core: every kernel validates its input and reports what is wrong,
+//! and the buffers whose size follows from the input (neighbour pairs, say) are allocated
+//! fallibly, so that a query too large for the memory fails instead of aborting.
 
 /// Invalid input to a kernel. The message names the argument and what was expected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -40,6 +42,9 @@ pub enum GeomError {
     /// An arena whose minimum is not below its maximum.
     #[error("arena bounds must satisfy xmin < xmax and ymin < ymax, got ({xmin}, {xmax}, {ymin}, {ymax})")]
     InvalidBounds { xmin: f64, xmax: f64, ymin: f64, ymax: f64 },
+    /// A buffer the input calls for could not be allocated.
+    #[error("out of memory: {what} needed {bytes} more bytes")]
+    OutOfMemory { what: &'static str, bytes: usize },
 }
 
 /// Result of a core kernel.
@@ -73,4 +78,21 @@ pub fn check_positive(arg: &'static str, value: f64) -> Result<()> {
             got: value,
         })
     }
+}
+
+/// Makes room in `buffer` for `additional` more items, failing with [`GeomError::OutOfMemory`]
+/// (naming `what`) where the allocation fails instead of aborting.
+pub fn try_room<T>(buffer: &mut Vec<T>, additional: usize, what: &'static str) -> Result<()> {
+    buffer.try_reserve(additional).map_err(|_| GeomError::OutOfMemory {
+        what,
+        bytes: additional.saturating_mul(std::mem::size_of::<T>()),
+    })
+}
+
+/// `len` copies of `value`, or [`GeomError::OutOfMemory`] (naming `what`).
+pub fn try_filled<T: Clone>(len: usize, value: T, what: &'static str) -> Result<Vec<T>> {
+    let mut buffer = Vec::new();
+    try_room(&mut buffer, len, what)?;
+    buffer.resize(len, value);
+    Ok(buffer)
 }

@@ -11,7 +11,7 @@ use std::f64::consts::{PI, TAU};
 use rayon::prelude::*;
 
 use crate::csr::{check_offsets, Csr};
-use crate::error::{check_finite, check_len, GeomError, Result};
+use crate::error::{check_finite, check_len, try_filled, try_room, GeomError, Result};
 use crate::grid::Grid;
 
 /// Rows below this count run on one thread: spawning costs more than it saves.
@@ -27,7 +27,7 @@ pub struct FieldOfView<'a> {
 
 impl Csr {
     /// Puts the blocks' rows in robot order.
-    fn from_blocks(blocks: Vec<Block>, n: usize) -> Self {
+    fn from_blocks(blocks: Vec<Block>, n: usize) -> Result<Self> {
         // Where each robot's row is: (block, start, length); robots not asked have none.
         let mut rows = vec![(0_usize, 0_usize, 0_usize); n];
         for (b, block) in blocks.iter().enumerate() {
@@ -43,7 +43,8 @@ impl Csr {
             indptr.push(indptr[indptr.len() - 1] + length as i64);
         }
         let total = indptr[n] as usize;
-        let (mut indices, mut distances) = (vec![0_i64; total], vec![0.0; total]);
+        let indices = try_filled(total, 0_i64, "neighbour indices");
+        let (mut indices, mut distances) = (indices?, try_filled(total, 0.0, "neighbour distances")?);
         // Robots in runs of GATHER_ROWS, each run's rows copied into its own part of the output:
         // on all cores for a large swarm, where the copy is a sixth of the query.
         let mut parts = Vec::with_capacity(n / GATHER_ROWS + 1);
@@ -72,11 +73,11 @@ impl Csr {
         } else {
             parts.into_iter().for_each(copy);
         }
-        Csr {
+        Ok(Csr {
             indptr,
             indices,
             distances,
-        }
+        })
     }
 }
 
@@ -169,11 +170,14 @@ pub fn within(
             }
         }
         chunks.push(first..cells.len());
-        chunks.into_par_iter().map(|range| query.block(&cells[range])).collect()
+        chunks
+            .into_par_iter()
+            .map(|range| query.block(&cells[range]))
+            .collect::<Result<_>>()?
     } else {
-        vec![query.block(&cells)]
+        vec![query.block(&cells)?]
     };
-    Ok(Csr::from_blocks(blocks, n))
+    Csr::from_blocks(blocks, n)
 }
 
 /// The range part of a neighbour query: a grid of the robots and the radius, shared by the
@@ -416,7 +420,9 @@ impl Query<'_> {
             .filter(move |&i| rows.is_none_or(|rows| rows[i]))
     }
 
-    fn block(&self, cells: &[&[usize]]) -> Block {
+    /// # Errors
+    /// [`GeomError::OutOfMemory`] when the rows do not fit.
+    fn block(&self, cells: &[&[usize]]) -> Result<Block> {
         let mut out = Block::default();
         let mut near = Candidates::default();
         for members in cells {
@@ -430,13 +436,13 @@ impl Query<'_> {
             near.xs.extend(near.indices.iter().map(|&j| self.xs[j]));
             near.ys.extend(near.indices.iter().map(|&j| self.ys[j]));
             for i in self.asks(members) {
-                self.row(i, &mut near, &mut out);
+                self.row(i, &mut near, &mut out)?;
             }
         }
-        out
+        Ok(out)
     }
 
-    fn row(&self, i: usize, near: &mut Candidates, out: &mut Block) {
+    fn row(&self, i: usize, near: &mut Candidates, out: &mut Block) -> Result<()> {
         let (x, y) = (self.xs[i], self.ys[i]);
         // No data-dependent branch in the hot loop: every candidate is written, the length only
         // advances for those whose squared distance may be in range. The buffer only grows.
@@ -454,6 +460,8 @@ impl Query<'_> {
             count += usize::from((squared <= self.radius_squared) & (j != i));
         }
         let start = out.indices.len();
+        try_room(&mut out.indices, count, "neighbour indices")?;
+        try_room(&mut out.distances, count, "neighbour distances")?;
         for &(k, squared) in &kept[..count] {
             let distance = length(squared, xs[k] - x, ys[k] - y);
             if distance > self.radius {
@@ -486,6 +494,7 @@ impl Query<'_> {
         }
         out.robots.push(i);
         out.lengths.push(out.indices.len() - start);
+        Ok(())
     }
 }
 

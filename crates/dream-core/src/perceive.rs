@@ -12,7 +12,7 @@ use std::f64::consts::TAU;
 
 use rayon::prelude::*;
 
-use crate::error::{check_finite, check_len, GeomError, Result};
+use crate::error::{check_finite, check_len, try_room, GeomError, Result};
 use crate::neighbours::{within, wrap_angle};
 
 /// Rows from which the robots are perceived for on every thread.
@@ -49,8 +49,24 @@ impl Perceived {
         }
     }
 
+    /// Room for `count` more entries (and `rows` more rows); the bearings and offsets only
+    /// where `seen`.
+    fn room(&mut self, rows: usize, count: usize, seen: bool) -> Result<()> {
+        const WHAT: &str = "perceived robots";
+        try_room(&mut self.offsets, rows, WHAT)?;
+        try_room(&mut self.ids, count, WHAT)?;
+        try_room(&mut self.distances, count, WHAT)?;
+        if seen {
+            try_room(&mut self.bearings, count, WHAT)?;
+            try_room(&mut self.dxs, count, WHAT)?;
+            try_room(&mut self.dys, count, WHAT)?;
+        }
+        Ok(())
+    }
+
     /// Appends the rows of `part` (whose offsets start at 0, the leading 0 left out).
-    fn extend(&mut self, part: Perceived) {
+    fn extend(&mut self, part: Perceived) -> Result<()> {
+        self.room(part.offsets.len(), part.ids.len(), !part.bearings.is_empty())?;
         let base = self.ids.len() as i64;
         self.offsets.extend(part.offsets.iter().map(|o| o + base));
         self.ids.extend_from_slice(&part.ids);
@@ -58,6 +74,7 @@ impl Perceived {
         self.bearings.extend_from_slice(&part.bearings);
         self.dxs.extend_from_slice(&part.dxs);
         self.dys.extend_from_slice(&part.dys);
+        Ok(())
     }
 }
 
@@ -120,11 +137,15 @@ pub fn perceive(
     // Every robot in reach talking, over the longest range: the query's rows are what is heard,
     // as they stand (the rows not asked are empty, so the entries are the asked rows' in order).
     let all_heard = radio.is_some_and(|(range, talking)| range >= reach && talking.iter().all(|&t| t));
-    let sort_out = |task: &[i64]| {
+    let sort_out = |task: &[i64]| -> Result<(Perceived, Perceived)> {
         let (mut seen, mut heard) = (Perceived::default(), Perceived::default());
         for &i in task {
             let i = i as usize;
             let entries = near.indptr[i] as usize..near.indptr[i + 1] as usize;
+            // At most every robot in reach, seen and heard.
+            let (may_see, may_hear) = (sight.is_some(), radio.is_some() && !all_heard);
+            seen.room(1, usize::from(may_see) * entries.len(), true)?;
+            heard.room(1, usize::from(may_hear) * entries.len(), false)?;
             for (&j, &distance) in near.indices[entries.clone()].iter().zip(&near.distances[entries]) {
                 let ju = j as usize;
                 if let Some(s) = sight {
@@ -153,17 +174,17 @@ pub fn perceive(
             seen.offsets.push(seen.ids.len() as i64);
             heard.offsets.push(heard.ids.len() as i64);
         }
-        (seen, heard)
+        Ok((seen, heard))
     };
     let parts: Vec<(Perceived, Perceived)> = if rows.len() >= PARALLEL_ROWS {
-        rows.par_chunks(CHUNK_ROWS).map(sort_out).collect()
+        rows.par_chunks(CHUNK_ROWS).map(sort_out).collect::<Result<_>>()?
     } else {
-        vec![sort_out(rows)]
+        vec![sort_out(rows)?]
     };
     let (mut seen, mut heard) = (Perceived::with_offsets(), Perceived::with_offsets());
     for (s, h) in parts {
-        seen.extend(s);
-        heard.extend(h);
+        seen.extend(s)?;
+        heard.extend(h)?;
     }
     if all_heard {
         heard.offsets = rows.iter().map(|&i| near.indptr[i as usize]).collect();

@@ -1,8 +1,9 @@
 //! Maps core errors to Python exceptions: bad input is a `ValueError` naming the argument,
-//! impossible geometry a `dream.errors.GeometryError` (a `ValueError` too).
+//! impossible geometry a `dream.errors.GeometryError` (a `ValueError` too), a buffer that could
+//! not be allocated a `MemoryError`.
 
 use dream_core::GeomError;
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyMemoryError, PyValueError};
 use pyo3::PyErr;
 
 pyo3::import_exception!(dream.errors, GeometryError);
@@ -31,6 +32,7 @@ impl From<PyDreamError> for PyErr {
     fn from(err: PyDreamError) -> Self {
         match err {
             PyDreamError::Core(e @ GeomError::DegenerateObstacle(_)) => GeometryError::new_err(e.to_string()),
+            PyDreamError::Core(e @ GeomError::OutOfMemory { .. }) => PyMemoryError::new_err(e.to_string()),
             PyDreamError::Core(e) => PyValueError::new_err(e.to_string()),
             PyDreamError::Python(e) => e,
         }

@@ -20,6 +20,7 @@ __all__ = [
     "Robotarium",
     "initial_poses",
     "make_robotarium",
+    "make_simulator",
     "rps_available",
     "rules_named",
     "rps_generation",
@@ -40,25 +41,41 @@ def initial_poses(
     As rps's ``generate_initial_conditions`` (distinct grid points in a 2.5 x 1.5 m area of the
     3.2 x 2 m arena, random headings), scaled to ``arena``, drawn from ``rng``. ``where(x, y)``,
     if given, keeps the grid points ``(k,)`` it is true of (relative to the arena's centre).
+
+    Without ``where`` only the chosen grid points are placed: time and memory grow with ``n``,
+    not with the arena (a ring of 100,000 robots has 1.8e9 grid points). ``where`` tests every
+    grid point, for arenas of fixed size.
     """
     width, height = arena.width * 2.5 / 3.2, arena.height * 1.5 / 2.0
     columns, rows = int(width // spacing), int(height // spacing)
-    cells = np.arange(columns * rows)
     cx, cy = (arena.xmin + arena.xmax) / 2, (arena.ymin + arena.ymax) / 2
-    x = cx - (columns - 1) * spacing / 2 + (cells // rows) * spacing
-    y = cy - (rows - 1) * spacing / 2 + (cells % rows) * spacing
+    cells = None  # every grid point is a candidate
     if where is not None:
+        cells = np.arange(columns * rows)
+        x, y = _grid_point(cells, rows, columns, spacing, cx, cy)
         cells = cells[np.asarray(where(x - cx, y - cy), dtype=np.bool_)]
-    if len(cells) < n:
+    count = columns * rows if cells is None else len(cells)
+    if count < n:
         raise ValueError(
             f"{n} robots do not fit {spacing} m apart in the central {width:.2f} x {height:.2f} m of the arena"
             f"{'' if where is None else ' where they may start'}: use a larger arena"
         )
-    cells = cells[rng.choice(len(cells), size=n, replace=False)]
+    # An int population: numpy draws n distinct integers without a table of all of them
+    # (Floyd's algorithm) unless n is over a fiftieth of it.
+    chosen = rng.choice(count, size=n, replace=False)
     poses = np.empty((3, n))
-    poses[0], poses[1] = x[cells], y[cells]
+    poses[0], poses[1] = _grid_point(chosen if cells is None else cells[chosen], rows, columns, spacing, cx, cy)
     poses[2] = rng.uniform(-np.pi, np.pi, size=n)
     return poses
+
+
+def _grid_point(
+    cells: np.ndarray, rows: int, columns: int, spacing: float, cx: float, cy: float
+) -> tuple[FloatArray, FloatArray]:
+    """Positions ``x, y`` ``(k,)`` of grid points ``cells`` (numbered column by column) of a
+    ``columns x rows`` grid of ``spacing`` centred on ``(cx, cy)``."""
+    x = cx - (columns - 1) * spacing / 2 + (cells // rows) * spacing
+    return x, cy - (rows - 1) * spacing / 2 + (cells % rows) * spacing
 
 
 def rules_named(rules: str | None = None) -> SimulatorSpec:
@@ -77,9 +94,15 @@ def make_robotarium(
     *,
     arena: ArenaSpec | None = None,
     seed: int | None = None,
+    rng: np.random.Generator | None = None,
     rules: str | None = None,
 ) -> Backend:
-    """A simulator for ``n`` robots.
+    """A simulator for ``n`` robots, for a script: the robots of the script's world keep to it.
+
+    The current world (the script's) is given the simulator's arena and limits
+    (:meth:`dream.World.keep_to`), so that its robots keep to them, made before or after it.
+    :func:`dream.run` makes its simulator with :func:`make_simulator`, which reads and writes no
+    world, and gives its own world the same.
 
     Parameters
     ----------
@@ -87,23 +110,40 @@ def make_robotarium(
         ``"auto"`` is the real Robotarium simulator when ``rps`` is installed, ``n <= 50`` and
         the arena is the Robotarium's, else the Fast backend.
     initial_conditions : (3, n) array_like, optional
-        Initial poses; default: :func:`initial_poses` drawn from ``seed`` (or the current
-        world's generator).
+        Initial poses; default: :func:`initial_poses` drawn from ``rng``, else from a generator
+        seeded with ``seed``, else from the current world's generator.
+    seed : int, optional
+        Seed of the initial poses' generator.
+    rng : numpy.random.Generator, optional
+        The initial poses' generator (not with ``seed``).
     arena : ArenaSpec, optional
         Default: the Robotarium arena.
     rules : {"rps0", "rps2"}, optional
         Which rps generation's dynamics and validation to follow (:data:`dream.specs.RULES`);
         default: the installed rps's, else "rps0". The Robotarium backend only has its own.
     """
-    if backend not in BACKENDS:
-        raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
-        raise ValueError(f"the number of robots must be an integer >= 0, got {n!r}")
+    _check_request(n, backend, rules)
+    if initial_conditions is None:
+        if seed is not None and rng is not None:
+            raise ValueError("give the initial poses' generator (rng) or its seed, not both")
+        arena_for_poses = ROBOTARIUM if arena is None else arena
+        if rng is None:
+            rng = current_world().rng if seed is None else np.random.default_rng(seed)
+        initial_conditions = initial_poses(n, rng, arena_for_poses)
+    sim = make_simulator(n, backend, initial_conditions, arena=arena, rules=rules)
+    current_world().keep_to(sim.arena, sim.spec)
+    return sim
+
+
+def make_simulator(
+    n: int, backend: str, initial_conditions: Any, *, arena: ArenaSpec | None = None, rules: str | None = None
+) -> Backend:
+    """A simulator for ``n`` robots starting at ``initial_conditions`` ``(3, n)``; the parameters
+    are :func:`make_robotarium`'s. It touches no world: the caller gives the simulator's arena and
+    limits to the world its robots live in (:meth:`dream.World.keep_to`)."""
+    _check_request(n, backend, rules)
     rules = rules_named(rules).rules
     arena = ROBOTARIUM if arena is None else arena
-    if initial_conditions is None:
-        rng = current_world().rng if seed is None else np.random.default_rng(seed)
-        initial_conditions = initial_poses(n, rng, arena)
     poses = as_poses(initial_conditions, "initial_conditions", n)
     if backend == "auto":
         real = rps_available() and n <= MAX_ROBOTS and arena == ROBOTARIUM and rules == rps_generation()
@@ -117,3 +157,12 @@ def make_robotarium(
             raise ValueError(f"the installed rps follows {rps_generation()!r}, not rules={rules!r}: use backend='fast'")
         return Robotarium(poses)
     return Fast(poses, arena, RULES[rules])
+
+
+def _check_request(n: int, backend: str, rules: str | None) -> None:
+    """Refuse an unknown backend or rules, or a bad number of robots, before drawing poses."""
+    rules_named(rules)
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+        raise ValueError(f"the number of robots must be an integer >= 0, got {n!r}")

@@ -11,7 +11,6 @@ import numpy as np
 from dream import kernels
 from dream._checks import FloatArray, as_array, as_poses
 from dream.specs import ROBOTARIUM, RPS, ArenaSpec, SimulatorSpec
-from dream.world import current_world
 
 
 class Backend(ABC):
@@ -54,7 +53,6 @@ class Backend(ABC):
         self._poses_taken = False
         self._figure: Any = None
         self._axes: Any = None
-        current_world().simulator = self  # robots without an arena of their own take this one
 
     @property
     def poses(self) -> FloatArray:

@@ -1,10 +1,24 @@
 """HRVO circle (thesis 3.1): robots cross a circle three times without touching.
 
 N robots start at random poses. Each has a goal on a circle, then the antipodal point, then
-its first goal again. A robot that reaches its goal (within 0.05 m) raises its state; range
-radios spread every robot's known states (element-wise max); when a robot knows that all
-states equal its own, it heads for its next goal. Robots avoid each other with HRVO using a
-movement sensor. Success: every robot finishes the third circle with zero collisions.
+its first goal again. A robot that reaches its goal (within 0.05 m) raises its state; when it
+knows that every robot has reached at least its state, it heads for its next goal. Robots
+avoid each other with HRVO using a movement sensor. Success: every robot finishes the third
+circle with zero collisions.
+
+Barrier. Robot ids run around the ring (robot i's goals are neighbours of robot i+1's), and a
+range-radio message holds four integers whatever N (:func:`dream.rules.arc_merge`): the
+sender's state, the arc of ids ``i - left .. i + right`` it knows to have reached that state,
+and the highest state it knows every robot to have reached (``released``). Arcs that overlap
+or touch merge; an arc covering all N releases its state, and releases spread to all. Each
+message states facts that stay true (states only rise), so stale, late, repeated or lost
+messages and a split radio graph can delay a release but never make one early: a robot never
+moves on while a robot has not arrived. The price: a robot keeps one arc, not a set, so what
+it hears of robots beyond a gap in its arc is dropped and must be heard again once the gap
+closes. On the ring, whose neighbouring goals are within radio range, arcs grow as fast as
+the N-entry vectors of known states spread: once the last robot arrives, the release reaches
+every robot in the radio hops half-way round the ring. Robot by robot, the heartbeat failure
+detector still holds N entries a robot; an arc grows over a robot taken for crashed.
 
 Robots choose their preferred velocity, step aside and count arrivals with the shared rules
 of :mod:`dream.rules` (the per-robot :class:`CircleRobot` and the swarm mode,
@@ -270,7 +284,7 @@ class CircleRobot(RobotHRVO):
     goals : (3, 2) array_like
         Its goals in order (m).
     n : int
-        Number of robots (the length of its state vector).
+        Number of robots (ids ``0 .. n - 1`` around the ring of goals: see :func:`dream.rules.arc_merge`).
     semi_axes : (float, float), optional
         The ring's semi-axes (m), which size the roundabout; default: :func:`circle_layout`'s.
     island : float
@@ -304,7 +318,10 @@ class CircleRobot(RobotHRVO):
         super().__init__(robot_id, tag, **kwargs)
         self.goals = np.asarray(goals, dtype=np.float64)
         self.current_goal = self.goals[0]
-        self.robot_states = np.zeros(n, dtype=np.int64)  # what this robot knows of every robot's state
+        self.n = n
+        # The arrival barrier (dream.rules.arc_merge): robots robot_id - left .. robot_id + right have
+        # reached this robot's state, and every robot has reached `released`.
+        self.left, self.right, self.released = 0, 0, 0
         self.heartbeats = Heartbeats(n, robot_id, SILENCE)
         self.suspects = False  # whether it takes some robot for crashed, or was taken for crashed
         self.state = 0  # goals reached so far
@@ -321,31 +338,55 @@ class CircleRobot(RobotHRVO):
         self.closest = math.inf  # its distance to its current goal when it last made PROGRESS (m)
         self.stalled = 0  # decisions since it last came PROGRESS closer
 
-    def update_radio(self, messages: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
-        """Merge the states and heartbeats heard (element-wise max); move on when every robot not
-        taken for crashed has reached at least this robot's state. Sends ``(states, heartbeats)``.
+    def update_radio(self, messages: list[tuple[Any, ...]]) -> tuple[Any, ...]:
+        """Merge the arcs and released levels heard (:func:`dream.rules.arc_merge`) and the
+        heartbeats; move on once every robot not taken for crashed has reached at least this
+        robot's state. Sends ``(id, state, left, right, released, heartbeats)``.
 
         A heartbeat failure detector (:class:`~dream.heartbeats.Heartbeats`, silent for
-        :data:`SILENCE` of this robot's rounds) lets the survivors stop waiting for crashed robots.
+        :data:`SILENCE` of this robot's rounds) lets the survivors stop waiting for crashed robots:
+        an arc grows over a robot taken for crashed as if it had arrived.
         """
         if messages:
-            np.maximum(self.robot_states, np.max([states for states, _ in messages], axis=0), out=self.robot_states)
-        self.heartbeats.round([beats for _, beats in messages])
-        self.robot_states[self.robot_id] = self.state
+            ids = np.array([message[0] for message in messages])
+            heard = np.array([message[1:5] for message in messages])
+            self.left, self.right, self.released = (
+                int(v)
+                for v in rules.arc_merge(
+                    self.n,
+                    self.state,
+                    self.left,
+                    self.right,
+                    self.released,
+                    np.zeros(len(ids), dtype=np.intp),
+                    (ids - self.robot_id) % self.n,
+                    heard,
+                )
+            )
+        self.heartbeats.round([message[5] for message in messages])
         alive = self.heartbeats.alive
-        # A robot two goals ahead means this one was taken for crashed and the others went on:
-        # a robot parked on its goal may then be one that has finished there (seen at N = 100
-        # under 30 % loss: it waited beside its goal for good).
-        self.suspects = not alive.all() or int(self.robot_states.max()) > self.state + 1
+        self.skip_crashed(alive)
+        self.released = int(rules.arc_release(self.n, self.state, self.left, self.right, self.released))
+        # Released beyond its own level means this robot was taken for crashed and the others
+        # went on: a robot parked on its goal may then be one that has finished there (seen at
+        # N = 100 under 30 % loss: it waited beside its goal for good).
+        self.suspects = not alive.all() or self.released > self.state
         # At least its own state, not equal to it: a robot taken for crashed while out of radio
         # reach (a 100-robot ring is tens of hops across) lets the others go ahead, and a robot
         # waiting for equal states would then wait for good (seen at N = 100, no fault).
-        level = bool(np.all(self.robot_states[alive] >= self.state))
-        if rules.moves_on(self.state, level, self.change_state, len(self.goals)):
+        if rules.moves_on(self.state, self.released >= self.state, self.change_state, len(self.goals)):
             self.current_goal = self.goals[self.state]
             self.change_state = True
             self.closest, self.stalled = math.inf, 0
-        return self.robot_states, self.heartbeats.beats
+        return self.robot_id, self.state, self.left, self.right, self.released, self.heartbeats.beats
+
+    def skip_crashed(self, alive: np.ndarray) -> None:
+        """Grow the arc over the robots beyond either end that it takes for crashed (``alive``
+        ``(n,)`` bool): the survivors do not wait for them."""
+        while self.left + self.right + 1 < self.n and not alive[(self.robot_id - self.left - 1) % self.n]:
+            self.left += 1
+        while self.left + self.right + 1 < self.n and not alive[(self.robot_id + self.right + 1) % self.n]:
+            self.right += 1
 
     def goal_taken(self, position: np.ndarray) -> bool:
         """Whether a robot standing still (one taken for crashed stops where it is, one that has
@@ -396,6 +437,7 @@ class CircleRobot(RobotHRVO):
             if reached or (self.change_state and self.suspects and self.goal_taken(position)):
                 self.state += 1
                 self.change_state = False
+                self.left = self.right = 0  # a new level: it knows only itself there
             if not self.packed:
                 self.squeeze(position)
                 aim = rules.roundabout_aim(position, self.current_goal, self.semi_axes, self.island)
@@ -476,10 +518,7 @@ def default_steps(n: int) -> int:
 class CircleSwarm:
     """Every robot's decision state in swarm mode, one row each (see :meth:`HrvoCircle.swarm_step`).
 
-    The per-robot progress vector becomes a bitset: row i of ``known`` holds the robots that
-    robot i knows to have reached at least its own number of goals (n^2 / 8 bytes in all, merged
-    by bitwise OR over radio links, reset when the robot reaches its next goal); a robot moves on
-    when its set is full, which is when every entry of the per-robot vector equals its own state.
+    The barrier (see the module docs) is :class:`CircleRobot`'s, exchanged every ``radio_gap`` steps.
 
     Attributes
     ----------
@@ -491,8 +530,8 @@ class CircleSwarm:
         Index of the goal being approached...
     unreached : (n,) bool ndarray
         ...which has not been reached yet.
-    known : (n, ceil(n / 8)) uint8 ndarray
-        The bitsets.
+    left, right, released : (n,) int ndarrays
+        The arcs of robots known to have reached each robot's state, and the level known complete.
     sidestep, side : (n,) ndarrays
         Decisions left stepping aside, and to which side (1.0: right, -1.0: left).
     dxi : (n, 2) ndarray
@@ -503,7 +542,9 @@ class CircleSwarm:
     state: np.ndarray
     heading_for: np.ndarray
     unreached: np.ndarray
-    known: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+    released: np.ndarray
     sidestep: np.ndarray
     side: np.ndarray
     dxi: np.ndarray
@@ -512,15 +553,14 @@ class CircleSwarm:
     def start(cls, goals: np.ndarray) -> CircleSwarm:
         """Robots that have reached nothing yet and know only themselves, heading for ``goals[:, 0]``."""
         n = len(goals)
-        everyone = np.arange(n)
-        known = np.zeros((n, (n + 7) // 8), dtype=np.uint8)
-        known[everyone, everyone // 8] = 128 >> (everyone % 8)
         return cls(
             goals=goals,
             state=np.zeros(n, dtype=np.int64),
             heading_for=np.zeros(n, dtype=np.int64),
             unreached=np.ones(n, dtype=bool),
-            known=known,
+            left=np.zeros(n, dtype=np.int64),
+            right=np.zeros(n, dtype=np.int64),
+            released=np.zeros(n, dtype=np.int64),
             sidestep=np.zeros(n, dtype=np.int64),
             side=np.ones(n),
             dxi=np.zeros((n, 2)),
@@ -612,17 +652,16 @@ class HrvoCircle(Experiment):
         """Every robot's decision: count arrivals, exchange progress by radio every
         ``radio_gap`` steps (and move on), aim around the roundabout, step aside when blocked,
         one HRVO call, then the unicycle commands within the wheel limits and the motion guard."""
-        team, everyone = self.team, np.arange(self.n)
+        team = self.team
         p = x[:2].T
         goal = team.goal
         arrived, reached = rules.arrival(p, goal, team.unreached, self.layout.arrival)
         team.state += reached
         team.unreached &= ~arrived
-        team.known[reached] = 0  # a new level: start over from itself
-        team.known[reached, everyone[reached] // 8] = 128 >> (everyone[reached] % 8)
+        team.left[reached] = team.right[reached] = 0  # a new level: it knows only itself there
         if step % self.radio_gap == 0:
-            full = _merge_known(team.known, team.state, p)
-            moving_on = rules.moves_on(team.state, full, team.unreached, CIRCLES)
+            _radio_round(team, p)
+            moving_on = rules.moves_on(team.state, team.released >= team.state, team.unreached, CIRCLES)
             team.heading_for[moving_on] = team.state[moving_on]
             team.unreached |= moving_on
             goal = team.goal
@@ -675,24 +714,13 @@ class HrvoCircle(Experiment):
 run = HrvoCircle.run
 
 
-def _merge_known(known: np.ndarray, state: np.ndarray, positions: np.ndarray, radio_range: float = 1.0) -> np.ndarray:
-    """One radio exchange: each robot ORs in the sets of the robots in range at its level or above.
-    Returns which sets are full ``(n,)``: the robots that know every robot is at their level."""
-    everyone = np.packbits(np.ones(len(state), dtype=bool))
-    full = (known == everyone).all(axis=1)
-    indptr, indices, _ = kernels.neighbours(positions, radio_range)
-    rows = np.repeat(np.arange(len(state)), np.diff(indptr))  # in order: CSR rows
-    # A full set stays full (senders set no bits beyond the robots): while crossing, every robot's is.
-    useful = (state[indices] >= state[rows]) & ~full[rows]
-    rows, senders = rows[useful], indices[useful]
-    if not len(rows):
-        return full
-    before = known.copy()
-    # Row by row would be a Python loop; instead OR in one neighbour slot at a time.
-    slot = np.arange(len(rows)) - np.searchsorted(rows, rows)
-    for k in range(int(slot.max(initial=-1)) + 1):
-        pick = slot == k
-        known[rows[pick]] |= before[senders[pick]]
-    merged = np.unique(rows)
-    full[merged] = (known[merged] == everyone).all(axis=1)
-    return full
+def _radio_round(team: CircleSwarm, positions: np.ndarray, radio_range: float = 1.0) -> None:
+    """One radio exchange of the arrival barrier between the robots in range (at once: each
+    hears what the others held before the round)."""
+    n = len(team.state)
+    indptr, senders, _ = kernels.neighbours(positions, radio_range)
+    rows = np.repeat(np.arange(n), np.diff(indptr))
+    heard = np.column_stack((team.state[senders], team.left[senders], team.right[senders], team.released[senders]))
+    merged = rules.arc_merge(n, team.state, team.left, team.right, team.released, rows, (senders - rows) % n, heard)
+    team.left, team.right, released = merged
+    team.released = rules.arc_release(n, team.state, team.left, team.right, released)

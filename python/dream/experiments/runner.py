@@ -15,13 +15,14 @@ from typing import Any, TypeVar
 import numpy as np
 
 from dream._files import check_writable
-from dream.backends import BACKENDS, make_robotarium, rules_named
+from dream.backends import BACKENDS, make_simulator, rules_named
 from dream.backends.base import Backend
 from dream.experiments.checkpoint import CHECKPOINT_EVERY, Checkpoint, CheckpointError, load, save
 from dream.experiments.result import ExperimentResult
 from dream.experiments.spec import Experiment
 from dream.faults import Faults, FaultState
 from dream.frames import Frame, fault_status, measures_title
+from dream.memory import check_fits
 from dream.specs import GRITSBOT, RPS, SimulatorSpec
 from dream.swarm import Engine
 from dream.world import World
@@ -114,6 +115,7 @@ def run(
         raise ValueError(f"faults must be a dream.Faults, such as Faults(loss=0.3), got {faults!r}")
     record = _callback(record, "record", "record(frame)")
     progress = _callback(progress, "progress", "progress(step, cap)")
+    check_fits(n)  # before the experiment sizes anything by n
     exp.check(n, backend)
     every = _count(checkpoint_every, "checkpoint_every", 1)
     if checkpoint is not None:
@@ -124,7 +126,7 @@ def run(
             stepper = Stepper(exp, n, world, rules_named(rules), swarm=swarm)
         except ValueError as err:  # from the layers below, in their terms: say which parameters the run set
             raise _naming_params(exp, err) from err
-        sim = make_robotarium(n, backend, stepper.initial_conditions, arena=exp.arena, rules=exp.rules.rules)
+        sim = make_simulator(n, backend, stepper.initial_conditions, arena=exp.arena, rules=exp.rules.rules)
         stepper.attach(sim, faults)
     cap = exp.steps(n) if exp.steps_cap is None else exp.steps_cap
     state = Checkpoint(stepper, sim, 0, cap, every, poses=[sim.poses] if trace else None)
@@ -307,8 +309,10 @@ class Stepper:
         self._limits = GRITSBOT
 
     def attach(self, sim: Backend, faults: Faults | None = None) -> None:
-        """Give the experiment its simulator and command array, and draw the run's faults."""
+        """Give the experiment its simulator and command array, the world the simulator's arena
+        and limits (which its robots keep to), and draw the run's faults."""
         exp = self.exp
+        self.world.keep_to(sim.arena, sim.spec)
         exp.sim, exp.dxu = sim, np.zeros((2, exp.n))
         self.state = self.world.inject(faults, exp.n)
         self._limits = GRITSBOT.within(sim.spec)
