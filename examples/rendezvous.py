@@ -106,5 +106,11 @@ class Rendezvous(Experiment):
     def done(self, step: int, poses: np.ndarray) -> bool:
         return self.spread(poses) <= self.radius
 
+    def potential(self, poses: np.ndarray) -> np.ndarray:
+        """For learners (:mod:`dream.rl`): each robot's distance to the correct robots' centre, negated
+        (m; a learner's reward is its gain over a step)."""
+        team = poses[:2, self.correct]
+        return -np.hypot(*(poses[:2] - team.mean(axis=1, keepdims=True)))
+
     def measures(self) -> dict[str, float]:
         return {"spread": self.spread(self.sim.poses)}

@@ -19,13 +19,14 @@ matplotlib, cvxopt), without DREAM's compiled extension. :func:`export` writes a
 from __future__ import annotations
 
 import ast
+import contextlib
 import os
 import shutil
 import sys
 import tempfile
 import time
 import warnings
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from string import Template
 from typing import Any
@@ -38,14 +39,13 @@ from dream.backends.robotarium import rps_generation
 from dream.backends.startup import START_SPACING
 from dream.experiments import EXPERIMENTS, ExperimentResult, find, load_file
 from dream.experiments.runner import Stepper
+from dream.lab_libraries import lab_modules, version_note
 from dream.specs import ROBOTARIUM, RULES, SimulatorSpec
 from dream.world import World, reset_default_world
 
 #: The lab's testbed takes at most 20 robots (Robotarium Python Guide, section 2.7.3); rps itself
 #: accepts 50, and rps 2.1's start-up phase has 22 charger slots.
 LAB_MAX_ROBOTS = 20
-#: Third-party packages a bundle may import: what the lab installs for every script.
-LAB_PACKAGES = ("numpy", "scipy", "matplotlib", "cvxopt", "rps")
 #: DREAM modules left out of a bundle, and why a script that uses one cannot go to the lab.
 LEFT_OUT = {
     "_core": "the compiled extension (a bundle runs on the NumPy reference)",
@@ -105,7 +105,8 @@ PARAMS = $params
 ITERATIONS = $iterations  # at most; the loop ends when the experiment is done
 SHOW = os.environ.get("DREAM_HEADLESS", "0") in ("", "0")
 
-lab = LabRun(EXPERIMENT, N, SEED, PARAMS, folder=HERE)
+POLICY = $policy  # the trained policy's weights file in this folder, if its robots run one
+lab = LabRun(EXPERIMENT, N, SEED, PARAMS, folder=HERE, policy=POLICY)
 r = robotarium.Robotarium(
     number_of_robots=N, show_figure=SHOW, initial_conditions=lab.initial_conditions, sim_in_real_time=SHOW
 )
@@ -184,6 +185,9 @@ class LabRun:
         The run's world; default: a fresh default world (:func:`dream.reset_default_world`).
     rules : {"rps0", "rps2"}, optional
         The rps generation to run with; default: the installed rps's (else rps 2.x's, the lab's).
+    policy : str, optional
+        A :class:`~dream.rl.LinearPolicy` weights file in ``folder`` that drives the robots
+        (:func:`dream.rl.learner.driven`) instead of the experiment's own decisions.
     """
 
     def __init__(
@@ -195,9 +199,16 @@ class LabRun:
         folder: str | Path = ".",
         world: World | None = None,
         rules: str | None = None,
+        policy: str | None = None,
     ) -> None:
         source = experiment if experiment in EXPERIMENTS else str(Path(folder) / experiment)
-        exp = find(source)(**params)
+        cls = find(source)
+        if policy is not None:
+            from dream.rl.learner import driven
+            from dream.rl.policy import LinearPolicy
+
+            cls = driven(cls, LinearPolicy.load(Path(folder) / policy))
+        exp = cls(**params)
         exp.check(n, "robotarium")
         spec = RULES[rules or rps_generation() or "rps2"]  # the lab's, should the bundle run without rps
         # rps 2.x drives the robots from the chargers first: start where that phase gets them.
@@ -245,9 +256,11 @@ class LabRun:
 def check_script(path: Path) -> None:
     """Raise :class:`ExportError` if the experiment file ``path`` uses what the lab cannot run.
 
-    Every import must be of the standard library, :data:`LAB_PACKAGES` or DREAM's pure part
+    Every import must be of the standard library, the lab's libraries
+    (:func:`dream.lab_libraries.lab_modules`: rps 2.1's ``libraries.txt``) or DREAM's pure part
     (not :data:`LEFT_OUT`), made by an ``import`` statement (not :data:`DYNAMIC_IMPORTS`); the
-    onboard sensors are refused by name too, for ``from dream import *``.
+    onboard sensors are refused by name too, for ``from dream import *``. A lab library installed
+    here at another version than the lab's gets an :class:`ExportWarning`.
     """
     try:
         tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
@@ -285,11 +298,15 @@ def _check_module(module: str, where: str) -> None:
         left_out = LEFT_OUT_NAMES.get(inner, inner)
         if left_out in LEFT_OUT:
             raise ExportError(f"{where}: uses dream.{inner}, which a lab bundle leaves out: {LEFT_OUT[left_out]}")
-    elif parts[0] not in LAB_PACKAGES and parts[0] not in sys.stdlib_module_names:
+    elif parts[0] not in lab_modules() and parts[0] not in sys.stdlib_module_names:
         raise ExportError(
-            f"{where}: imports {module}, which the lab does not have "
-            f"(it runs {', '.join(LAB_PACKAGES)} and the standard library)"
+            f"{where}: imports {module}, which the lab does not have (it runs the standard library and the "
+            "libraries of rps 2.1's libraries.txt: numpy, scipy, matplotlib, torch, scikit-learn, gym, ...)"
         )
+    else:
+        note = version_note(parts[0])
+        if note is not None:
+            warnings.warn(f"{where}: {note}", ExportWarning, stacklevel=4)
 
 
 def export(
@@ -300,6 +317,7 @@ def export(
     seed: int = 0,
     params: Mapping[str, Any] | None = None,
     force: bool = False,
+    policy: str | Path | None = None,
 ) -> Path:
     """Write the lab bundle of ``source`` (a built-in experiment's name or a ``.py`` file) to ``output``.
 
@@ -314,6 +332,9 @@ def export(
     force : bool
         Replace ``output`` if it holds a previous export (its :data:`MARKER` file). Whatever
         ``force``, the working folder, a folder above it and the home folder are never replaced.
+    policy : path, optional
+        A :class:`~dream.rl.LinearPolicy` weights file (``.npz``): the bundle carries it as
+        :data:`POLICY_FILE` and its robots run it (:func:`dream.rl.learner.driven`).
 
     Returns
     -------
@@ -350,9 +371,10 @@ def export(
         )
     try:
         baked = cls(**dict(params or {})).params
-        with World(seed) as world:  # a dry build: errors show now, not at the lab
-            name, folder = (cls.name, ".") if script is None else (script.name, script.parent)
-            lab = LabRun(name, n, seed, baked, folder, world, rules="rps2")  # as the lab's rps 2.1 runs it
+        with World(seed) as world, _dry_folder(cls.name, script, policy) as (name, folder, weights):  # a dry build
+            lab = LabRun(
+                name, n, seed, baked, folder, world, rules="rps2", policy=weights
+            )  # as the lab's rps 2.1 runs it
     except ValueError as err:
         raise ExportError(str(err)) from None
     exp = lab.stepper.exp
@@ -372,19 +394,21 @@ def export(
     files = [
         ("main.py", "the lab's loop"),
         *([] if script is None else [(bundled, "the experiment")]),
+        *([] if policy is None else [(POLICY_FILE, "the trained policy's weights")]),
         ("dream/", DREAM_FILES),
     ]
     width = max(len(name) for name, _ in files)
     text = MAIN.substitute(
         label=exp.label(),
         version=_version(),
-        command=_command(source, output, n, seed, params),
+        command=_command(source, output, n, seed, params, policy),
         files="".join(f"    {name:<{width}}  {what}\n" for name, what in files),
         experiment=repr(bundled),
         n=n,
         seed=seed,
         params=repr(baked),
         iterations=exp.steps(n),
+        policy=repr(None if policy is None else POLICY_FILE),
     )
     folder = Path(tempfile.mkdtemp(prefix=f".{target.name}-", dir=target.parent))
     try:
@@ -395,12 +419,35 @@ def export(
         )
         if script is not None:
             shutil.copyfile(script, folder / _bundled_name(script))
+        if policy is not None:
+            shutil.copyfile(policy, folder / POLICY_FILE)
         _copy_package(folder / "dream")
         _replace(folder, target)
     except BaseException:
         shutil.rmtree(folder, ignore_errors=True)
         raise
     return target
+
+
+#: The name of the policy's weights file in a bundle.
+POLICY_FILE = "policy.npz"
+
+
+@contextlib.contextmanager
+def _dry_folder(name: str, script: Path | None, policy: str | Path | None) -> Iterator[tuple[str, Path, str | None]]:
+    """Where the dry build finds the experiment (its name and folder) and the policy's weights (their
+    name there): with a policy, a folder that holds both under their bundled names."""
+    if policy is None:
+        yield (name, Path("."), None) if script is None else (script.name, script.parent, None)
+        return
+    if not Path(policy).is_file():
+        raise ExportError(f"--policy {policy}: no such file")
+    with tempfile.TemporaryDirectory() as folder:
+        if script is not None:
+            name = _bundled_name(script)
+            shutil.copyfile(script, Path(folder) / name)
+        shutil.copyfile(policy, Path(folder) / POLICY_FILE)
+        yield name, Path(folder), POLICY_FILE
 
 
 def _bundled_name(script: Path) -> str:
@@ -493,6 +540,8 @@ def _version() -> str:
     return __version__
 
 
-def _command(source: str | Path, output: str | Path, n: int, seed: int, params: Mapping[str, Any] | None) -> str:
+def _command(
+    source: str | Path, output: str | Path, n: int, seed: int, params: Mapping[str, Any] | None, policy: Any = None
+) -> str:
     settings = "".join(f" --param {key}={value}" for key, value in (params or {}).items())
-    return f"{source} -o {output} -n {n} --seed {seed}{settings}"
+    return f"{source} -o {output} -n {n} --seed {seed}{settings}" + ("" if policy is None else f" --policy {policy}")

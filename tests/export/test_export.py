@@ -256,3 +256,51 @@ def test_export_never_replaces_the_working_folder_a_folder_above_it_or_home(
         err = capsys.readouterr().err
         assert err == f"dream: error: -o {output}: {said}; give a new folder's name\n"
     assert sorted(tmp_path.rglob("*")) == before
+
+
+TRAINED = ROOT / "tests" / "data" / "rendezvous_policy.npz"
+
+
+def test_exported_policy_bundle_runs_to_the_end_on_rps0_without_dream_installed(lab_python, tmp_path):
+    from dream.rl import LinearPolicy
+    from dream.rl.learner import driven
+
+    folder = export.export(str(RENDEZVOUS), tmp_path / "bundle", n=6, seed=0, policy=TRAINED)
+    assert (folder / "policy.npz").read_bytes() == TRAINED.read_bytes()
+    assert "POLICY = 'policy.npz'" in (folder / "main.py").read_text()
+    output, verdict = run_bundle(lab_python, folder, lab_env())
+    assert verdict["collisions"] == "0"
+    # The robots ran the policy (not the experiment's own rule): the same steps as dream.run of it.
+    cls = driven(str(RENDEZVOUS), LinearPolicy.load(TRAINED))
+    assert int(re.search(r"steps run +(\d+)", output).group(1)) == dream.run(cls, n=6, seed=0).steps
+
+
+def test_export_accepts_the_labs_libraries_and_checks_their_versions(tmp_path):
+    from dream.lab_libraries import lab_modules, lab_versions
+
+    versions = lab_versions()  # rps 2.1's libraries.txt, as the issue read it
+    assert versions["torch"].startswith("2.10.") and versions["scikit-learn"].startswith("1.7.")
+    assert versions["gym"].startswith("0.26.") and {"shapely", "networkx", "PyYAML", "opencv-python"} <= set(versions)
+    assert {lab_modules()[m] for m in ("sklearn", "cv2", "yaml", "rps")} == {
+        "scikit-learn",
+        "opencv-python",
+        "PyYAML",
+        "rps",
+    }
+    script = tmp_path / "mine.py"
+    script.write_text(
+        SCRIPT.format(imports="\nimport sklearn\nimport cv2\nimport yaml\nimport gym\nimport torch", body="pass")
+    )
+    with pytest.warns(export.ExportWarning) as caught:
+        export.check_script(script)
+    notes = [str(w.message) for w in caught]
+    assert any(
+        re.search(r"line 6: torch \(torch\) is (not installed here|\S+ here but 2\.10\.0 at the lab)", n) for n in notes
+    )
+    assert not any("numpy" in note for note in notes)  # DREAM's own dependencies run on the lab's versions
+
+
+def test_export_refuses_a_missing_policy_file(tmp_path, capsys):
+    args = ["export", str(RENDEZVOUS), "-o", str(tmp_path / "out"), "--policy", str(tmp_path / "none.npz")]
+    assert cli.main(args) == 2
+    assert "--policy" in capsys.readouterr().err and not (tmp_path / "out").exists()

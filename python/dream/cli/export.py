@@ -29,6 +29,9 @@ def add(commands: Commands) -> None:
     exporter.add_argument(
         "--force", action="store_true", help=f"replace DIR if it holds a previous export (a {MARKER} file)"
     )
+    exporter.add_argument(
+        "--policy", metavar="FILE", default=None, help="a trained dream.rl.LinearPolicy (.npz) for the robots to run"
+    )
     exporter.set_defaults(handler=command)
 
 
@@ -38,7 +41,15 @@ def command(args: argparse.Namespace) -> int:
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", ExportWarning)
-            folder = export(args.experiment, args.output, n=args.n, seed=args.seed, params=params, force=args.force)
+            folder = export(
+                args.experiment,
+                args.output,
+                n=args.n,
+                seed=args.seed,
+                params=params,
+                force=args.force,
+                policy=args.policy,
+            )
     except ExportError as err:
         raise UsageError(str(err)) from None
     for warning in caught:

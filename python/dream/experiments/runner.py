@@ -405,13 +405,24 @@ class Stepper:
         change what is carried out.
         """
         exp = self.exp
-        exp.before_step(step)
-        # In swarm mode there are no timers: this moves the world's clock and the robots' faults.
-        self.world.update_timers(step, exp.timer_params(x, exp.dxu))
+        self.begin(step, x)
         if exp.engine is not None:
             exp.dxu = exp.engine.step(step, x, exp.dxu, self.state)
         elif self.swarm:
             exp.dxu = self._commands(exp.swarm_step(step, x))
+        return self.carried_out()
+
+    def begin(self, step: int, x: np.ndarray) -> None:
+        """What comes before the swarm decides at step ``step``: the experiment's
+        :meth:`~Experiment.before_step` and the world's timers (robot objects' decisions; in
+        swarm mode, the world's clock and the robots' faults)."""
+        self.exp.before_step(step)
+        self.world.update_timers(step, self.exp.timer_params(x, self.exp.dxu))
+
+    def carried_out(self) -> np.ndarray:
+        """The commands ``(2, n)`` the wheels carry out of ``exp.dxu``: a crashed robot's none,
+        faulty wheels' changed (:meth:`dream.faults.FaultState.actuate`)."""
+        exp = self.exp
         if self.state is None:
             return exp.dxu
         exp.dxu[:, self.state.crashed] = 0.0  # a crashed robot commands nothing: sensors see it stand

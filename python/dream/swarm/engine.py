@@ -102,6 +102,14 @@ class Engine:
     def step(self, t: int, x: np.ndarray, commands: np.ndarray, faults: FaultState | None = None) -> np.ndarray:
         """Decide at step ``t`` from the poses ``x`` ``(3, n)``: ``commands`` ``(2, n)`` (the last
         ones, which the movement sensors see) with the deciding robots' columns replaced."""
+        views = self.perceive(t, x, commands, faults)
+        return self.act(t, views, [self.robot.decide(view) for view in views], commands, faults)
+
+    def perceive(self, t: int, x: np.ndarray, commands: np.ndarray, faults: FaultState | None = None) -> list[View]:
+        """What the robots due to decide at step ``t`` know: one :class:`View` per robot robot by
+        robot, else one for all of them (none if no robot decides). :meth:`step` is this, each
+        view's :meth:`~SwarmRobot.decide`, then :meth:`act`; a learner (:mod:`dream.rl`) decides
+        in between."""
         if faults is not None and (faults.crashed & ~self.silenced).any():
             self._silence(faults.crashed & ~self.silenced)
         self._deliver(t)
@@ -115,18 +123,31 @@ class Engine:
         if self.robot.movement is not None:  # a robot whose sensor reading is lost holds its command
             rows = rows[self._kept(t, rows, np.full(len(rows), -2), faults)]
         if not len(rows):
-            return commands
+            return []
         # What the sensors see of the others' motion: their commands before anyone decides now.
-        vx, vy = seen_velocity(commands, x[2])
+        velocities = seen_velocity(commands, x[2])
         talking = self.sent_at >= 0
         batches = np.split(rows, len(rows)) if self.one_by_one else [rows]
+        return [self._view(t, b, clock[b], x, velocities, talking, faults) for b in batches]
+
+    def act(
+        self,
+        t: int,
+        views: list[View],
+        wishes: list[np.ndarray],
+        commands: np.ndarray,
+        faults: FaultState | None = None,
+    ) -> np.ndarray:
+        """Carry out the velocities ``wishes`` (one ``(k, 2)`` per view of :meth:`perceive`) and
+        what the views remember and send: ``commands`` ``(2, n)`` with the deciding robots' columns
+        replaced."""
         out = commands.copy()
-        said = [self._decide(t, b, clock[b], x, (vx, vy), talking, faults, out) for b in batches]
+        said = [self._apply(view, wished, out) for view, wished in zip(views, wishes)]
         if self.robot.radio is not None:
             self._publish(t, [s for s in said if s is not None], faults)
         return out
 
-    def _decide(
+    def _view(
         self,
         t: int,
         rows: np.ndarray,
@@ -135,11 +156,9 @@ class Engine:
         velocities: tuple[np.ndarray, np.ndarray],
         talking: np.ndarray,
         faults: FaultState | None,
-        out: np.ndarray,
-    ) -> tuple[np.ndarray, dict[str, np.ndarray]] | None:
-        """The robots ``rows`` perceive, hear and decide; their commands go into ``out``. Returns
-        what they said (their ids and fields), if anything."""
-        robot, movement, radio = self.robot, self.robot.movement, self.robot.radio
+    ) -> View:
+        """What the robots ``rows`` perceive and hear."""
+        movement, radio = self.robot.movement, self.robot.radio
         by_range = radio is not None and radio.graph is None
         seen, heard = kernels.perceive(
             x[:2].T,
@@ -153,19 +172,24 @@ class Engine:
             heard = _linked(radio.graph, rows, x, talking)
         ids = rows.copy()
         ids.flags.writeable = False
-        memory = {key: values[rows] for key, values in self.memory.items()}
         view = View(
             ids,
             clock.copy(),
             self.belief[rows],
             self._sense(t, rows, seen, velocities, faults).frozen(),
             self._hear(t, rows, heard, faults).frozen(),
-            memory,
+            {key: values[rows] for key, values in self.memory.items()},
         )
         if self.focus is not None:
             self._keep_focus(t, rows, view, self.focus)
-        wished = np.asarray(robot.decide(view), dtype=np.float64)
-        name = type(robot).__name__
+        return view
+
+    def _apply(self, view: View, wished: Any, out: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]] | None:
+        """Check a view's decision, keep its memory and put its commands into ``out``. Returns what
+        its robots said (their ids and fields), if anything."""
+        rows = np.asarray(view.ids)
+        wished = np.asarray(wished, dtype=np.float64)
+        name = type(self.robot).__name__
         if wished.shape != (len(rows), 2) or not np.isfinite(wished).all():
             raise ValueError(
                 f"{name}.decide must return finite velocities of shape (k, 2) = ({len(rows)}, 2), "
