@@ -71,7 +71,9 @@ def kernels_alone(engine: Engine, x: np.ndarray) -> float:
         kernels.perceive(positions, x[2], everyone, sight=(0.5, 2 * np.pi, 0.0), radio_range=1.0, talking=talking)
         for column in positions.T:  # the board's fields, read at the senders
             kernels.segment_reduce(column, heard[0], "sum", heard[1])
-        kernels.hrvo_rows(engine.dxi, np.zeros((n, 2)), positions, offsets, detections, safety=0.2, bounds=bounds)
+        kernels.hrvo_rows(
+            engine.dxi, np.zeros((n, 2)), positions, offsets, detections, safety=0.2, bounds=bounds, towards=True
+        )
         dxu = kernels.actuator_limit(kernels.dxi_to_dxu(engine.dxi.T, x, 0.8, 3.0))
         kernels.motion_guard(dxu[0], x[2], offsets, dx, dy, near=0.12, horizon=0.25)
 

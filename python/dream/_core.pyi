@@ -125,6 +125,7 @@ def hrvo_rows(
     bounds: _Bounds | None,
     candidates: _Floats,
     include_preferred: bool,
+    towards: bool = False,
 ) -> _Floats:
     """HRVO velocities (m, 2) of the deciding robots, each from its own detections (k, 4) or their four columns, cut by offsets (m+1,)."""
 

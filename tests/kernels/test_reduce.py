@@ -131,6 +131,20 @@ def test_hrvo_rows_is_the_planner_row_by_row(rng, rows):
         _core.hrvo_rows(velocities, preferred, positions, offsets, columns, candidates=grid, **options), got
     )
     assert_array_equal(kernels.hrvo_rows(velocities, preferred, positions, offsets, columns, **options), got)
+    # Bearings towards the robots seen, as a movement sensor's neighbourhood holds them: the same
+    # answer once the kernel turns them into the sensor's angles (from them), on both paths.
+    angle = seen[:, 1]
+    bearing = np.where(angle > 0, angle - np.pi, angle + np.pi)
+    bearing[:3] = 0.0  # straight ahead: the flip's edge
+    towards = np.column_stack((seen[:, 0], bearing, seen[:, 2:]))
+    flipped = seen.copy()
+    flipped[:, 1] = np.where(bearing > 0, bearing - np.pi, bearing + np.pi)
+    want = _reference.hrvo_rows(velocities, preferred, positions, offsets, flipped, candidates=grid, **options)
+    for path in (_core, _reference):
+        both = path.hrvo_rows(
+            velocities, preferred, positions, offsets, towards, candidates=grid, towards=True, **options
+        )
+        assert_array_equal(both, want)
     planner = _core.HrvoPlanner(grid, **options)
     for r in range(0, rows, max(rows // 40, 1)):  # exactly the per-robot planner's answer
         row = seen[offsets[r] : offsets[r + 1]]

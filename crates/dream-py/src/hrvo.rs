@@ -6,6 +6,7 @@ use dream_core::hrvo::{self as core, HrvoParams, Neighbour};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
+use std::f64::consts::PI;
 
 use crate::arrays::{both, indices_of, points_of, vector_of};
 use crate::errors::{value_error, PyDreamResult};
@@ -69,7 +70,7 @@ pub fn hrvo<'py>(
 /// HRVO velocities `(m, 2)` of the deciding robots, each from its own detections `(k, 4)`
 /// (row r's: `offsets[r]..offsets[r + 1]`); row r is `HrvoPlanner.velocity`'s answer for them.
 #[pyfunction]
-#[pyo3(signature = (velocities, preferred, positions, offsets, detections, *, safety, v_max, bounds, candidates, include_preferred))]
+#[pyo3(signature = (velocities, preferred, positions, offsets, detections, *, safety, v_max, bounds, candidates, include_preferred, towards=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn hrvo_rows<'py>(
     py: Python<'py>,
@@ -83,12 +84,21 @@ pub fn hrvo_rows<'py>(
     bounds: Option<(f64, f64, f64, f64)>,
     candidates: Bound<'py, PyAny>,
     include_preferred: bool,
+    towards: bool,
 ) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
     let v = points_of::<2>("velocities", &velocities)?;
     let pref = points_of::<2>("preferred", &preferred)?;
     let p = points_of::<2>("positions", &positions)?;
     let offsets = indices_of("offsets", &offsets)?;
-    let seen = detections_of(&detections)?;
+    let mut seen = detections_of(&detections)?;
+    if towards {
+        // Bearings towards the detected robots, as the movement sensor's angles from them: the
+        // reference's flip, to the bit.
+        for detection in &mut seen {
+            let bearing = detection[1];
+            detection[1] = if bearing > 0.0 { bearing - PI } else { bearing + PI };
+        }
+    }
     let grid = points_of::<2>("candidates", &candidates)?;
     let params = params(safety, v_max, bounds, include_preferred)?;
     let chosen = py.detach(|| core::hrvo_rows(&v, &pref, &p, &offsets, &seen, &grid, &params))?;

@@ -211,12 +211,17 @@ def hrvo_rows(
     bounds: tuple[float, float, float, float] | None,
     candidates: FloatArray,
     include_preferred: bool,
+    towards: bool = False,
 ) -> FloatArray:
     """HRVO velocities ``(m, 2)`` of the deciding robots, row r from its own detections
     ``detections[offsets[r]:offsets[r + 1]]`` ``(k, 4)``, or its four columns (:meth:`HrvoPlanner.velocity`'s
-    answer)."""
+    answer); with ``towards``, the angles are bearings towards the detected robots."""
     if isinstance(detections, tuple):
         detections = np.column_stack(detections)
+    if towards:
+        bearing = detections[:, 1]
+        detections = detections.copy()
+        detections[:, 1] = np.where(bearing > 0, bearing - np.pi, bearing + np.pi)
     planner = HrvoPlanner(candidates, safety=safety, v_max=v_max, bounds=bounds, include_preferred=include_preferred)
     out = np.zeros((len(positions), 2))
     for r in range(len(positions)):

@@ -210,12 +210,15 @@ def hrvo_rows(
     n_angles: int = 20,
     n_speeds: int = 10,
     include_preferred: bool = True,
+    towards: bool = False,
 ) -> FloatArray:
     """HRVO velocities ``(m, 2)`` of the robots deciding now, each from its own detections.
 
     Row r's detections are ``detections[offsets[r]:offsets[r + 1]]``, movement-sensor rows
     ``[distance, angle, vx, vy]`` (angle from the detected robot towards this one), or a tuple
-    of those four columns (a neighbourhood's, unstacked); row r's
+    of those four columns (a neighbourhood's, unstacked); with ``towards``, the angle column holds
+    bearings from the robot towards the detected one (a movement sensor's neighbourhood), turned
+    into the sensor's angles inside the kernel; row r's
     answer is :meth:`HrvoPlanner.velocity`'s for them, with ``velocities``, ``preferred`` and
     ``positions`` ``(m, 2)``: the robots' previous, wanted velocities and believed positions.
     A robot decides from what it perceives, never from the others' true poses (see :func:`hrvo`).
@@ -246,4 +249,5 @@ def hrvo_rows(
         bounds=checked_bounds(bounds),
         candidates=_checked_grid(v_max, n_angles, n_speeds),
         include_preferred=include_preferred,
+        towards=towards,
     )

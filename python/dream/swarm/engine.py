@@ -213,14 +213,7 @@ class Engine:
             asked = wished
             if avoid.sidestep:
                 asked, self.sidestep[rows] = rules.sidestep_preference(wished, self.sidestep[rows], self.side[rows])
-            bearing = seen["bearing"]
-            # The sensor's bearing is towards the other robot; HRVO takes the angle from it.
-            detections = (
-                seen["distance"],
-                np.where(bearing > 0, bearing - math.pi, bearing + math.pi),
-                seen["vx"],
-                seen["vy"],
-            )
+            detections = (seen["distance"], seen["bearing"], seen["vx"], seen["vy"])
             margin = robot.spec.radius if avoid.margin is None else avoid.margin
             chosen = kernels.hrvo_rows(
                 self.dxi[rows],
@@ -234,6 +227,7 @@ class Engine:
                 n_angles=avoid.n_angles,
                 n_speeds=avoid.n_speeds,
                 include_preferred=avoid.include_preferred,
+                towards=True,  # the sensor's bearings, towards the robots seen
             )
             if avoid.sidestep:
                 self.sidestep[rows], self.side[rows] = rules.sidestep_update(
