@@ -100,7 +100,7 @@ def test_line_consensus_scales_on_the_fast_backend():
 
 
 def test_line_consensus_thousand_robots_on_fast_do_not_collide():
-    result = lc.run(n=1000, seed=0, backend="fast", steps=150)
+    result = lc.run(n=1000, seed=0, backend="fast", steps=150, swarm=True)  # robot by robot: the same run
     assert result.n == 1000 and result.collisions == 0
 
 

@@ -189,7 +189,8 @@ class LineRobot(SwarmRobot):
     ) -> None:
         self.radio = Radio(graph=graph, fields=("x", "y"))  # robot i hears graph[1][graph[0][i]:graph[0][i + 1]]
         self.avoid = Avoid(safety=SAFETY, sidestep=SIDESTEP_UPDATES if lane > 0 else 0)
-        self.bounds, self.spacing, self.lane, self.resilient, self.radio_gap = bounds, spacing, lane, resilient, radio_gap
+        self.bounds, self.spacing, self.lane = bounds, spacing, lane
+        self.resilient, self.radio_gap = resilient, radio_gap
 
     def start(self, ids: np.ndarray) -> np.ndarray:
         """Staggered: a third of the team talks and decides at each of three neighbouring steps."""
@@ -202,15 +203,16 @@ class LineRobot(SwarmRobot):
         # A radio exchange at the first decision of each `radio_gap` steps of the robot's clock.
         slot = np.floor((view.clock - self.start(view.ids)) / self.radio_gap).astype(np.int64)
         talking = slot > memory["slot"]
-        places = rules.line_places(heard["sender"], view.ids[heard.owner], heard["x"], heard["y"], self.spacing)
-        if self.resilient:  # W-MSR: ignore the extreme values a liar could send
-            mean = np.column_stack([heard.wmsr_mean(places[:, c], here[:, c], self.resilient) for c in (0, 1)])
-        else:
-            mean = heard.mean(places)
-        update = talking & (heard.count > 0)
-        target[update] = mean[update]
-        view.send(where=talking, x=here[:, 0], y=rules.sent_row(here[:, 1], target[:, 1], travelling))
-        memory["slot"] = np.where(talking, slot, memory["slot"])
+        if talking.any():
+            places = rules.line_places(heard["sender"], view.ids[heard.owner], heard["x"], heard["y"], self.spacing)
+            if self.resilient:  # W-MSR: ignore the extreme values a liar could send
+                mean = np.column_stack([heard.wmsr_mean(places[:, c], here[:, c], self.resilient) for c in (0, 1)])
+            else:
+                mean = heard.mean(places)
+            update = talking & (heard.count > 0)
+            target[update] = mean[update]
+            view.send(where=talking, x=here[:, 0], y=rules.sent_row(here[:, 1], target[:, 1], travelling))
+            memory["slot"] = np.where(talking, slot, memory["slot"])
         desired = np.zeros((len(view), 2))
         aiming = np.isfinite(target[:, 0])
         goals, travelling[aiming] = rules.line_goal(

@@ -190,9 +190,11 @@ class Engine:
         chosen = wished
         if avoid is not None:
             chosen = wished.copy()
-            steer = slice(None) if straight is None else np.flatnonzero(~straight)
-            offsets, entries = seen.offsets, slice(None)
-            if straight is not None:  # the steered rows and their detections
+            steer: slice | np.ndarray = slice(None)  # the rows that go through HRVO
+            entries: slice | np.ndarray = slice(None)  # and their detections
+            offsets = seen.offsets
+            if straight is not None:
+                steer = np.flatnonzero(~straight)
                 counts = np.diff(offsets)[steer]
                 offsets, entries = np.concatenate(([0], np.cumsum(counts))), spans(offsets[:-1][steer], counts)
             ids, want = rows[steer], wished[steer]
