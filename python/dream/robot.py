@@ -20,6 +20,7 @@ from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec, RobotSpec
 from dream.world import current_world
 
 GUARD_MARGIN = 0.01  #: what :meth:`RobotHRVO.guard` adds to the robot's diameter (m)
+SIDESTEP_UPDATES = 10  #: decisions a blocked robot steps aside for (:meth:`RobotHRVO.steer`)
 GUARD_HORIZON = 0.25  #: how far ahead :meth:`RobotHRVO.guard` looks (s): beyond the next decision
 
 
@@ -367,7 +368,7 @@ class RobotHRVO(Robot):
             offsets = rows[:, :1] * np.column_stack((np.cos(rows[:, 1]), np.sin(rows[:, 1])))
             self.stop_short(offsets, near)
 
-    def steer(self, detections: Any, desired_velocity: Any, sidestep_updates: int = 10) -> FloatArray:
+    def steer(self, detections: Any, desired_velocity: Any, sidestep_updates: int = SIDESTEP_UPDATES) -> FloatArray:
         """:meth:`HRVO`, for a robot that must not wait forever.
 
         A robot that HRVO stops while it wants to move steps aside for the next
@@ -380,3 +381,23 @@ class RobotHRVO(Robot):
         sidestep, side = rules.sidestep_update(chosen, desired, sidestep, self.side, sidestep_updates)
         self.sidestep, self.side = int(sidestep), float(side)
         return chosen
+
+    def settle_or_steer(
+        self, desired: Any, fine: float, clearance: float, sidestep_updates: int = SIDESTEP_UPDATES
+    ) -> None:
+        """Set :attr:`dxi`: ``desired`` itself when slower than ``fine`` (m/s) with no detected robot
+        closer than ``clearance`` (m) (:func:`dream.rules.settles`); else :meth:`steer`.
+
+        A robot this slow is within centimetres of its place, and velocity obstacles (no time
+        horizon) forbid every velocity towards a neighbour inside the cone, however slow: on a
+        line 0.3 m apart that is the very direction of the last centimetres, so HRVO would push
+        the robot sideways, off the line, for ever. The clearance keeps HRVO in charge when two
+        places still nearly coincide: without it two such robots creep into each other. (A swarm
+        robot does this with :meth:`dream.swarm.View.direct`.)
+        """
+        detections = np.asarray(self.detections)
+        nearest = float(detections[:, 0].min()) if detections.size else math.inf
+        if rules.settles(desired, nearest, fine, clearance):
+            self.dxi = desired
+        else:
+            self.steer(self.detections, desired, sidestep_updates)

@@ -384,19 +384,41 @@ def sidestep_update(chosen: Any, desired: Any, sidestep: Any, side: Any, updates
 
 
 def wmsr_keep(values: Any, own: float, trimmed: int) -> np.ndarray:
-    """W-MSR's filter: ``values`` ``(k,)`` without the ``trimmed`` largest of those above ``own``
-    and the ``trimmed`` smallest of those below it (all of them when there are fewer).
+    """W-MSR's filter for one robot: ``values`` ``(k,)`` without the ``trimmed`` largest of those above
+    ``own`` and the ``trimmed`` smallest of those below it (all of them when there are fewer), in
+    their order (:func:`wmsr_kept` of one row).
 
     With at most ``trimmed`` lying neighbours in a robust enough graph, the correct robots still
     reach consensus within the range of their own values (LeBlanc et al., 2013): a liar's value
     outside that range is among the dropped ones.
     """
+    values = np.asarray(values, dtype=np.float64).reshape(-1)
+    return values[wmsr_kept(values, np.array([0, len(values)]), np.array([own], dtype=np.float64), trimmed)]
+
+
+def wmsr_kept(values: Any, offsets: Any, own: Any, trimmed: int) -> np.ndarray:
+    """W-MSR's filter on ragged rows: ``(e,)`` bool, which of ``values`` ``(e,)`` (NaN-free) row r
+    (entries ``offsets[r]:offsets[r + 1]``) keeps when it drops the ``trimmed`` largest of its values
+    above ``own[r]`` and the ``trimmed`` smallest below it (all of them when there are fewer).
+
+    Each row is sorted on its own (by row, then value), so a row's flags depend on its entries
+    alone: robots filtered one at a time or together keep the same values.
+    """
     values = np.asarray(values, dtype=np.float64)
-    if trimmed <= 0:
-        return values
-    above, below = values[values > own], values[values < own]
-    kept = [np.sort(above)[: max(len(above) - trimmed, 0)], values[values == own], np.sort(below)[trimmed:]]
-    return np.concatenate(kept)
+    offsets = np.asarray(offsets, dtype=np.int64)
+    keep = np.ones(len(values), dtype=bool)
+    if trimmed <= 0 or not len(values):
+        return keep
+    count = np.diff(offsets)
+    row = np.repeat(np.arange(len(count)), count)
+    mine = np.asarray(own, dtype=np.float64)[row]
+    order = np.lexsort((values, row))
+    rank = np.empty(len(values), dtype=np.int64)  # each value's place in its row, smallest first
+    rank[order] = np.arange(len(values)) - offsets[row[order]]
+    below = np.minimum(np.bincount(row[values < mine], minlength=len(count)), trimmed)
+    above = np.minimum(np.bincount(row[values > mine], minlength=len(count)), trimmed)
+    # Sorted, a row holds its values below `own` first and those above it last.
+    return (rank >= below[row]) & (rank < (count - above)[row])
 
 
 def seen_positions(position: Any, detections: Any) -> FloatArray:
@@ -541,7 +563,7 @@ def sent_row(own_y: Any, target_y: Any, travelling: Any) -> np.ndarray:
 def settles(desired: Any, nearest: Any, fine: float, clearance: float) -> np.ndarray:
     """Whether a robot moves at ``desired`` ``(n, 2)`` or ``(2,)`` (m/s) without HRVO: slower than
     ``fine`` (m/s) with no robot nearer than ``clearance`` (m; ``nearest`` ``(n,)`` or ``()``,
-    inf when none is detected). See :func:`dream.experiments.line_consensus.settle_or_steer`."""
+    inf when none is detected). See :meth:`dream.robot.RobotHRVO.settle_or_steer`."""
     return (length(desired) < fine) & (np.asarray(nearest) >= clearance)
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import dream
 from dream import rules
 from dream.experiments import line_consensus as lc
 
@@ -25,24 +26,35 @@ def test_line_consensus_orders_robots_by_id_along_x():
 
 
 @pytest.mark.parametrize(("n", "seed"), [(6, 0), (10, 1)])
-def test_line_consensus_swarm_mode_moves_as_the_robots_do(n, seed):
-    # Swarm mode keeps every robot's timer rates, the order in which the per-robot timers run
-    # within a step (radio messages and detections of lower ids), what each movement sensor saw
-    # and when, and the shared decision rules: the trajectories agree to rounding, whole runs long.
-    # Six robots: the thesis's (Robotarium arena, plain HRVO); ten: the large team's code paths.
+def test_line_consensus_is_the_same_robot_by_robot_and_as_a_swarm(n, seed):
+    # One LineRobot, run robot by robot and as one swarm: the same poses at every step, bit for
+    # bit, whole runs long. Six robots: the thesis's (Robotarium arena, plain HRVO); ten: the
+    # large team's code paths (lanes, stepping aside, settling without HRVO).
     robots = lc.run(n=n, seed=seed, backend="fast", trace=True)
     swarm = lc.run(n=n, seed=seed, backend="fast", swarm=True, trace=True)
     assert robots.success and swarm.success and swarm.swarm
     assert swarm.completed_step == robots.completed_step
-    np.testing.assert_allclose(swarm.trace, robots.trace, rtol=0, atol=1e-9)
+    assert np.array_equal(swarm.trace, robots.trace)
 
 
-def test_line_consensus_swarm_mode_refuses_w_msr():
-    with pytest.raises(ValueError, match="no W-MSR"):
-        lc.run(n=6, backend="fast", swarm=True, resilient=1, steps=2)
+FAULTS = {
+    "loss, latency, crash": (dream.Faults(loss=0.3, latency=5, jitter=2, crash=0.1, crash_at=100), {}),
+    "liars, W-MSR": (dream.Faults(byzantine=1, lie="random", sensor_noise=0.005, drift=0.02), {"resilient": 1}),
+}
 
 
-def test_line_consensus_swarm_mode_frames_come_from_its_arrays():
+@pytest.mark.parametrize("case", FAULTS)
+def test_line_consensus_is_the_same_both_ways_under_faults(case):
+    faults, params = FAULTS[case]
+    robots, swarm = (
+        lc.run(n=12, seed=2, backend="fast", steps=400, trace=True, swarm=way, faults=faults, **params)
+        for way in (False, True)
+    )
+    assert np.array_equal(swarm.trace, robots.trace) and robots.faults == swarm.faults
+    assert robots.faults["messages_lost"] > 0 if "loss" in case else robots.faults["events"]
+
+
+def test_line_consensus_frames_come_from_its_robots():
     frames = []
     lc.run(n=10, seed=0, backend="fast", swarm=True, steps=40, record=frames.append)
     last = frames[-1]
@@ -88,7 +100,7 @@ def test_line_consensus_scales_on_the_fast_backend():
 
 
 def test_line_consensus_thousand_robots_on_fast_do_not_collide():
-    result = lc.run(n=1000, seed=0, backend="fast", steps=150)
+    result = lc.run(n=1000, seed=0, backend="fast", steps=150, swarm=True)  # robot by robot: the same run
     assert result.n == 1000 and result.collisions == 0
 
 

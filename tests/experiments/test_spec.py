@@ -212,7 +212,13 @@ def test_run_refuses_unknown_experiment_names():
         dream.run("nope")
 
 
-@pytest.mark.parametrize("name", sorted(EXPERIMENTS))
+#: line-consensus left the hand-written loops' timers for the swarm engine (its robots read their
+#: sensors at each decision and hear a message from the step after it was sent): its pinned
+#: trajectories no longer apply; tests/experiments/test_line_consensus.py compares its runs both ways.
+PINNED = sorted(set(EXPERIMENTS) - {"line-consensus"})
+
+
+@pytest.mark.parametrize("name", PINNED)
 @pytest.mark.parametrize("backend", ["robotarium", "fast"])
 def test_ported_experiments_keep_their_trajectories(name, backend):
     """Poses every 50 steps of seed 3, recorded with the hand-written loops before the runner."""

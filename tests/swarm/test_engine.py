@@ -221,7 +221,17 @@ def test_a_sensor_sees_only_within_its_range_and_field_of_view():
 def test_the_decision_gets_rows_never_the_swarm():
     robot = Recorder(period=2, radio=Radio(range=1.0, fields=("value",)))
     drive(robot, 6, 3)
-    assert set(View.__dataclass_fields__) == {"ids", "clock", "pose", "seen", "heard", "memory", "said"}
+    assert set(View.__dataclass_fields__) == {
+        "ids",
+        "clock",
+        "pose",
+        "seen",
+        "heard",
+        "memory",
+        "said",
+        "saying",
+        "straight",
+    }
     assert all(len(ids) == 6 for _, ids, _ in robot.views)
 
 

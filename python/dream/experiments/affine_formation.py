@@ -72,14 +72,13 @@ import numpy as np
 
 from dream import rules, timers
 from dream._checks import Bounds
-from dream.experiments.line_consensus import SIDESTEP_UPDATES, settle_or_steer
 from dream.experiments.sightings import Nearby, Sight, decide_in_order, last_detections
 from dream.experiments.spec import Experiment
 from dream.frames import Frame
 from dream.heartbeats import Heartbeats
 from dream.obstacles import Fleet, Obstacle
 from dream.radios import GraphRadio
-from dream.robot import RobotHRVO
+from dream.robot import SIDESTEP_UPDATES, RobotHRVO
 from dream.sensors import MovementSensor, OdometrySensor
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec
 from dream.world import create_timer
@@ -519,7 +518,7 @@ class Follower(RobotHRVO):
             desired = rules.capped(-GAIN * rules.stress(here, there, self.weights[list(known)]), self.v_max)
         # Close to its place (the formation keeps robots >= 0.25 m apart) HRVO would forbid the
         # last centimetres towards a neighbour. The thesis's followers check no clearance.
-        settle_or_steer(self, desired, FINE, clearance=0.0)
+        self.settle_or_steer(desired, FINE, clearance=0.0)
         self.command(dxu)
 
 
@@ -743,7 +742,7 @@ class AffineFormation(Experiment):
         :meth:`Follower.update` take them: a leader heads for its aim (:func:`morph`,
         :func:`dream.rules.toward`) through HRVO, avoiding nobody; a follower obeys the stress law
         on the positions ``heard`` ``(k, 7, 2)`` (:func:`dream.rules.stress`), settles or steers
-        (:func:`~dream.experiments.line_consensus.settle_or_steer`); one HRVO call for them all,
+        (:meth:`~dream.robot.RobotHRVO.settle_or_steer`); one HRVO call for them all,
         in the per-robot mode's order (:func:`~dream.experiments.sightings.decide_in_order`), puts
         their limited and guarded commands into ``commands`` ``(2, n)``."""
         team, k = self.team, len(who)

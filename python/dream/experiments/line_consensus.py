@@ -19,18 +19,12 @@ over 4000 steps, N = 100 never got there). While travelling, a robot sends the y
 rather than its own, so that its detour does not pull the others' line. These robots also step
 aside when HRVO blocks them, and settle their last centimetres without HRVO, whose cones
 otherwise forbid the very direction of a neighbour 0.3 m away on the line and keep the line
-shaking sideways (see :func:`settle_or_steer`).
+shaking sideways (:func:`dream.rules.settles`, :meth:`dream.swarm.View.direct`).
 
-Swarm mode (``swarm=True``, :meth:`LineConsensus.swarm_step`) runs the same robots on arrays: the
-same decision rules (:mod:`dream.rules`: the consensus update, the goal beside the line, settling,
-stepping aside; the motion guard of :func:`dream.robot.stopping`), each robot at its own timer's
-steps (:func:`dream.timers.due`), one HRVO call for the robots deciding in a step. It also keeps
-what the per-robot timers imply within a step, where robots run one after the other by id: a
-radio hears the message a neighbour of lower id sent in that very step, and a movement sensor
-reads, besides the poses, the commands those neighbours have just decided. Each robot decides
-from what its sensor read at its last reading (up to two steps old), with the velocities the
-sensor estimates. The trajectories equal the per-robot mode's to rounding (the tests compare them
-over whole runs); it has no W-MSR, since faults reach a swarm through its wheels only.
+The robot is one :class:`LineRobot`, written on arrays (:mod:`dream.swarm`): the runner runs it
+robot by robot, or as one swarm (``swarm=True``), with the same poses at every step, under
+every fault. With ``resilient`` = F it filters what it hears by W-MSR
+(:meth:`dream.swarm.Neighbourhood.wmsr_mean`).
 
 Success: y spread and spacing error below 0.02 m, zero collisions.
 """
@@ -38,36 +32,33 @@ Success: y spread and spacing error below 0.02 m, zero collisions.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from dream import rules, timers
-from dream.experiments.sightings import Nearby, Sight, decide_in_order, last_detections
+from dream import rules
+from dream._checks import Bounds
+from dream._csr import offsets_of
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
-from dream.radios import GraphRadio
-from dream.robot import RobotHRVO
-from dream.sensors import MovementSensor, OdometrySensor
+from dream.robot import SIDESTEP_UPDATES
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec
-from dream.world import create_timer
+from dream.swarm import Avoid, Movement, Radio, SwarmRobot, View
 
 NAME = "line-consensus"
 SPACING = 0.3  #: distance between neighbours on the line (m)
 TOLERANCE = 0.02  #: largest y spread and spacing error of a converged line (m)
 GAIN = 1.0  #: proportional gain towards the consensus target (1/s)
 LANE = 0.35  #: distance of the passing lanes from the line (m): more than HRVO's safety radius
-FINE = 0.03  #: below this desired speed (m/s) a robot moves without HRVO (see `settle_or_steer`)
+FINE = 0.03  #: below this desired speed (m/s) a robot moves without HRVO (see :func:`dream.rules.settles`)
 CLEARANCE = 0.2  #: settling without HRVO only with no robot this close (m): contact is at 0.11
 CRUISE = 0.8 * GRITSBOT.v_max  #: top speed of a robot (m/s): the unicycle conversion's gain 0.8 times v_max
 START_SPACING = 0.4  #: grid of the large teams' starting strip (m)
 START_SHARE = 6  #: grid points per robot in the starting strip: about one robot per square metre
 SAFETY = 0.24  #: HRVO's combined safety radius (m): the RobotHRVO default
 SENSING = 1.0  #: range of the movement sensor (m)
-START_DELAY = 10  #: start-up delay of robot i's timer: this plus i % 3 steps
-ODOM_GAP, MOVEMENT_GAP, CONTROL_GAP = 2, 3, 4  #: steps between odometry readings, detections, decisions
-SIDESTEP_UPDATES = 10  #: decisions a blocked robot steps aside for (see RobotHRVO.steer)
+START_DELAY = 10  #: start-up delay of robot i: this plus i % 3 steps
+CONTROL_GAP = 4  #: steps between two decisions of a robot
 
 #: The thesis's communication graph for six robots.
 THESIS_GRAPH = np.array(
@@ -127,12 +118,6 @@ def graph(n: int, rng: np.random.Generator, reach: int = 1) -> np.ndarray:
     return adjacency
 
 
-def start_delays(n: int) -> np.ndarray:
-    """Start-up delays ``(n,)`` of the robots' timers (steps): staggered so that a third of the
-    team talks and decides at each of three neighbouring steps."""
-    return START_DELAY + np.arange(n) % 3
-
-
 def start_grid(n: int, spacing: float = SPACING) -> tuple[int, int]:
     """``(columns, rows)`` of the starting strip of a large team: columns ``START_SPACING`` apart
     over 1.25 times the line's length, rows enough for ``START_SHARE`` grid points per robot."""
@@ -170,151 +155,83 @@ def line_errors(poses: np.ndarray, spacing: float = SPACING, correct: np.ndarray
     return float(np.ptp(y)) if len(y) else 0.0, float(np.abs(gaps).max()) if len(gaps) else 0.0
 
 
-def settle_or_steer(
-    robot: RobotHRVO,
-    desired: np.ndarray,
-    fine: float = FINE,
-    clearance: float = CLEARANCE,
-    sidestep_updates: int = SIDESTEP_UPDATES,
-) -> None:
-    """Set ``robot.dxi``: ``desired`` itself when slower than ``fine`` (m/s) with no detected robot
-    closer than ``clearance`` (m) (:func:`dream.rules.settles`); else :meth:`RobotHRVO.steer`.
+class LineRobot(SwarmRobot):
+    """A robot that moves to the consensus of its graph neighbours' positions (see the module docs).
 
-    A robot this slow is within centimetres of its place, and velocity obstacles (no time
-    horizon) forbid every velocity towards a neighbour inside the cone, however slow: on a line
-    0.3 m apart that is the very direction of the last centimetres, so HRVO would push the robot
-    sideways, off the line, for ever. The clearance keeps HRVO in charge when two places still
-    nearly coincide (the consensus not yet converged): without it two such robots creep into
-    each other.
-    """
-    detections = np.asarray(robot.detections)
-    nearest = float(detections[:, 0].min()) if detections.size else math.inf
-    if rules.settles(desired, nearest, fine, clearance):
-        robot.dxi = desired
-    else:
-        robot.steer(robot.detections, desired, sidestep_updates)
+    Every ``CONTROL_GAP`` steps it heads for its consensus target (:func:`dream.rules.line_goal`,
+    :func:`dream.rules.toward`); at the first decision of every ``radio_gap`` steps of its clock it
+    also takes the mean place its neighbours' messages give it (:func:`dream.rules.line_places`,
+    or their W-MSR mean with ``resilient`` > 0) and sends its position and row
+    (:func:`dream.rules.sent_row`).
 
-
-class LineRobot(RobotHRVO):
-    """A robot that moves to the consensus of its graph neighbours' positions.
-
-    Callbacks: :meth:`update_odom`, :meth:`update_sensor`, :meth:`update_radio` (receives
-    ``(id, x, y)`` messages, returns its own) and :meth:`update` (the controller).
-
-    ``lane`` (m) > 0 is the large team's robot: it travels beside the line (see the module
-    docs), steps aside when HRVO blocks it (:meth:`~RobotHRVO.steer`) and settles its last
-    centimetres without HRVO (:func:`settle_or_steer`). 0 is the thesis's robot, which heads
+    ``lane`` (m) > 0 is the large team's robot: it travels beside the line, steps aside when HRVO
+    blocks it and settles its last centimetres without HRVO. 0 is the thesis's robot, which heads
     straight for its target through HRVO.
+
+    Robot objects with timers (before this robot was written on arrays) read their odometry every
+    2 steps and their sensor every 3, and heard a message from a neighbour of lower id in the
+    step it was sent; this robot reads both fresh at each decision and hears a message from the
+    step after it was sent.
     """
+
+    period = CONTROL_GAP
+    movement = Movement(range=SENSING)
+    memory = {"target_x": math.nan, "target_y": math.nan, "travelling": 0, "slot": -1}
 
     def __init__(
-        self, robot_id: int, tag: str, spacing: float = SPACING, lane: float = 0.0, resilient: int = 0, **kwargs: Any
+        self,
+        graph: tuple[np.ndarray, np.ndarray],
+        bounds: Bounds,
+        spacing: float = SPACING,
+        lane: float = 0.0,
+        resilient: int = 0,
+        radio_gap: int = 10,
     ) -> None:
-        super().__init__(robot_id, tag, **kwargs)
-        self.spacing = spacing
-        self.lane = lane
-        self.resilient = resilient
-        self.target: np.ndarray | None = None
-        self.travelling = False
+        self.radio = Radio(graph=graph, fields=("x", "y"))  # robot i hears graph[1][graph[0][i]:graph[0][i + 1]]
+        self.avoid = Avoid(safety=SAFETY, sidestep=SIDESTEP_UPDATES if lane > 0 else 0)
+        self.bounds, self.spacing, self.lane = bounds, spacing, lane
+        self.resilient, self.radio_gap = resilient, radio_gap
 
-    def update_radio(self, messages: list[tuple[int, float, float]]) -> tuple[int, float, float] | None:
-        if messages:
-            senders, x, y = np.array(messages, dtype=np.float64).T
-            places = rules.line_places(senders, self.robot_id, x, y, self.spacing)
-            if self.resilient and self.has_pose:  # W-MSR: ignore the extreme values a liar could send
-                xs = [*rules.wmsr_keep(places[:, 0], self.pos_x, self.resilient), self.pos_x]
-                ys = [*rules.wmsr_keep(places[:, 1], self.pos_y, self.resilient), self.pos_y]
-                self.target = np.array([np.mean(xs), np.mean(ys)])
+    def start(self, ids: np.ndarray) -> np.ndarray:
+        """Staggered: a third of the team talks and decides at each of three neighbouring steps."""
+        return START_DELAY + ids % 3
+
+    def decide(self, view: View) -> np.ndarray:
+        here, memory, heard = view.pose[:, :2], view.memory, view.heard
+        target = np.column_stack((memory["target_x"], memory["target_y"]))
+        travelling = memory["travelling"].astype(bool)
+        # A radio exchange at the first decision of each `radio_gap` steps of the robot's clock.
+        slot = np.floor((view.clock - self.start(view.ids)) / self.radio_gap).astype(np.int64)
+        talking = slot > memory["slot"]
+        if talking.any():
+            places = rules.line_places(heard["sender"], view.ids[heard.owner], heard["x"], heard["y"], self.spacing)
+            if self.resilient:  # W-MSR: ignore the extreme values a liar could send
+                mean = np.column_stack([heard.wmsr_mean(places[:, c], here[:, c], self.resilient) for c in (0, 1)])
             else:
-                self.target = rules.consensus(places, np.zeros(len(places), dtype=np.int64), 1)[0]
-        if not self.has_pose:
-            return None
-        target_y = math.nan if self.target is None else self.target[1]
-        return (self.robot_id, self.pos_x, float(rules.sent_row(self.pos_y, target_y, self.travelling)))
-
-    def goal(self, target: np.ndarray) -> np.ndarray:
-        """Where the robot heads now for its consensus ``target`` ``(2,)`` (:func:`dream.rules.line_goal`:
-        the target, or beside the line while its place is far along it)."""
-        goal, travelling = rules.line_goal(
-            (self.pos_x, self.pos_y), target, self.travelling, self.spacing, self.lane, self.bounds
+                mean = heard.mean(places)
+            update = talking & (heard.count > 0)
+            target[update] = mean[update]
+            view.send(where=talking, x=here[:, 0], y=rules.sent_row(here[:, 1], target[:, 1], travelling))
+            memory["slot"] = np.where(talking, slot, memory["slot"])
+        desired = np.zeros((len(view), 2))
+        aiming = np.isfinite(target[:, 0])
+        goals, travelling[aiming] = rules.line_goal(
+            here[aiming], target[aiming], travelling[aiming], self.spacing, self.lane, self.bounds
         )
-        self.travelling = bool(travelling)
-        return goal
-
-    def update(self, dxu: np.ndarray) -> None:
-        desired = np.zeros(2)
-        if self.has_pose and self.target is not None:
-            desired = rules.toward((self.pos_x, self.pos_y), self.goal(self.target), GAIN, self.v_max)
+        desired[aiming] = rules.toward(here[aiming], goals, GAIN, self.spec.v_max)
         if self.lane > 0:
-            settle_or_steer(self, desired, sidestep_updates=SIDESTEP_UPDATES)
-        else:
-            self.HRVO(self.detections, desired)
-        self.command(dxu)
-
-
-@dataclass
-class LineSwarm:
-    """Every robot's state in swarm mode, one row or column each (see :meth:`LineConsensus.swarm_step`).
-
-    Attributes
-    ----------
-    delays : (n,) int ndarray
-        Start-up delay of each robot's timer (steps), as in the per-robot mode.
-    receivers, senders : (m,) int ndarrays
-        The graph's links (:func:`graph_links`).
-    pose : (3, n) ndarray
-        Each robot's last odometry reading (NaN before the first).
-    target : (n, 2) ndarray
-        Consensus targets (m; NaN before the first message).
-    travelling : (n,) bool ndarray
-        Whether each robot travels beside the line (:func:`dream.rules.line_goal`).
-    sent : (n, 2) ndarray
-        The radio board: the ``(x, y)`` each robot sent last (NaN before it first spoke).
-    dxi : (n, 2) ndarray
-        The velocities chosen last (m/s).
-    sidestep, side : (n,) ndarrays
-        Decisions left stepping aside, and to which side (see :meth:`~dream.RobotHRVO.steer`).
-    """
-
-    delays: np.ndarray
-    receivers: np.ndarray
-    senders: np.ndarray
-    pose: np.ndarray
-    target: np.ndarray
-    travelling: np.ndarray
-    sent: np.ndarray
-    dxi: np.ndarray
-    sidestep: np.ndarray
-    side: np.ndarray
-
-    @classmethod
-    def start(cls, n: int, links: tuple[np.ndarray, np.ndarray]) -> LineSwarm:
-        """``n`` robots that know nothing yet, on the graph ``links`` ``(receivers, senders)``."""
-        return cls(
-            delays=start_delays(n),
-            receivers=links[0],
-            senders=links[1],
-            pose=np.full((3, n), np.nan),
-            target=np.full((n, 2), np.nan),
-            travelling=np.zeros(n, dtype=bool),
-            sent=np.full((n, 2), np.nan),
-            dxi=np.zeros((n, 2)),
-            sidestep=np.zeros(n, dtype=np.int64),
-            side=np.ones(n),
-        )
+            nearest = view.seen.min("distance")
+            view.direct(rules.settles(desired, np.where(np.isnan(nearest), math.inf, nearest), FINE, CLEARANCE))
+        memory["target_x"], memory["target_y"], memory["travelling"] = target[:, 0], target[:, 1], travelling
+        return desired
 
 
 class LineConsensus(Experiment):
-    """The line-consensus experiment (see the module docs).
-
-    Swarm mode (``swarm=True``) keeps the per-robot mode's schedule and decision rules (see the
-    module docs) with the team's state in a :class:`LineSwarm`.
-    """
+    """The line-consensus experiment (see the module docs): its robots are one :class:`LineRobot`."""
 
     name = NAME
     default_n = 6
     success = "y spread and spacing error below 0.02 m (the line has formed), zero violations"
-    has_swarm_mode = True
     spacing: float = param(SPACING, "distance between neighbours on the line (m)", gt=0)
     radio_gap: int = param(10, "steps between radio exchanges", ge=1)
     resilient: int = param(
@@ -340,141 +257,19 @@ class LineConsensus(Experiment):
         """3000 in the Robotarium; beyond, 3000 plus five times the time the robot farthest from
         its place needs at full speed (half the line plus half the starting strip away): N = 100
         took 7522-27,917 steps over seeds 0-9 against a cap of 34,487, N = 1000 65,444-119,393 over
-        seeds 0-2 against 322,177."""
+        seeds 0-2 against 322,177 (robot objects with timers, before :class:`LineRobot`)."""
         if self.arena_for(n) == ROBOTARIUM:
             return 3000
         travel = (n - 1) * self.spacing / 2 + (start_grid(n, self.spacing)[0] - 1) * START_SPACING / 2
         return 3000 + math.ceil(5 * travel / (CRUISE * RPS.time_step))
 
-    def build(self, n: int) -> None:
-        self.adjacency = graph(n, self.world.rng, resilient_reach(self.resilient))
-        lane, delays = self.lane(), start_delays(n)
-        for i in range(n):
-            robot = LineRobot(i, f"robot_{i}", self.spacing, lane, self.resilient, safety=SAFETY, arena=self.arena)
-            odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
-            movement = MovementSensor(i, f"movement_{i}", robot.update_sensor, range=SENSING)
-            radio = GraphRadio(i, f"radio_{i}", robot.update_radio, self.adjacency)
-            create_timer(
-                i,
-                int(delays[i]),
-                [
-                    {"delay": ODOM_GAP, "tag": "odom", "call": odometry.update},
-                    {"delay": MOVEMENT_GAP, "tag": "movement", "call": movement.update},
-                    {"delay": self.radio_gap, "tag": "radio", "call": radio.update},
-                    {"delay": CONTROL_GAP, "tag": "robot", "call": robot.update},
-                ],
-            )
-            self.robots.append(robot)
-
-    def lane(self) -> float:
-        """The passing lanes' distance from the line (m): none in the Robotarium (the thesis's robots)."""
-        return 0.0 if self.arena == ROBOTARIUM else LANE
-
-    def build_swarm(self, n: int) -> None:
-        if self.resilient:
-            raise ValueError(
-                "line-consensus's swarm mode has no W-MSR (resilient > 0): its radio carries no lies "
-                "(faults reach a swarm through its wheels only); run it robot by robot"
-            )
-        self.team = LineSwarm.start(n, graph_links(n, self.world.rng))
-        self.bounds = self.arena.shrunk(GRITSBOT.radius)
-        self.sights: dict[int, Sight] = {}
-
-    def swarm_step(self, step: int, x: np.ndarray) -> np.ndarray:
-        """Every robot's part of step ``step``, at the per-robot mode's rates (:func:`dream.timers.due`
-        of each robot's timer): odometry, a radio round (:meth:`_talk`), a decision (:meth:`_decide`);
-        a robot that does not decide keeps its last command."""
-        team = self.team
-        if step == 0:  # no robot drives faster than its simulator lets it
-            self.nearby = Nearby(SENSING, GRITSBOT.within(self.sim.spec).v_max, self.sim.time_step)
-        # What the movement sensors of this step see: the poses, the commands before this step's
-        # decisions, and who is in range (the last MOVEMENT_GAP steps are kept for later decisions).
-        looking = np.flatnonzero(timers.due(step, team.delays, MOVEMENT_GAP))
-        self.sights[step] = Sight(x, self.dxu.copy(), *self.nearby.rows(step, x, looking))
-        self.sights.pop(step - MOVEMENT_GAP, None)
-        reading = timers.due(step, team.delays, ODOM_GAP)
-        team.pose[:, reading] = x[:, reading]
-        talking = timers.due(step, team.delays, self.radio_gap)
-        if talking.any():
-            self._talk(talking)
-        deciding = np.flatnonzero(timers.due(step, team.delays, CONTROL_GAP))
-        commands = self.dxu.copy()
-        if len(deciding):
-            self._decide(step, deciding, commands)
-        return commands
-
-    def _talk(self, talking: np.ndarray) -> None:
-        """One radio round of the ``talking`` robots ``(n,)`` bool: each takes the mean place of the
-        messages on the board from its graph neighbours (:func:`dream.rules.consensus`), then sends
-        its own. The per-robot mode's radios talk one after the other by id, so a neighbour of lower
-        id talking in the same step has already replaced its message: its position now, and a row
-        (:func:`dream.rules.sent_row`) that can depend on the target it has just taken. Those rows
-        follow the ids, so repeating the round until they no longer change gives exactly the
-        per-robot messages (twice for teams that do not travel)."""
-        team, n = self.team, self.n
-        links = talking[team.receivers]
-        receivers, senders = team.receivers[links], team.senders[links]
-        fresh = talking[senders] & (senders < receivers)
-        board = team.sent[senders]
-        heard = fresh | np.isfinite(board[:, 0])  # silent robots (none yet) send nothing
-        receivers, senders, fresh, board = receivers[heard], senders[heard], fresh[heard], board[heard]
-        x_sent = np.where(fresh, team.pose[0, senders], board[:, 0])
-        rows = rules.sent_row(team.pose[1], team.target[:, 1], team.travelling)
-        while True:
-            places = rules.line_places(
-                senders, receivers, x_sent, np.where(fresh, rows[senders], board[:, 1]), self.spacing
-            )
-            mean = rules.consensus(places, receivers, n)
-            target = np.where((talking & np.isfinite(mean[:, 0]))[:, None], mean, team.target)
-            settled, rows = rows, rules.sent_row(team.pose[1], target[:, 1], team.travelling)
-            if np.array_equal(rows[talking], settled[talking], equal_nan=True):
-                break
-        team.target = target
-        team.sent[talking] = np.column_stack((team.pose[0, talking], rows[talking]))
-
-    def _decide(self, step: int, who: np.ndarray, commands: np.ndarray) -> None:
-        """The decisions of robots ``who`` ``(k,)`` (ids, increasing), as :meth:`LineRobot.update`
-        takes them: head for the goal (:func:`dream.rules.line_goal`, :func:`dream.rules.toward`),
-        settle or steer, then write their limited and guarded commands into ``commands`` ``(2, n)``
-        in the per-robot mode's order (:func:`~dream.experiments.sightings.decide_in_order`: one
-        HRVO call for them all), each from what its movement sensor saw at its last reading
-        (:func:`~dream.experiments.sightings.last_detections`).
-        """
-        team, lane = self.team, self.lane()
-        own = team.pose[:2, who].T
-        aiming = np.isfinite(team.target[who, 0])
-        goals, team.travelling[who[aiming]] = rules.line_goal(
-            own[aiming], team.target[who[aiming]], team.travelling[who[aiming]], self.spacing, lane, self.bounds
-        )
-        desired = np.zeros((len(who), 2))
-        desired[aiming] = rules.toward(own[aiming], goals, GAIN, GRITSBOT.v_max)
-        seen = last_detections(self.sights, team.delays[who], step, who, MOVEMENT_GAP)
-        settle = np.zeros(len(who), dtype=bool)
-        wanted, sidestep = desired, team.sidestep[who]
-        if lane > 0:
-            nearest = np.full(len(who), np.inf)
-            np.minimum.at(nearest, seen.owners, seen.distances)
-            settle = rules.settles(desired, nearest, FINE, CLEARANCE)
-            wanted, sidestep = rules.sidestep_preference(desired, sidestep, team.side[who])
-        chosen = decide_in_order(
-            who,
-            team.pose[:, who],
-            team.dxi[who],
-            desired,
-            wanted,
-            settle,
-            seen,
-            commands,
-            safety=SAFETY,
-            v_max=GRITSBOT.v_max,
-            bounds=self.bounds,
-            limits=GRITSBOT.within(self.sim.spec),
-        )
-        if lane > 0:
-            sidestep, side = rules.sidestep_update(chosen, desired, sidestep, team.side[who], SIDESTEP_UPDATES)
-            steered = who[~settle]
-            team.sidestep[steered], team.side[steered] = sidestep[~settle], side[~settle]
-        team.dxi[who] = np.where(settle[:, None], desired, chosen)
+    def swarm_robot(self, n: int) -> LineRobot:
+        """The team on its graph (:func:`graph_links`, a wider ring for W-MSR: :func:`resilient_reach`)."""
+        self.links = graph_links(n, self.world.rng, resilient_reach(self.resilient))
+        lane = 0.0 if self.arena == ROBOTARIUM else LANE  # the thesis's robots in the Robotarium
+        graph = (offsets_of(self.links[0], n), self.links[1])
+        bounds = self.arena.shrunk(GRITSBOT.radius)
+        return LineRobot(graph, bounds, self.spacing, lane, self.resilient, self.radio_gap)
 
     def done(self, step: int, poses: np.ndarray) -> bool:
         self.errors = line_errors(poses, self.spacing, self.correct)
@@ -489,21 +284,17 @@ class LineConsensus(Experiment):
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
         spread, error = line_errors(poses, self.spacing, self.correct)
-        if self.swarm:
-            goals, velocities = self.team.target, self.team.dxi
-            upper = self.team.receivers < self.team.senders
-            links = np.column_stack((self.team.receivers[upper], self.team.senders[upper]))
-        else:
-            goals = np.array([np.full(2, np.nan) if r.target is None else r.target for r in self.robots])
-            velocities = np.array([r.dxi for r in self.robots]).reshape(-1, 2)
-            links = np.argwhere(np.triu(self.adjacency) > 0)
+        assert self.engine is not None
+        memory = self.engine.memory
+        receivers, senders = self.links
+        upper = receivers < senders
         return Frame(
             step,
             self.arena,
             poses,
-            goals=goals.reshape(-1, 2),
-            velocities=velocities,
-            links=links,
+            goals=np.column_stack((memory["target_x"], memory["target_y"])),
+            velocities=self.engine.dxi.copy(),
+            links=np.column_stack((receivers[upper], senders[upper])),
             title=f"{NAME}: y spread {spread:.3f} m, spacing error {error:.3f} m",
         )
 

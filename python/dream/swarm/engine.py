@@ -199,27 +199,46 @@ class Engine:
             if key not in self.memory:
                 raise ValueError(f"{name} remembers {key!r}, which its memory does not declare: add it to `memory`")
             self.memory[key][rows] = _per_robot(values, len(rows), self.memory[key].dtype, f"{name} memory {key!r}")
-        out[:, rows] = self._drive(rows, wished, self.belief[rows], view.seen)
+        straight = None
+        if view.straight is not None:
+            straight = _per_robot(view.straight, len(rows), np.dtype(bool), f"{name}'s rows driven direct")
+        out[:, rows] = self._drive(rows, wished, self.belief[rows], view.seen, straight)
         if view.said is None:
             return None
-        return rows, self._message(view.said, len(rows))
+        message = self._message(view.said, len(rows))
+        if view.saying is None:
+            return rows, message
+        saying = _per_robot(view.saying, len(rows), np.dtype(bool), f"{name}'s senders (`where`)")
+        return rows[saying], {key: values[saying] for key, values in message.items()}
 
-    def _drive(self, rows: np.ndarray, wished: np.ndarray, pose: np.ndarray, seen: Neighbourhood) -> np.ndarray:
+    def _drive(
+        self, rows: np.ndarray, wished: np.ndarray, pose: np.ndarray, seen: Neighbourhood, straight: np.ndarray | None
+    ) -> np.ndarray:
         """The unicycle commands ``(2, k)`` that carry out ``wished`` ``(k, 2)``: through HRVO on the
-        robots' own detections (if they avoid), the conversion, the limits and the motion guard."""
+        robots' own detections (if they avoid, and but for the rows ``straight`` flags), the
+        conversion, the limits and the motion guard."""
         robot, avoid = self.robot, self.robot.avoid
         chosen = wished
         if avoid is not None:
-            asked = wished
+            chosen = wished.copy()
+            steer: slice | np.ndarray = slice(None)  # the rows that go through HRVO
+            entries: slice | np.ndarray = slice(None)  # and their detections
+            offsets = seen.offsets
+            if straight is not None:
+                steer = np.flatnonzero(~straight)
+                counts = np.diff(offsets)[steer]
+                offsets, entries = np.concatenate(([0], np.cumsum(counts))), spans(offsets[:-1][steer], counts)
+            ids, want = rows[steer], wished[steer]
+            asked = want
             if avoid.sidestep:
-                asked, self.sidestep[rows] = rules.sidestep_preference(wished, self.sidestep[rows], self.side[rows])
-            detections = (seen["distance"], seen["bearing"], seen["vx"], seen["vy"])
+                asked, self.sidestep[ids] = rules.sidestep_preference(want, self.sidestep[ids], self.side[ids])
+            detections = tuple(seen[name][entries] for name in ("distance", "bearing", "vx", "vy"))
             margin = robot.spec.radius if avoid.margin is None else avoid.margin
-            chosen = kernels.hrvo_rows(
-                self.dxi[rows],
+            steered = kernels.hrvo_rows(
+                self.dxi[ids],
                 asked,
-                pose[:, :2],
-                seen.offsets,
+                pose[steer, :2],
+                offsets,
                 detections,
                 safety=avoid.safety,
                 v_max=robot.spec.v_max,
@@ -229,9 +248,10 @@ class Engine:
                 include_preferred=avoid.include_preferred,
                 towards=True,  # the sensor's bearings, towards the robots seen
             )
+            chosen[steer] = steered
             if avoid.sidestep:
-                self.sidestep[rows], self.side[rows] = rules.sidestep_update(
-                    chosen, wished, self.sidestep[rows], self.side[rows], avoid.sidestep
+                self.sidestep[ids], self.side[ids] = rules.sidestep_update(
+                    steered, want, self.sidestep[ids], self.side[ids], avoid.sidestep
                 )
         self.dxi[rows] = chosen
         out = kernels.actuator_limit(kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain), self.limits)

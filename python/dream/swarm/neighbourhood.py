@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from dream import kernels
+from dream import kernels, rules
 from dream._checks import FloatArray
 
 
@@ -113,6 +113,22 @@ class Neighbourhood:
     def max(self, what: str | Sequence[str] | np.ndarray) -> FloatArray:
         """Each row's maximum (NaN entries skipped; NaN for an empty row); see :meth:`sum`."""
         return self._reduce(what, "max")
+
+    def wmsr_mean(self, what: str | np.ndarray, own: Any, trimmed: int) -> FloatArray:
+        """``(k,)``: W-MSR's update, each row's values (a column, or values ``(e,)``) without the
+        ``trimmed`` largest above the robot's ``own`` ``(k,)`` value and the ``trimmed`` smallest
+        below it (:func:`dream.rules.wmsr_kept`), averaged with ``own``. A robot with at most
+        ``trimmed`` lying neighbours on a robust enough graph stays within the correct values."""
+        values = np.asarray(self._values(what), dtype=np.float64)
+        own = np.asarray(own, dtype=np.float64)
+        if values.shape != (self.offsets[-1],) or own.shape != (len(self),):
+            raise ValueError(
+                f"wmsr_mean takes values ({self.offsets[-1]},) and own ({len(self)},), "
+                f"got {values.shape} and {own.shape}"
+            )
+        keep = rules.wmsr_kept(values, self.offsets, own, trimmed)
+        kept = self.where(keep)
+        return (kept.sum(values[keep]) + own) / (kept.count + 1)
 
     def any(self, flags: Any) -> np.ndarray:
         """``(k,)`` bool: whether any of a row's entries is flagged (``flags`` ``(e,)`` bool)."""

@@ -82,8 +82,8 @@ class Radio:
                 raise ValueError(f"`Radio graph` indices must be robot ids in [0, {len(indptr) - 1})")
             object.__setattr__(self, "graph", (indptr, indices))
         for name, kind in self.kinds.items():
-            if not name.isidentifier() or name == "sender":
-                raise ValueError(f"Radio field {name!r} must be an identifier other than 'sender'")
+            if not name.isidentifier() or name in ("sender", "where"):
+                raise ValueError(f"Radio field {name!r} must be an identifier other than 'sender' and 'where'")
             if kind not in (float, int):
                 raise ValueError(f"Radio field {name!r} must be float or int, got {kind!r}")
 
@@ -155,14 +155,25 @@ class View:
     heard: Neighbourhood
     memory: dict[str, np.ndarray]
     said: dict[str, np.ndarray] | None = field(default=None, repr=False)
+    saying: Any = field(default=None, repr=False)  #: which rows send (``where`` of :meth:`send`)
+    straight: Any = field(default=None, repr=False)  #: which rows skip HRVO (:meth:`direct`)
 
     def __len__(self) -> int:
         return len(self.ids)
 
-    def send(self, **fields: Any) -> None:
-        """Broadcast a message from every robot deciding now: one ``(k,)`` array (or one value for
-        all) per declared field of the radio. A later call replaces an earlier one."""
-        self.said = dict(fields)
+    def send(self, where: Any = None, **fields: Any) -> None:
+        """Broadcast a message from the robots deciding now: one ``(k,)`` array (or one value for
+        all) per declared field of the radio. ``where`` ``(k,)`` bool, optional, picks the robots
+        that send (the others say nothing this time, and are heard saying what they said last).
+        A later call replaces an earlier one."""
+        self.said, self.saying = dict(fields), where
+
+    def direct(self, rows: Any) -> None:
+        """Drive the wishes of the robots flagged in ``rows`` ``(k,)`` bool as they are, without the
+        HRVO layer (and without stepping aside): for a robot settling its last centimetres, whose
+        neighbours' velocity obstacles would forbid the very direction of its place. The motion
+        guard still checks them. A later call replaces an earlier one."""
+        self.straight = rows
 
 
 class SwarmRobot:

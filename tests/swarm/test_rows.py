@@ -1,0 +1,120 @@
+"""The per-row choices of a swarm robot's decision: which robots send (``view.send(where=...)``),
+which drive their wish without HRVO (``view.direct``), and W-MSR on a neighbourhood's rows."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import dream
+from dream import rules
+from dream.swarm import Avoid, Movement, Neighbourhood, Radio, SwarmRobot
+
+
+def ragged(rng, rows, most=9):
+    counts = rng.integers(0, most, rows)
+    offsets = np.concatenate(([0], np.cumsum(counts)))
+    values = np.round(rng.normal(size=offsets[-1]), 1)  # rounded: ties with each other and with own
+    return offsets, values, np.round(rng.normal(size=rows), 1)
+
+
+@pytest.mark.parametrize("trimmed", [0, 1, 2, 4])
+def test_wmsr_mean_is_the_per_robot_filter_on_random_ragged_rows(trimmed):
+    rng = np.random.default_rng(trimmed)
+    offsets, values, own = ragged(rng, 300)
+    rows = Neighbourhood(offsets, {"v": values})
+    got = rows.wmsr_mean("v", own, trimmed)
+    for r in range(300):
+        row = values[offsets[r] : offsets[r + 1]]
+        kept = rules.wmsr_keep(row, own[r], trimmed)
+        assert got[r] == pytest.approx(np.mean([*kept, own[r]]), rel=1e-12, abs=1e-12)
+        # A row alone gives the same bits as among the others: robot by robot equals the swarm.
+        alone = Neighbourhood(np.array([0, len(row)]), {"v": row}).wmsr_mean("v", own[r : r + 1], trimmed)
+        assert alone[0] == got[r]
+    assert trimmed == 0 or (rules.wmsr_kept(values, offsets, own, trimmed).sum() < len(values))
+
+
+def test_wmsr_drops_a_liars_extreme_value():
+    rows = Neighbourhood(np.array([0, 4]), {"v": np.array([0.1, 99.0, -0.2, 0.3])})
+    assert rows.wmsr_mean("v", np.array([0.0]), 1)[0] == pytest.approx((0.1 + 0.3 + 0.0) / 3)  # 99 and -0.2 dropped
+    with pytest.raises(ValueError, match=r"wmsr_mean takes values \(4,\) and own \(1,\)"):
+        rows.wmsr_mean("v", np.zeros(2), 1)
+
+
+class Pusher(SwarmRobot):
+    """Two robots face each other; robot 0 drives its wish straight when ``direct``; robot 1 sends
+    only at even clocks."""
+
+    period = 1
+    movement = Movement(range=1.0)
+    radio = Radio(range=2.0, fields=("clock",))
+
+    def __init__(self, direct):
+        self.avoid = Avoid(safety=0.3, sidestep=3)
+        self.direct = direct
+        self.heard = []
+
+    def decide(self, view):
+        wish = np.where((view.ids == 0)[:, None], [[0.05, 0.0]], [[-0.05, 0.0]])
+        if self.direct:
+            view.direct(view.ids == 0)
+        heard = {int(i): view.heard["clock"][view.heard.owner == r].tolist() for r, i in enumerate(view.ids)}
+        self.heard.append((int(view.clock[0]), heard))
+        view.send(where=(view.ids == 0) | (view.clock % 2 == 0), clock=view.clock)
+        return wish
+
+
+def run_pusher(direct, one_by_one=False):
+    robot = Pusher(direct)
+    engine = dream.swarm.Engine(robot, 2, 0, dream.specs.ROBOTARIUM, one_by_one=one_by_one)
+    x = np.array([[-0.15, 0.15], [0.0, 0.0], [0.0, np.pi]])
+    for t in range(8):
+        engine.step(t, x, np.zeros((2, 2)))
+    return robot, engine
+
+
+@pytest.mark.parametrize("one_by_one", [False, True])
+def test_direct_rows_skip_hrvo_and_stepping_aside(one_by_one):
+    _, steered = run_pusher(direct=False, one_by_one=one_by_one)
+    robot, direct = run_pusher(direct=True, one_by_one=one_by_one)
+    # HRVO turns robot 0 away from robot 1, 0.3 m ahead; driven direct, it keeps its wish.
+    assert not np.allclose(steered.dxi[0], [0.05, 0.0])
+    assert np.array_equal(direct.dxi[0], [0.05, 0.0]) and direct.sidestep[0] == 0
+    assert not np.allclose(direct.dxi[1], [-0.05, 0.0])  # robot 1 still avoids
+
+
+def test_only_the_robots_picked_send():
+    robot, _ = run_pusher(direct=False)
+    # Robot 0 hears robot 1's message of the last even clock: it said nothing at odd clocks.
+    assert len(robot.heard) == 7
+    for clock, heard in robot.heard[2:]:  # from clock 3 on (the first decision is at clock 1)
+        assert heard[0] == [float(clock - 1 - (clock - 1) % 2)] and heard[1] == [float(clock - 1)]
+
+
+@pytest.mark.parametrize(
+    ("choice", "message"),
+    [
+        (lambda view: view.direct(np.ones(len(view) + 1, dtype=bool)), "rows driven direct must have one value"),
+        (lambda view: view.direct(np.ones(len(view))), "rows driven direct holds bool values, got float64"),
+        (lambda view: view.send(where=[True], value=view.clock), r"senders \(`where`\) must have one value"),
+    ],
+)
+def test_a_bad_row_choice_is_named(choice, message):
+    class Bad(SwarmRobot):
+        period = 1
+        avoid = Avoid()
+        radio = Radio(range=1.0, fields=("value",))
+
+        def decide(self, view):
+            choice(view)
+            return np.zeros((len(view), 2))
+
+    engine = dream.swarm.Engine(Bad(), 3, 0, dream.specs.ROBOTARIUM)
+    with pytest.raises(ValueError, match=message):
+        for t in range(3):
+            engine.step(t, np.array([[-0.5, 0.0, 0.5], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]), np.zeros((2, 3)))
+
+
+def test_a_field_named_where_is_refused():
+    with pytest.raises(ValueError, match="other than 'sender' and 'where'"):
+        Radio(fields=("where",))
