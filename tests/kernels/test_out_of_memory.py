@@ -9,7 +9,10 @@ from pathlib import Path
 
 import pytest
 
-PYTHON = Path(__file__).parents[2] / "python"
+import dream
+
+# The child imports the dream this suite tests (an installed wheel, or a checkout on PYTHONPATH).
+PYTHON = Path(dream.__file__).parents[1]
 
 # Run in a child under an address-space limit of its size at start plus 512 MiB: 20,000 robots
 # at one point, each in range of all the others, make 4e8 neighbour pairs (6.4 GB).
