@@ -583,3 +583,13 @@ def approach(
     distance = length(way)
     scale = np.minimum(1.0, v_max / (gain * np.maximum(distance, 1e-300)))
     return np.where((distance >= arrival)[..., None], gain * way * scale[..., None], 0.0)
+
+
+def morph(start: Any, goals: Any, done: Any, total: int) -> FloatArray:
+    """Where aims stand after ``done`` ``(k,)`` or ``()`` of ``total`` steps from ``start`` to ``goals``
+    ``(k, m, 2)`` or ``(m, 2)`` (m): a steady pace along straight lines, then at the goals. Aims
+    that all take the same shape keep an affine image of it on the way (affine-formation's leaders)."""
+    start = np.asarray(start, dtype=np.float64)
+    share = np.minimum(np.asarray(done) / total, 1.0)
+    return start + share[..., None, None] * (np.asarray(goals, dtype=np.float64) - start)
+

@@ -104,6 +104,13 @@ def due(step: int, start_delay: Any, gap: int) -> np.ndarray:
     return last_due(step, start_delay, gap) == step
 
 
+def staggered(ids: Any, first: int, spread: int) -> np.ndarray:
+    """Start-up delays ``(n,)`` (steps) of robots ``ids`` ``(n,)``: ``first`` plus ``id % spread``, so
+    that a share of the team decides at each of ``spread`` neighbouring steps (the built-in
+    experiments' staggered start)."""
+    return first + np.asarray(ids, dtype=np.int64) % spread
+
+
 def _steps(value: Any, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value) or value < 0:
         raise ValueError(f"{what} must be a finite number of steps >= 0, got {value!r}")

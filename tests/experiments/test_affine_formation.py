@@ -8,6 +8,7 @@ from numpy.testing import assert_allclose
 
 import dream
 from dream.experiments import affine_formation as af
+from dream.experiments.affine_formation import plan
 
 
 def test_nominal_configuration_is_in_stress_equilibrium():
@@ -72,18 +73,27 @@ def test_affine_formation_succeeds_under_rps2_rules(seed):
 
 
 def test_leaders_change_places_at_a_steady_pace():
-    leader = af.Leader(0, "leader_0")
-    leader.update_odom([0.0, 0.0, 0.0])
+    robot = af.FormationRobot(7, np.zeros((1, 2)))
+    ids = np.array([0])
+    start = robot.aims(ids, {"start": np.full((1, 3, 2), np.nan), "goals": np.full((1, 3, 2), np.nan), "decisions": [0]})
     places = af.formation("compressed") + (0.2, 0.0)  # the planned formation, leaders first
-    leader.head_for(places)
-    aims = [leader.aims.copy()]
-    for _ in range(af.MORPH + 5):
-        leader.update(np.zeros((2, 1)))
-        aims.append(leader.aims.copy())
+    memory = {"start": start, "goals": places[None, : af.LEADERS], "decisions": np.zeros(1, dtype=np.int64)}
+    aims = []
+    for decisions in range(af.MORPH + 6):
+        memory["decisions"] = np.array([decisions])
+        aims.append(robot.aims(ids, memory)[0])
+    assert_allclose(aims[0], af.formation("nominal")[: af.LEADERS])  # from the nominal places
     steps = np.diff(np.array(aims)[: af.MORPH + 1], axis=0)
     assert_allclose(steps, np.broadcast_to(steps[0], steps.shape), atol=1e-12)  # straight lines, steady...
     assert_allclose(aims[-1], places[: af.LEADERS])  # ...that end at the new places
-    assert_allclose(leader.aim, places[0])
+
+
+def test_a_leader_takes_the_plans_shapes_by_its_own_clock():
+    steps, shapes, offsets = plan.shape_plan()
+    passes = af.schedule()
+    assert steps.tolist() == [0, plan.GATHER] + [step for p in passes for step in (p[0], p[2])]
+    assert shapes == ["nominal", "nominal", "compressed", "nominal", "collinear", "nominal"]
+    assert offsets[0].tolist() == [plan.SHIFT, 0.0] and not offsets[1:].any()  # right while they gather
 
 
 def test_affine_formation_has_seven_robots():
@@ -105,40 +115,45 @@ def test_affine_formation_tiles_several_formations(two_formations):
 
 
 def test_affine_formation_swarm_mode_moves_as_the_robots_do(two_formations):
-    # Swarm mode keeps each robot's timers, the per-robot order by id within a step (radio
-    # messages and detected commands of lower ids are this step's) and the same rules, so the
-    # whole runs agree: 1e-9 m leaves room for the rounding of the one HRVO call (detections as
-    # robots placed where they are seen) against each robot's own (they agree to the bit today).
+    # One FormationRobot, run robot by robot and as one swarm: the same poses at every step,
+    # bit for bit, whole runs long.
     swarm = af.run(n=14, seed=0, backend="fast", trace=True, swarm=True)
     assert two_formations.success and swarm.success and swarm.swarm
     assert swarm.collisions == 0 and swarm.boundary == 0 and swarm.actuator == 0
     assert swarm.completed_step == two_formations.completed_step
-    np.testing.assert_allclose(swarm.trace, two_formations.trace, rtol=0, atol=1e-9)
-    assert swarm.measures == pytest.approx(two_formations.measures, abs=1e-9)
+    assert np.array_equal(swarm.trace, two_formations.trace)
+    assert swarm.measures == two_formations.measures
 
 
-def test_affine_formation_swarm_mode_moves_as_the_robots_do_with_stuck_wheels():
-    # Wheel faults reach the swarm as the robots (they decide and talk on): the first 600 steps
-    # of one formation with one robot stuck from step 100.
-    faults = dream.Faults(stuck=0.15, stuck_at=100)
-    robots = af.run(n=7, seed=1, backend="fast", steps=600, trace=True, faults=faults)
-    swarm = af.run(n=7, seed=1, backend="fast", steps=600, trace=True, faults=faults, swarm=True)
-    assert [event["kind"] for event in swarm.faults["events"]] == ["stuck"]
-    assert swarm.faults["events"] == robots.faults["events"]
-    np.testing.assert_allclose(swarm.trace, robots.trace, rtol=0, atol=1e-9)
+#: One of each fault kind (docs/faults.md), some together: each reaches the robots' own radios,
+#: sensors, clocks and wheels, robot by robot as in the swarm.
+FAULTS = {
+    "crash": dream.Faults(crash=0.15, crash_at=100),
+    "stuck": dream.Faults(stuck=0.15, stuck_at=100),
+    "actuator noise": dream.Faults(actuator_noise=0.01),
+    "byzantine": dream.Faults(byzantine=2, lie="random"),
+    "loss, burst": dream.Faults(loss=0.3, burst=(0.1, 0.5)),
+    "distance loss, latency, jitter": dream.Faults(distance_loss=0.2, latency=5, jitter=2),
+    "sensor noise, dropout": dream.Faults(sensor_noise=0.005, sensor_dropout=0.1),
+    "drift, clock jitter": dream.Faults(drift=0.02, clock_jitter=2),
+}
 
 
-@pytest.mark.parametrize(
-    ("faults", "named"),
-    [
-        (dream.Faults(crash=0.2, crash_at=5), "crash"),
-        (dream.Faults(byzantine=1), "byzantine"),
-        (dream.Faults(loss=0.1), "loss"),
-    ],
-)
-def test_affine_formation_swarm_mode_refuses_faults_it_cannot_model(faults, named):
-    with pytest.raises(ValueError, match=rf"wheels only .* got .*{named}.*failure detector"):
-        af.run(n=7, backend="fast", swarm=True, steps=3, faults=faults)
+@pytest.fixture(scope="module")
+def unfaulted():
+    """The poses of the fault tests' run without faults."""
+    return af.run(n=14, seed=1, backend="fast", steps=500, trace=True, swarm=True).trace
+
+
+@pytest.mark.parametrize("case", FAULTS)
+def test_affine_formation_is_the_same_both_ways_under_each_fault(case, unfaulted):
+    robots, swarm = (
+        af.run(n=14, seed=1, backend="fast", steps=500, trace=True, faults=FAULTS[case], swarm=way)
+        for way in (False, True)
+    )
+    assert np.array_equal(swarm.trace, robots.trace) and swarm.faults == robots.faults
+    assert swarm.collisions == robots.collisions == 0
+    assert not np.array_equal(swarm.trace, unfaulted)  # the fault reached the robots
 
 
 def test_affine_formation_thousand_robots_on_fast_do_not_collide():

@@ -146,56 +146,89 @@ def test_affine_formations_side_by_side_ignore_a_liar_out_of_sight():
     assert (result.collisions, result.boundary, result.actuator) == (0, 0, 0)
 
 
-def test_affine_follower_takes_a_claim_that_matches_no_robot_seen_for_a_lie():
-    from dream.experiments import affine_formation as af
+def _follower(here, claims, tile=None, plans=None):
+    """What a follower of the affine formation at ``here`` knows: the claims ``{place: (x, y)}``
+    of its formation, the leaders' ``plans`` ``{leader: {leader: (x, y)}}``; its tile's bounds."""
+    from dream.experiments.affine_formation import plan
 
-    follower = af.Follower(3, "follower_3")
-    follower.update_odom([0.0, 0.0, 0.0])
-    beats = np.ones(7, dtype=np.int64)
+    state = {
+        "heard": np.full((1, 7, 2), np.nan),
+        "plans": np.full((1, 3, 3, 2), np.nan),
+        "strikes": np.zeros((1, 7), dtype=np.int64),
+        "liar": np.zeros((1, 7), dtype=np.int64),
+        "liar_at": np.full((1, 7, 2), np.nan),
+    }
+    for j, claim in claims.items():
+        state["heard"][0, j] = claim
+    for i, word in (plans or {}).items():
+        for m, place in word.items():
+            state["plans"][0, i, m] = place
+    bounds = np.array([plan.tile_bounds(np.zeros(2)) if tile is None else tile])
+    return np.array([here], dtype=np.float64), bounds, state
+
+
+def _judged(here, me, bounds, state, spotted, alive=None):
+    from dream.experiments.affine_formation import robot
+    from dream.swarm import Neighbourhood
+
+    alive = np.ones((1, 7), dtype=bool) if alive is None else alive
+    hood = Neighbourhood(np.array([0, len(spotted)]), {})
+    return robot.judge(here, np.array([me]), alive, bounds, hood, np.asarray(spotted, dtype=np.float64), state)
+
+
+def test_affine_follower_takes_a_claim_that_matches_no_robot_seen_for_a_lie():
+    from dream.experiments.affine_formation import robot
+
     truth = {0: (0.5, 0.0), 1: (0.2, 0.3)}  # robot 1 is there, robot 0 lies it is at the origin
-    follower.update_radio([(0, 0.0, 0.0, beats, {}), (1, *truth[1], beats, {})])
-    # Rows [distance, angle from the robot seen to this one, vx, vy].
-    follower.update_sensor(np.array([[math.hypot(*p), math.atan2(-p[1], -p[0]), 0.0, 0.0] for p in truth.values()]))
-    for _ in range(af.STRIKES):
-        assert 0 not in follower.liars
-        follower.check_claims(np.zeros(2))
-    assert list(follower.liars) == [0]  # robot 1's claim matches a robot seen
-    assert_allclose(follower.positions()[0], truth[0], atol=1e-12)  # the one robot no claim accounts for
+    here, bounds, state = _follower((0.0, 0.0), {0: (0.0, 0.0), 1: truth[1]})
+    alive = np.ones((1, 7), dtype=bool)
+    for _ in range(robot.STRIKES):
+        assert not state["liar"][0, 0]
+        sensed = _judged(here, 3, bounds, state, list(truth.values()))
+    assert np.flatnonzero(state["liar"][0]).tolist() == [0]  # robot 1's claim matches a robot seen
+    known = robot.positions(state["heard"], alive, state["plans"], state["liar"] > 0, state["liar_at"], sensed)
+    assert_allclose(known[0, 0], truth[0], atol=1e-12)  # the one robot no claim accounts for
 
 
 def test_affine_follower_takes_a_claim_out_of_sight_but_off_its_plan_or_tile_for_a_lie():
-    from dream.experiments import affine_formation as af
+    from dream.experiments.affine_formation import robot
 
-    follower = af.Follower(10, "follower_10", np.kron(np.eye(2), af.WEIGHTS), tile=(1.6, 4.8, -1.0, 1.0))
-    follower.update_odom([3.2, 0.0, 0.0])
-    beats = np.ones(7, dtype=np.int64)
-    # Leader 7 lies: it claims the arena's centre, out of sight, and plans the others there too;
-    # leaders 8 and 9 plan it at (3.8, 0) and each other where they say they are.
-    plans = {7: {8: (0.0, 0.0), 9: (0.0, 0.0)}, 8: {7: (3.8, 0.0), 9: (3.0, -0.5)}, 9: {7: (3.8, 0.0), 8: (3.0, 0.5)}}
-    claims = {7: (0.0, 0.0), 8: (3.1, 0.5), 9: (3.0, -0.4), 11: (4.6, 0.9)}
-    follower.update_radio([(j, *claims[j], beats, plans.get(j, {})) for j in claims])
-    seen = [np.subtract(claims[j], (3.2, 0.0)) for j in (8, 9, 11)]  # all but leader 7, out of sight
-    follower.update_sensor(np.array([[math.hypot(*p), math.atan2(-p[1], -p[0]), 0.0, 0.0] for p in seen]))
-    ids = list(claims)
-    assert follower.implausible(ids, np.array([claims[j] for j in ids])).tolist() == [True, False, False, False]
-    assert follower.implausible([11], np.array([[5.2, 0.0]])).tolist() == [True]  # beyond its tile
+    # Formation 1 (ids 7-13): follower 10 (place 3) at (3.2, 0). Leader 7 (place 0) lies: it claims
+    # the arena's centre, out of sight, and plans the others there too; leaders 8 and 9 plan it at
+    # (3.8, 0) and each other where they say they are.
+    plans = {0: {1: (0.0, 0.0), 2: (0.0, 0.0)}, 1: {0: (3.8, 0.0), 2: (3.0, -0.5)}, 2: {0: (3.8, 0.0), 1: (3.0, 0.5)}}
+    claims = {0: (0.0, 0.0), 1: (3.1, 0.5), 2: (3.0, -0.4), 4: (4.6, 0.9)}
+    here, bounds, state = _follower((3.2, 0.0), claims, (1.6, 4.8, -1.0, 1.0), plans)
+    alive = np.ones((1, 7), dtype=bool)
+
+    def implausible(place, claim):
+        heard = state["heard"].copy()
+        heard[0, place] = claim
+        return bool(robot.implausible(heard, alive, state["plans"], np.zeros((1, 7), dtype=bool), bounds)[0, place])
+
+    lies = robot.implausible(state["heard"], alive, state["plans"], np.zeros((1, 7), dtype=bool), bounds)
+    assert lies[0, [0, 1, 2, 4]].tolist() == [True, False, False, False]
+    assert implausible(4, (5.2, 0.0))  # beyond its tile
     # Inside the tile but 0.6 m from where both other leaders plan it: a lie too.
-    assert follower.implausible([7], np.array([[3.2, 0.0]])).tolist() == [True]
-    assert follower.implausible([7], np.array([[3.5, 0.0]])).tolist() == [False]  # 0.3 m off: lagging
-    for _ in range(af.STRIKES):
-        assert not follower.liars
-        follower.check_claims(np.array([3.2, 0.0]))
-    assert list(follower.liars) == [7]
-    assert_allclose(follower.positions()[7], (3.8, 0.0))  # where the correct leader plans it
+    assert implausible(0, (3.2, 0.0))
+    assert not implausible(0, (3.5, 0.0))  # 0.3 m off: lagging
+    seen = [claims[j] for j in (1, 2, 4)]  # all but leader 7, out of sight
+    for _ in range(robot.STRIKES):
+        assert not state["liar"].any()
+        sensed = _judged(here, 3, bounds, state, seen)
+    assert np.flatnonzero(state["liar"][0]).tolist() == [0]
+    known = robot.positions(state["heard"], alive, state["plans"], state["liar"] > 0, state["liar_at"], sensed)
+    assert_allclose(known[0, 0], (3.8, 0.0))  # where the correct leader plans it
     # A crashed leader stands where it stopped, off the plan that moves on: no liar (seed 0 of the
     # crash row at N = 98 took one for a liar and lost its formation).
-    follower.heartbeats.news[8 % 7] = follower.heartbeats.rounds - af.SILENCE - 1
-    assert not follower.heartbeats.alive[8 % 7]
-    assert not follower.implausible([8], np.array([[2.0, 0.9]]))[0]
+    alive[0, 1] = False
+    heard = state["heard"].copy()
+    heard[0, 1] = (2.0, 0.9)
+    assert not robot.implausible(heard, alive, state["plans"], np.zeros((1, 7), dtype=bool), bounds)[0, 1]
 
 
 def test_clearing_shift_moves_places_off_a_crashed_robot_along_x():
-    from dream.experiments import affine_formation as af
+    from dream.experiments.affine_formation import plan as af
 
     places = af.formation("nominal")
     assert af.clearing_shift(places, np.zeros((0, 2)), 0.0) == 0.0

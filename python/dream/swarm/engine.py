@@ -73,7 +73,8 @@ class Engine:
         self.last = np.zeros(n)  #: each robot's clock at its last decision
         self.belief = np.full((n, 3), np.nan)  #: each robot's odometry, NaN until its first reading
         self.dxi = np.zeros((n, 2))  #: each robot's last chosen velocity (m/s)
-        self.memory = {key: np.full(n, value) for key, value in robot.memory.items()}
+        #: each robot's memory, ``(n, *shape)`` per field (a field declared as an array keeps one per robot)
+        self.memory = {key: np.full((n, *np.shape(value)), value) for key, value in robot.memory.items()}
         self.silenced = np.zeros(n, dtype=bool)  #: crashed robots whose messages left the air
         self.sidestep = np.zeros(n, dtype=np.int64)
         self.side = np.ones(n)
@@ -198,11 +199,21 @@ class Engine:
         for key, values in view.memory.items():
             if key not in self.memory:
                 raise ValueError(f"{name} remembers {key!r}, which its memory does not declare: add it to `memory`")
-            self.memory[key][rows] = _per_robot(values, len(rows), self.memory[key].dtype, f"{name} memory {key!r}")
+            memory = self.memory[key]
+            memory[rows] = _per_robot(values, len(rows), memory.dtype, f"{name} memory {key!r}", memory.shape[1:])
         straight = None
         if view.straight is not None:
             straight = _per_robot(view.straight, len(rows), np.dtype(bool), f"{name}'s rows driven direct")
-        out[:, rows] = self._drive(rows, wished, self.belief[rows], view.seen, straight)
+        seen = view.seen
+        if view.heeded is not None:
+            heeded = np.asarray(view.heeded)
+            if heeded.shape != (seen.offsets[-1],) or heeded.dtype != bool:
+                raise ValueError(
+                    f"{name}'s heeded detections must be one bool per detection, shape ({seen.offsets[-1]},), "
+                    f"got {heeded.dtype} of shape {heeded.shape}"
+                )
+            seen = seen.where(heeded)
+        out[:, rows] = self._drive(rows, wished, self.belief[rows], seen, straight)
         if view.said is None:
             return None
         message = self._message(view.said, len(rows))
@@ -457,16 +468,19 @@ class Engine:
             self.air = {key: values[~gone] for key, values in self.air.items()}
 
 
-def _per_robot(values: Any, k: int, kind: np.dtype, what: str) -> np.ndarray:
-    """``values`` as ``(k,)`` of ``kind``: one value per deciding robot, or one for all of them;
-    anything else (a shape that would spread one robot's value over the others, a float for an
-    int field) is refused, naming ``what``."""
+def _per_robot(values: Any, k: int, kind: np.dtype, what: str, shape: tuple[int, ...] = ()) -> np.ndarray:
+    """``values`` as ``(k, *shape)`` of ``kind``: one value (of ``shape``) per deciding robot, or one
+    for all of them; anything else (a shape that would spread one robot's value over the others,
+    a float for an int field) is refused, naming ``what``."""
     array = np.asarray(values)
-    if array.shape not in ((), (k,)):
-        raise ValueError(f"{what} must have one value per deciding robot, shape ({k},), got shape {array.shape}")
+    if array.shape == (k, *shape) and array.dtype == kind:  # as it should be: nothing to convert
+        return array
+    if array.shape not in (shape, (k, *shape)):
+        want = ", ".join(map(str, (k, *shape))) + ("," if not shape else "")
+        raise ValueError(f"{what} must have one value per deciding robot, shape ({want}), got shape {array.shape}")
     if not np.can_cast(array.dtype, kind, casting="same_kind"):
         raise ValueError(f"{what} holds {kind} values, got {array.dtype}")
-    return np.broadcast_to(array, (k,)).astype(kind)
+    return np.broadcast_to(array, (k, *shape)).astype(kind)
 
 
 def _linked(graph: tuple[np.ndarray, np.ndarray], rows: np.ndarray, x: np.ndarray, talking: np.ndarray) -> Heard:

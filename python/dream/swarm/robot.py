@@ -157,6 +157,7 @@ class View:
     said: dict[str, np.ndarray] | None = field(default=None, repr=False)
     saying: Any = field(default=None, repr=False)  #: which rows send (``where`` of :meth:`send`)
     straight: Any = field(default=None, repr=False)  #: which rows skip HRVO (:meth:`direct`)
+    heeded: Any = field(default=None, repr=False)  #: which detections the safety layer heeds (:meth:`heed`)
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -175,6 +176,13 @@ class View:
         guard still checks them. A later call replaces an earlier one."""
         self.straight = rows
 
+    def heed(self, detections: Any) -> None:
+        """Let the HRVO layer and the motion guard heed only the detections flagged in
+        ``detections`` (one bool per entry of :attr:`seen`): for a robot that sees farther than
+        it avoids, or avoids only some of the robots it sees (a leader that ignores its
+        followers). A later call replaces an earlier one."""
+        self.heeded = detections
+
 
 class SwarmRobot:
     """Base class of a robot written on arrays (see the module docs).
@@ -190,7 +198,8 @@ class SwarmRobot:
     avoid : Avoid or None
         The HRVO safety layer on the wished velocities.
     memory : dict
-        Each memory field's initial value (a float or an int), kept per robot between decisions.
+        Each memory field's initial value (a float or an int, or an array of them: each robot then
+        keeps one of that shape), kept per robot between decisions.
     odometry_noise : float
         Standard deviation of the noise on every odometry value.
     vel_gain, ang_gain : float
@@ -203,7 +212,7 @@ class SwarmRobot:
     movement: Movement | None = None
     radio: Radio | None = None
     avoid: Avoid | None = None
-    memory: ClassVar[dict[str, float | int]] = {}
+    memory: ClassVar[dict[str, Any]] = {}
     odometry_noise: float = 0.0
     vel_gain: float = 0.8
     ang_gain: float = 3.0

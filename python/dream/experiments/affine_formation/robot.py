@@ -1,0 +1,336 @@
+"""The affine formation's robot: leaders and followers, two roles of one swarm robot.
+
+Robot ``i`` holds place ``i % 7`` of formation ``i // 7``: places 0-2 lead, 3-6 follow. Each robot
+hears the six others of its formation, keeps what each claimed last and when it last heard it (a
+failure detector), and decides from its own odometry, sensor, radio and clock; see
+``docs/experiments/affine-formation.md`` for the rules and the failures they answer.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from dream import rules, timers
+from dream.experiments.affine_formation.plan import (
+    GAIN,
+    LEADER_GAIN,
+    LEADERS,
+    MORPH,
+    NOMINAL,
+    WEIGHTS,
+    affine_image,
+    clearing_shift,
+    formation,
+    shape_plan,
+    tile_bounds,
+)
+from dream.robot import SIDESTEP_UPDATES
+from dream.swarm import Avoid, Movement, Neighbourhood, Radio, SwarmRobot, View
+
+MEMBERS = len(NOMINAL)  #: robots in a formation
+SAFETY = 0.15  #: the HRVO safety radius (m): the formation's robots are 0.3 m apart
+FINE = 0.03  #: below this desired speed (m/s) a follower moves without HRVO
+RANGE = 0.6  #: robots within this distance (m) are the ones a follower's HRVO avoids
+VERIFY = 1.0  #: the movement sensor sees this far (m), to check claimed positions
+MATCH = 0.15  #: a claimed position this close (m) to a robot seen matches it (radio lag, latency)
+STRIKES = 3  #: decisions in a row whose claims match no robot seen make a liar
+PLAN_SLACK = 0.5  #: a leader claiming to be this far (m) from every place the other leaders plan for it lies
+SILENCE = 20  #: radio rounds without a message after which a robot is taken for crashed
+START_DELAY = 10  #: start-up delay of robot i: this plus its place in its formation (i % 7) steps
+CONTROL_GAP = 4  #: steps between two decisions (and radio rounds) of a robot
+#: The message's fields beyond the position: where the plan has each leader head now (leaders only).
+AIMS = tuple(f"{axis}{m}" for m in range(LEADERS) for axis in ("ax", "ay"))
+
+
+def formation_graph(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Every robot linked to the six others of its formation, as CSR ``(indptr, indices)``."""
+    ids = np.arange(n)
+    others = (ids - ids % MEMBERS)[:, None] + np.arange(MEMBERS)
+    indices = others[others != ids[:, None]]
+    return np.arange(n + 1, dtype=np.int64) * (MEMBERS - 1), indices.astype(np.int64)
+
+
+class FormationRobot(SwarmRobot):
+    """A leader or a follower of an affine formation, by its place (see the module docs).
+
+    A leader takes each shape of the plan (:func:`~dream.experiments.affine_formation.plan.shape_plan`)
+    by its own clock: the aims of its formation's leaders move to the new places at a steady pace
+    over ``MORPH`` decisions (:func:`dream.rules.morph`), shifted clear of the robots it takes for
+    crashed (which alone it avoids), and it sends them with its position. A follower obeys the
+    stress law on where it takes its formation to be (:meth:`positions`), through HRVO, checking
+    the claims it hears against what it sees (:meth:`judge`).
+    """
+
+    period = CONTROL_GAP
+    movement = Movement(range=VERIFY)
+    memory = {
+        "heard": np.full((MEMBERS, 2), np.nan),  # the last position each robot of its formation claimed
+        "news": np.zeros(MEMBERS, dtype=np.int64),  # its round in which it last heard each (0: never)
+        "rounds": 0,  # its radio rounds so far
+        "plans": np.full((LEADERS, LEADERS, 2), np.nan),  # each leader's last word on the leaders' aims
+        "strikes": np.zeros(MEMBERS, dtype=np.int64),  # decisions in a row each one's claim was blamed
+        "liar": np.zeros(MEMBERS, dtype=np.int64),  # robots taken for liars
+        "liar_at": np.full((MEMBERS, 2), np.nan),  # where a liar was seen last (NaN: not located)
+        "phase": -1,  # the leader's step of the plan
+        "start": np.full((LEADERS, 2), np.nan),  # the leaders' places its aims left from
+        "goals": np.full((LEADERS, 2), np.nan),  # and the places they go to
+        "decisions": MORPH,  # its decisions since then
+        "shift": 0.0,  # how far (m) along x it shifts the plan clear of crashed robots
+        "silent": np.zeros(MEMBERS, dtype=np.int64),  # the robots it takes for crashed
+    }
+
+    def __init__(self, n: int, centres: np.ndarray) -> None:
+        self.radio = Radio(graph=formation_graph(n), fields=("x", "y", *AIMS))
+        self.avoid = Avoid(safety=SAFETY, sidestep=SIDESTEP_UPDATES)
+        self.centres = centres  #: the centres ``(n / 7, 2)`` of the formations' tiles
+        self.tiles = np.array([tile_bounds(centre) for centre in centres]).reshape(-1, 4)  #: and their bounds
+        steps, shapes, offsets = shape_plan()
+        self.plan_steps = steps
+        self.plan_places = np.array([formation(shape) for shape in shapes]) + offsets[:, None, :]
+
+    def start(self, ids: np.ndarray) -> np.ndarray:
+        return timers.staggered(ids, START_DELAY, MEMBERS)
+
+    # -- the decision --------------------------------------------------------------------------
+    def decide(self, view: View) -> np.ndarray:
+        memory, here, place = view.memory, view.pose[:, :2], view.ids % MEMBERS
+        listen(view)
+        alive = (memory["news"] == 0) | (memory["rounds"][:, None] - memory["news"] <= SILENCE)
+        lead = place < LEADERS
+        seen = view.seen
+        spotted = here[seen.owner] + np.column_stack((seen["dx"], seen["dy"]))  # where it sees each robot
+        desired, heeded = np.zeros((len(view), 2)), seen["distance"] <= RANGE
+        rows = np.flatnonzero(lead)
+        self.plan(view, rows, alive[rows])
+        mine = {key: memory[key][rows] for key in ("start", "goals", "decisions")}
+        view.send(x=here[:, 0], y=here[:, 1], **self.said(lead, self.aims(view.ids[rows], mine)))
+        if len(rows):
+            memory["decisions"][rows] += 1
+            mine["decisions"] = mine["decisions"] + 1
+            aim = self.aims(view.ids[rows], mine)[np.arange(len(rows)), place[rows]]
+            desired[rows] = rules.toward(here[rows], aim, LEADER_GAIN, self.spec.v_max)
+            # A leader heeds only the robots it takes for crashed, where they were heard last.
+            crashed = np.where(memory["silent"][:, :, None] > 0, memory["heard"], np.nan)[seen.owner]
+            heeded = np.where(lead[seen.owner], (_gaps(spotted, crashed) <= MATCH).any(axis=1), heeded)
+        if (~lead).any():
+            rows = np.flatnonzero(~lead)
+            desired[rows] = self.follow(view, rows, alive[rows], spotted)
+        view.heed(heeded)
+        # Close to its place HRVO would forbid a follower the last centimetres towards a neighbour.
+        view.direct(~lead & rules.settles(desired, np.inf, FINE, 0.0))
+        return desired
+
+    @staticmethod
+    def said(lead: np.ndarray, aims: np.ndarray) -> dict[str, np.ndarray]:
+        """The aims fields of the message: the leaders' ``aims`` ``(l, 3, 2)``, NaN from followers."""
+        fields = np.full((len(lead), LEADERS, 2), np.nan)
+        fields[lead] = aims
+        flat = fields.reshape(len(lead), -1)
+        return {name: flat[:, column] for column, name in enumerate(AIMS)}
+
+    # -- leaders -------------------------------------------------------------------------------
+    def aims(self, ids: np.ndarray, memory: dict[str, np.ndarray]) -> np.ndarray:
+        """The points ``(k, 3, 2)`` (m) where the plan has the formation's leaders head now, for the
+        leaders ``ids`` ``(k,)`` whose memory rows ``memory`` holds (before its first plan: their
+        nominal places)."""
+        nominal = formation("nominal")[:LEADERS] + self.centres[ids // MEMBERS][:, None, :]
+        start = np.where(np.isnan(memory["start"]), nominal, memory["start"])
+        goals = np.where(np.isnan(memory["goals"]), nominal, memory["goals"])
+        return rules.morph(start, goals, memory["decisions"], MORPH)
+
+    def plan(self, view: View, rows: np.ndarray, alive: np.ndarray) -> None:
+        """The leaders ``rows`` take the plan's shape of their clock, or a new shift clear of the
+        robots they now take for crashed: their aims set off for the new places."""
+        memory, ids = view.memory, view.ids[rows]
+        phase = np.searchsorted(self.plan_steps, view.clock[rows], side="right") - 1
+        silent = (~alive & (memory["news"][rows] > 0)).astype(np.int64)
+        moved = phase > memory["phase"][rows]
+        changed = (silent != memory["silent"][rows]).any(axis=1)
+        memory["phase"][rows], memory["silent"][rows] = np.maximum(phase, memory["phase"][rows]), silent
+        places = self.plan_places[memory["phase"][rows]] + self.centres[ids // MEMBERS][:, None, :]
+        shift = memory["shift"][rows].copy()
+        for r in np.flatnonzero(moved | changed):
+            shift[r] = self.clearing(places[r], silent[r].astype(bool), memory["heard"][rows[r]])
+        again = moved | (changed & (shift != memory["shift"][rows]))  # else the aims keep their pace
+        if again.any():
+            chosen = rows[again]
+            aims = self.aims(view.ids[chosen], {key: value[chosen] for key, value in memory.items()})
+            memory["start"][chosen] = aims
+            memory["goals"][chosen] = places[again, :LEADERS] + np.column_stack((shift[again], 0 * shift[again]))[:, None]
+            memory["decisions"][chosen] = 0
+            memory["shift"][chosen] = shift[again]
+
+    @staticmethod
+    def clearing(places: np.ndarray, silent: np.ndarray, heard: np.ndarray) -> float:
+        """The shift (m) along x of the planned ``places`` ``(7, 2)`` clear of the robots taken for
+        crashed (``silent`` ``(7,)``, heard last at ``heard`` ``(7, 2)``): :func:`clearing_shift`."""
+        if not silent.any():
+            return 0.0
+        return clearing_shift(places[~silent], heard[silent], float(places.mean(axis=0)[0]))
+
+    # -- followers -----------------------------------------------------------------------------
+    def follow(self, view: View, rows: np.ndarray, alive: np.ndarray, spotted: np.ndarray) -> np.ndarray:
+        """The stress law's velocities ``(f, 2)`` for the followers ``rows`` on where they take their
+        formation to be, after checking what they hear against what they see."""
+        memory, ids = view.memory, view.ids[rows]
+        here = view.pose[rows, :2]
+        bounds = self.tiles[ids // MEMBERS]
+        seen = view.seen
+        owner = seen.owner
+        # Robots beyond its tile belong to other formations: neither claimed nor liars.
+        mine = np.full(len(view), -1)
+        mine[rows] = np.arange(len(rows))
+        keep = (mine[owner] >= 0) & in_tile(spotted, bounds[np.maximum(mine[owner], 0)])
+        counts = np.bincount(mine[owner][keep], minlength=len(rows))
+        hood = Neighbourhood(np.concatenate(([0], np.cumsum(counts))), {})
+        state = {key: memory[key][rows] for key in ("heard", "plans", "strikes", "liar", "liar_at")}
+        sensed = judge(here, ids % MEMBERS, alive, bounds, hood, spotted[keep], state)
+        for key, value in state.items():
+            memory[key][rows] = value
+        known = positions(state["heard"], alive, state["plans"], state["liar"].astype(bool), state["liar_at"], sensed)
+        pull = rules.stress(here, known, WEIGHTS[ids % MEMBERS])
+        return rules.capped(-GAIN * pull, self.spec.v_max)
+
+
+def listen(view: View) -> None:
+    """A radio round of the robots deciding now: keep each message's position, when it came and
+    (from a leader) its word on the leaders' aims."""
+    memory, heard = view.memory, view.heard
+    memory["rounds"] = memory["rounds"] + 1
+    owner, place = heard.owner, heard["sender"] % MEMBERS
+    memory["heard"][owner, place] = np.column_stack((heard["x"], heard["y"]))
+    memory["news"][owner, place] = memory["rounds"][owner]
+    lead = place < LEADERS
+    aims = np.column_stack([heard[name] for name in AIMS]).reshape(-1, LEADERS, 2)[lead]
+    aims[np.arange(len(aims)), place[lead]] = np.nan  # a leader's word on the others only
+    memory["plans"][owner[lead], place[lead]] = aims
+
+
+def in_tile(points: np.ndarray, bounds: np.ndarray) -> np.ndarray:
+    """Which ``points`` ``(..., 2)`` lie in their tiles ``bounds`` ``(..., 4)``, give or take
+    :data:`MATCH` (claims lag; a robot of the next formation that close to the edge passes too)."""
+    x, y = points[..., 0], points[..., 1]
+    xmin, xmax, ymin, ymax = np.moveaxis(bounds, -1, 0)
+    return (x >= xmin - MATCH) & (x <= xmax + MATCH) & (y >= ymin - MATCH) & (y <= ymax + MATCH)
+
+
+def _gaps(spotted: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Distances ``(e, 7)`` from each robot seen ``(e, 2)`` to the points ``(e, 7, 2)`` of its row."""
+    return np.hypot(*(spotted[:, None, :] - points).transpose(2, 0, 1))
+
+
+def judge(
+    here: np.ndarray,
+    me: np.ndarray,
+    alive: np.ndarray,
+    bounds: np.ndarray,
+    hood: Neighbourhood,
+    spotted: np.ndarray,
+    state: dict[str, np.ndarray],
+) -> np.ndarray:
+    """Check the claims of followers at ``here`` ``(f, 2)`` (places ``me``, tiles ``bounds``), who
+    see the robots ``spotted`` ``(e, 2)`` in rows ``hood``: strike each robot whose claim, close
+    enough to check, matches no robot seen, or lies where no correct robot can be
+    (:func:`implausible`); else, when it sees close by a robot that no claim accounts for, the one
+    robot whose claim lies out of its sight. :data:`STRIKES` in a row make a liar. Updates
+    ``state`` (``heard``, ``plans``, ``strikes``, ``liar``, ``liar_at``) and returns which liars it
+    sees now ``(f, 7)`` (at ``liar_at``)."""
+    heard, liar, liar_at = state["heard"], state["liar"].astype(bool), state["liar_at"]
+    owner, members = hood.owner, np.arange(MEMBERS)
+    trusted = np.isfinite(heard[..., 0]) & ~liar & (members != me[:, None])
+    checkable = trusted & (np.hypot(*(heard - here[:, None]).transpose(2, 0, 1)) < VERIFY - MATCH)
+    matched = hood.min(_gaps(spotted, heard[owner])) <= MATCH
+    missed = (checkable & ~matched) | (trusted & implausible(heard, alive, state["plans"], liar, bounds))
+    located = ~(liar & np.isnan(liar_at[..., 0])).any(axis=1)
+    lone = ~missed.any(axis=1) & ((trusted & ~checkable).sum(axis=1) == 1) & located
+    if lone.any():
+        accounted = np.where((trusted | liar)[..., None], np.where(liar[..., None], liar_at, heard), np.nan)
+        unaccounted = ~(_gaps(spotted, accounted[owner]) <= MATCH).any(axis=1)
+        close = np.hypot(*(spotted - here[owner]).T) <= RANGE
+        lone &= hood.any(close & unaccounted)
+        missed = np.where(lone[:, None], trusted & ~checkable, missed)
+    state["strikes"] = np.where(trusted, np.where(missed, state["strikes"] + 1, 0), state["strikes"])
+    liar |= trusted & (state["strikes"] >= STRIKES)
+    sensed = np.zeros(liar.shape, dtype=bool)
+    if liar.any():
+        claims = np.where((~liar & np.isfinite(heard[..., 0]))[..., None], heard, np.nan)
+        unclaimed = ~(_gaps(spotted, claims[owner]) <= MATCH).any(axis=1)
+        count, rows = hood.sum(unclaimed.astype(np.float64)), np.arange(len(here))
+        tracked = liar & np.isfinite(liar_at[..., 0])
+        one = np.argmax(liar, axis=1)
+        found = (liar.sum(axis=1) == 1) & (count == 1) & ~tracked[rows, one]
+        entry = hood.nearest(np.where(unclaimed, 0.0, np.inf))
+        liar_at[found, one[found]] = spotted[entry[found]]
+        sensed[found, one[found]] = True
+        for j in range(MEMBERS):  # a liar seen before: the same robot, moved on a little
+            following = tracked[:, j] & (count > 0)
+            if following.any():
+                gap = np.where(unclaimed, np.hypot(*(spotted - liar_at[owner, j]).T), np.inf)
+                entry = hood.nearest(gap)
+                near = following & (hood.pick(gap, entry) < 2 * MATCH)
+                liar_at[near, j] = spotted[entry[near]]
+                sensed[near, j] = True
+    state["liar"] = liar.astype(np.int64)
+    return sensed
+
+
+def implausible(heard: np.ndarray, alive: np.ndarray, plans: np.ndarray, liar: np.ndarray, bounds: np.ndarray) -> np.ndarray:
+    """Which claims ``heard`` ``(f, 7, 2)`` no correct robot makes: outside the formation's tile, or a
+    living leader's place :data:`PLAN_SLACK` from every place the other living, trusted leaders
+    plan for it (``plans`` ``(f, 3, 3, 2)``: leader i's word on leader m)."""
+    out = ~in_tile(heard, bounds[:, None, :])
+    living = alive[:, :LEADERS] & ~liar[:, :LEADERS]
+    places = np.where(living[:, :, None, None], plans, np.nan)  # [row, i, m]
+    gaps = np.hypot(*(heard[:, None, :LEADERS] - places).transpose(3, 0, 1, 2))
+    off = np.isfinite(gaps).any(axis=1) & ~(gaps <= PLAN_SLACK).any(axis=1)
+    # A crashed leader stands where it stopped, off the plan that moves on.
+    out[:, :LEADERS] |= off & alive[:, :LEADERS]
+    return out
+
+
+def positions(
+    heard: np.ndarray, alive: np.ndarray, plans: np.ndarray, liar: np.ndarray, liar_at: np.ndarray, sensed: np.ndarray
+) -> np.ndarray:
+    """Where followers take the robots of their formation to be ``(f, 7, 2)`` (NaN: unknown), for
+    the law: what they claim; liars where seen; crashed leaders, and lying ones out of sight,
+    where the living leaders plan them; the others (crashed followers, lying ones out of sight)
+    at their places in the affine image of the nominal shape that the rest span."""
+    have = np.isfinite(heard[..., 0])
+    living = alive[:, :LEADERS] & ~liar[:, :LEADERS]
+    planned = np.full((len(heard), LEADERS, 2), np.nan)
+    for i in range(LEADERS):  # a later leader's word over an earlier one's
+        word = living[:, i, None] & np.isfinite(plans[:, i, :, 0])
+        planned = np.where(word[..., None], plans[:, i], planned)
+    known = np.where((~liar & alive & have)[..., None], heard, np.nan)
+    known = np.where((liar & sensed)[..., None], liar_at, known)
+    lead = known[:, :LEADERS]
+    from_plan = np.isfinite(planned[..., 0]) & liar[:, :LEADERS] & ~sensed[:, :LEADERS]
+    lead = np.where(from_plan[..., None], planned, lead)
+    crashed = ~liar[:, :LEADERS] & ~alive[:, :LEADERS] & have[:, :LEADERS]
+    lead = np.where(crashed[..., None], np.where(np.isfinite(planned), planned, heard[:, :LEADERS]), lead)
+    known[:, :LEADERS] = lead
+    unknown = have & np.isnan(known[..., 0])
+    for r in np.flatnonzero(unknown.any(axis=1)):
+        found = np.flatnonzero(np.isfinite(known[r, :, 0]))
+        missing = np.flatnonzero(unknown[r])
+        image = affine_image({int(j): known[r, j] for j in found}, [int(j) for j in missing])
+        for j in missing:
+            if j in image:
+                known[r, j] = image[j]
+            elif not liar[r, j]:
+                known[r, j] = heard[r, j]  # too few to span the image: where it last said
+    return known
+
+
+def nominal_place(ids: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """The places ``(k, 2)`` (m) of robots ``ids`` in the nominal shape of their tiles."""
+    return formation("nominal")[ids % MEMBERS] + centres[ids // MEMBERS]
+
+
+def leader_goals(memory: dict[str, np.ndarray], ids: np.ndarray, centres: np.ndarray) -> Any:
+    """The planned places ``(k, 2)`` (m) of leaders ``ids`` (their memory rows ``memory``; nominal
+    before their first plan)."""
+    goals = memory["goals"][np.arange(len(ids)), ids % MEMBERS]
+    return np.where(np.isnan(goals), nominal_place(ids, centres), goals)
