@@ -5,7 +5,7 @@ of every robot; receivers keep the element-wise maximum, so heartbeats spread li
 a robot need not hear another directly. A robot heard from once whose heartbeat has not
 risen for ``silence`` of this robot's own rounds is taken for crashed (its radio fell
 silent). Rounds are local: no clock is shared. Used by hrvo-circle (survivors stop waiting
-for the crashed) and affine-formation (survivors stop listening to them).
+for the crashed).
 """
 
 from __future__ import annotations

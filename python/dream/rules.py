@@ -592,4 +592,3 @@ def morph(start: Any, goals: Any, done: Any, total: int) -> FloatArray:
     start = np.asarray(start, dtype=np.float64)
     share = np.minimum(np.asarray(done) / total, 1.0)
     return start + share[..., None, None] * (np.asarray(goals, dtype=np.float64) - start)
-

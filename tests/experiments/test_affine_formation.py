@@ -75,7 +75,9 @@ def test_affine_formation_succeeds_under_rps2_rules(seed):
 def test_leaders_change_places_at_a_steady_pace():
     robot = af.FormationRobot(7, np.zeros((1, 2)))
     ids = np.array([0])
-    start = robot.aims(ids, {"start": np.full((1, 3, 2), np.nan), "goals": np.full((1, 3, 2), np.nan), "decisions": [0]})
+    start = robot.aims(
+        ids, {"start": np.full((1, 3, 2), np.nan), "goals": np.full((1, 3, 2), np.nan), "decisions": [0]}
+    )
     places = af.formation("compressed") + (0.2, 0.0)  # the planned formation, leaders first
     memory = {"start": start, "goals": places[None, : af.LEADERS], "decisions": np.zeros(1, dtype=np.int64)}
     aims = []

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import math
 import os
 import warnings
 
@@ -140,7 +139,9 @@ def test_affine_formations_side_by_side_ignore_a_liar_out_of_sight():
     # Seed 2: follower 24 (tile 3) claims the arena's centre, three tiles off. Its formation took
     # it for a liar only once claims were checked against the tile, and placed it right only once
     # robots of other formations seen nearby stopped passing for it (follower error 1.43 m before).
-    result = dream.run("affine-formation", n=98, backend="fast", seed=2, faults=dream.Faults(byzantine=1))
+    # Swarm mode: the robots' own trajectories (test_affine_formation compares them under each fault).
+    faults = dream.Faults(byzantine=1)
+    result = dream.run("affine-formation", n=98, backend="fast", seed=2, faults=faults, swarm=True)
     assert [(e["kind"], e["robot"]) for e in result.faults["events"]] == [("byzantine", 24)]
     assert result.success, result.summary()
     assert (result.collisions, result.boundary, result.actuator) == (0, 0, 0)

@@ -231,6 +231,7 @@ def test_the_decision_gets_rows_never_the_swarm():
         "said",
         "saying",
         "straight",
+        "heeded",
     }
     assert all(len(ids) == 6 for _, ids, _ in robot.views)
 
@@ -301,6 +302,51 @@ def test_memory_keeps_its_kind_and_one_value_per_robot():
 
     with pytest.raises(ValueError, match="memory 'decisions' holds int64 values, got float64"):
         drive(Bad(), 3, 3)
+
+
+def test_an_array_memory_field_keeps_one_array_per_robot():
+    class Tally(SwarmRobot):
+        period = 1
+        memory = {"count": np.zeros(3, dtype=np.int64), "heard": np.full((2, 2), np.nan)}
+
+        def decide(self, view):
+            assert view.memory["count"].shape == (len(view), 3) and view.memory["heard"].shape == (len(view), 2, 2)
+            view.memory["count"][:, view.clock.astype(int) % 3] += 1  # each row its own counts
+            view.memory["heard"][:, 1] = view.pose[:, :2]
+            return np.zeros((len(view), 2))
+
+    for one_by_one in (False, True):
+        engine, _ = drive(Tally(), 3, 7, one_by_one=one_by_one)
+        assert engine.memory["count"].tolist() == [[2, 2, 2]] * 3  # decided at steps 1-6
+        assert np.isnan(engine.memory["heard"][:, 0]).all()
+        assert np.array_equal(engine.memory["heard"][:, 1], np.column_stack((np.linspace(-0.5, 0.5, 3), np.zeros(3))))
+
+    class Bad(Tally):
+        def decide(self, view):
+            view.memory["count"] = np.zeros((len(view), 2), dtype=np.int64)
+            return np.zeros((len(view), 2))
+
+    with pytest.raises(ValueError, match=r"memory 'count' must have one value per deciding robot, shape \(3, 3\)"):
+        drive(Bad(), 3, 3)
+
+
+@pytest.mark.parametrize("heed", [None, True, False])
+def test_the_safety_layer_heeds_only_the_detections_flagged(heed):
+    class HeadOn(SwarmRobot):
+        period = 1
+        movement = Movement(range=1.0)
+        avoid = Avoid(safety=0.2)
+
+        def decide(self, view):
+            if heed is not None:
+                view.heed(np.full(view.seen.offsets[-1], heed))
+            return np.where(view.ids[:, None] == 0, [[0.1, 0.0]], [[-0.1, 0.0]])
+
+    poses = np.array([[-0.15, 0.15], [0.0, 0.0], [0.0, np.pi]])
+    engine, _ = drive(HeadOn(), 2, 2, poses=poses)
+    wished = np.array([[0.1, 0.0], [-0.1, 0.0]])
+    # Heeding nobody, the robots drive into each other as wished; else HRVO turns them away.
+    assert np.allclose(engine.dxi, wished) == (heed is False)
 
 
 def test_draws_depend_on_keys_not_on_order():

@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from dream import rules
+from dream import rules, timers
 from dream._checks import Bounds
 from dream._csr import offsets_of
 from dream.experiments.spec import Experiment, param
@@ -194,7 +194,7 @@ class LineRobot(SwarmRobot):
 
     def start(self, ids: np.ndarray) -> np.ndarray:
         """Staggered: a third of the team talks and decides at each of three neighbouring steps."""
-        return START_DELAY + ids % 3
+        return timers.staggered(ids, START_DELAY, 3)
 
     def decide(self, view: View) -> np.ndarray:
         here, memory, heard = view.pose[:, :2], view.memory, view.heard

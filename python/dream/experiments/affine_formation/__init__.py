@@ -103,7 +103,9 @@ class AffineFormation(Experiment):
         """The bars: the leaders change shapes by their own clocks (:class:`FormationRobot`)."""
         for _, enter, leave, _, gap in self.passes:
             if step == enter:
-                self.bars = Fleet([bar for centre in self.centres for bar in bars(gap, ROBOTARIUM.xmax + ENTRY, centre)])
+                self.bars = Fleet(
+                    [bar for centre in self.centres for bar in bars(gap, ROBOTARIUM.xmax + ENTRY, centre)]
+                )
             if step == leave:
                 self.bars = Fleet()
 
@@ -129,6 +131,7 @@ class AffineFormation(Experiment):
             return anchors
         assert self.engine is not None
         robot, memory = self.engine.robot, self.engine.memory
+        assert isinstance(robot, FormationRobot)
         first = np.arange(0, self.n, MEMBERS)
         for i in range(LEADERS):  # a later leader's aims over an earlier one's
             ids = first + i

@@ -181,8 +181,6 @@ def tile_places(robots: np.ndarray, shape: str, centres: np.ndarray) -> np.ndarr
     return formation(shape)[robots % 7] + centres[robots // 7]
 
 
-
-
 def shape_plan() -> tuple[np.ndarray, list[str], np.ndarray]:
     """What the leaders plan, as ``(steps (e,), shapes, offsets (e, 2))``: from ``steps[i]`` on, the
     formation ``shapes[i]`` moved by ``offsets[i]`` (m) from the tile's centre (to the right while

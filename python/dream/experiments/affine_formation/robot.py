@@ -86,6 +86,7 @@ class FormationRobot(SwarmRobot):
         self.avoid = Avoid(safety=SAFETY, sidestep=SIDESTEP_UPDATES)
         self.centres = centres  #: the centres ``(n / 7, 2)`` of the formations' tiles
         self.tiles = np.array([tile_bounds(centre) for centre in centres]).reshape(-1, 4)  #: and their bounds
+        self.nominal = formation("nominal")  #: the nominal shape about a tile's centre
         steps, shapes, offsets = shape_plan()
         self.plan_steps = steps
         self.plan_places = np.array([formation(shape) for shape in shapes]) + offsets[:, None, :]
@@ -103,17 +104,22 @@ class FormationRobot(SwarmRobot):
         spotted = here[seen.owner] + np.column_stack((seen["dx"], seen["dy"]))  # where it sees each robot
         desired, heeded = np.zeros((len(view), 2)), seen["distance"] <= RANGE
         rows = np.flatnonzero(lead)
-        self.plan(view, rows, alive[rows])
-        mine = {key: memory[key][rows] for key in ("start", "goals", "decisions")}
-        view.send(x=here[:, 0], y=here[:, 1], **self.said(lead, self.aims(view.ids[rows], mine)))
+        aims = np.zeros((0, LEADERS, 2))
+        if len(rows):
+            self.plan(view, rows, alive[rows])
+            mine = {key: memory[key][rows] for key in ("start", "goals", "decisions")}
+            aims = self.aims(view.ids[rows], mine)
+        view.send(x=here[:, 0], y=here[:, 1], **self.said(lead, aims))
         if len(rows):
             memory["decisions"][rows] += 1
             mine["decisions"] = mine["decisions"] + 1
             aim = self.aims(view.ids[rows], mine)[np.arange(len(rows)), place[rows]]
             desired[rows] = rules.toward(here[rows], aim, LEADER_GAIN, self.spec.v_max)
             # A leader heeds only the robots it takes for crashed, where they were heard last.
-            crashed = np.where(memory["silent"][:, :, None] > 0, memory["heard"], np.nan)[seen.owner]
-            heeded = np.where(lead[seen.owner], (_gaps(spotted, crashed) <= MATCH).any(axis=1), heeded)
+            heeded = heeded & ~lead[seen.owner]
+            if memory["silent"][rows].any():
+                crashed = np.where(memory["silent"][:, :, None] > 0, memory["heard"], np.nan)[seen.owner]
+                heeded |= lead[seen.owner] & (_gaps(spotted, crashed) <= MATCH).any(axis=1)
         if (~lead).any():
             rows = np.flatnonzero(~lead)
             desired[rows] = self.follow(view, rows, alive[rows], spotted)
@@ -135,7 +141,7 @@ class FormationRobot(SwarmRobot):
         """The points ``(k, 3, 2)`` (m) where the plan has the formation's leaders head now, for the
         leaders ``ids`` ``(k,)`` whose memory rows ``memory`` holds (before its first plan: their
         nominal places)."""
-        nominal = formation("nominal")[:LEADERS] + self.centres[ids // MEMBERS][:, None, :]
+        nominal = self.nominal[:LEADERS] + self.centres[ids // MEMBERS][:, None, :]
         start = np.where(np.isnan(memory["start"]), nominal, memory["start"])
         goals = np.where(np.isnan(memory["goals"]), nominal, memory["goals"])
         return rules.morph(start, goals, memory["decisions"], MORPH)
@@ -150,15 +156,17 @@ class FormationRobot(SwarmRobot):
         changed = (silent != memory["silent"][rows]).any(axis=1)
         memory["phase"][rows], memory["silent"][rows] = np.maximum(phase, memory["phase"][rows]), silent
         places = self.plan_places[memory["phase"][rows]] + self.centres[ids // MEMBERS][:, None, :]
-        shift = memory["shift"][rows].copy()
-        for r in np.flatnonzero(moved | changed):
+        shift = np.where(moved | changed, 0.0, memory["shift"][rows])
+        for r in np.flatnonzero((moved | changed) & silent.any(axis=1)):
             shift[r] = self.clearing(places[r], silent[r].astype(bool), memory["heard"][rows[r]])
         again = moved | (changed & (shift != memory["shift"][rows]))  # else the aims keep their pace
         if again.any():
             chosen = rows[again]
             aims = self.aims(view.ids[chosen], {key: value[chosen] for key, value in memory.items()})
             memory["start"][chosen] = aims
-            memory["goals"][chosen] = places[again, :LEADERS] + np.column_stack((shift[again], 0 * shift[again]))[:, None]
+            goals = places[again, :LEADERS]
+            goals[..., 0] += shift[again][:, None]
+            memory["goals"][chosen] = goals
             memory["decisions"][chosen] = 0
             memory["shift"][chosen] = shift[again]
 
@@ -166,8 +174,6 @@ class FormationRobot(SwarmRobot):
     def clearing(places: np.ndarray, silent: np.ndarray, heard: np.ndarray) -> float:
         """The shift (m) along x of the planned ``places`` ``(7, 2)`` clear of the robots taken for
         crashed (``silent`` ``(7,)``, heard last at ``heard`` ``(7, 2)``): :func:`clearing_shift`."""
-        if not silent.any():
-            return 0.0
         return clearing_shift(places[~silent], heard[silent], float(places.mean(axis=0)[0]))
 
     # -- followers -----------------------------------------------------------------------------
@@ -256,8 +262,8 @@ def judge(
     sensed = np.zeros(liar.shape, dtype=bool)
     if liar.any():
         claims = np.where((~liar & np.isfinite(heard[..., 0]))[..., None], heard, np.nan)
-        unclaimed = ~(_gaps(spotted, claims[owner]) <= MATCH).any(axis=1)
-        count, rows = hood.sum(unclaimed.astype(np.float64)), np.arange(len(here))
+        unclaimed = np.asarray(~(_gaps(spotted, claims[owner]) <= MATCH).any(axis=1))
+        count, rows = hood.where(unclaimed).count, np.arange(len(here))
         tracked = liar & np.isfinite(liar_at[..., 0])
         one = np.argmax(liar, axis=1)
         found = (liar.sum(axis=1) == 1) & (count == 1) & ~tracked[rows, one]
@@ -276,7 +282,9 @@ def judge(
     return sensed
 
 
-def implausible(heard: np.ndarray, alive: np.ndarray, plans: np.ndarray, liar: np.ndarray, bounds: np.ndarray) -> np.ndarray:
+def implausible(
+    heard: np.ndarray, alive: np.ndarray, plans: np.ndarray, liar: np.ndarray, bounds: np.ndarray
+) -> np.ndarray:
     """Which claims ``heard`` ``(f, 7, 2)`` no correct robot makes: outside the formation's tile, or a
     living leader's place :data:`PLAN_SLACK` from every place the other living, trusted leaders
     plan for it (``plans`` ``(f, 3, 3, 2)``: leader i's word on leader m)."""
@@ -316,7 +324,7 @@ def positions(
         found = np.flatnonzero(np.isfinite(known[r, :, 0]))
         missing = np.flatnonzero(unknown[r])
         image = affine_image({int(j): known[r, j] for j in found}, [int(j) for j in missing])
-        for j in missing:
+        for j in map(int, missing):
             if j in image:
                 known[r, j] = image[j]
             elif not liar[r, j]:
