@@ -90,7 +90,7 @@ def test_leaders_change_places_at_a_steady_pace():
     assert_allclose(aims[-1], places[: af.LEADERS])  # ...that end at the new places
 
 
-def test_a_leader_takes_the_plans_shapes_by_its_own_clock():
+def test_the_leaders_plan_its_shapes_in_order():
     steps, shapes, offsets = plan.shape_plan()
     passes = af.schedule()
     assert steps.tolist() == [0, plan.GATHER] + [step for p in passes for step in (p[0], p[2])]
@@ -159,7 +159,7 @@ def test_affine_formation_is_the_same_both_ways_under_each_fault(case, unfaulted
 
 
 def test_affine_formation_thousand_robots_on_fast_do_not_collide():
-    result = af.run(n=1001, seed=0, backend="fast", steps=100)
+    result = af.run(n=1001, seed=0, backend="fast", steps=100, swarm=True)  # robot by robot: the same run
     assert result.n == 1001 and result.collisions == 0 and result.boundary == 0
 
 

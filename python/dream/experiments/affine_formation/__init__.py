@@ -33,6 +33,7 @@ from dream.experiments.affine_formation.plan import (
     follower_targets,
     formation,
     schedule,
+    shape_plan,
     stress_matrix,
     tile_centres,
     tiled_arena,
@@ -88,6 +89,7 @@ class AffineFormation(Experiment):
         self.centres = tile_centres(n // MEMBERS)
         self.leader = np.arange(n) % MEMBERS < LEADERS
         self.passes = schedule()
+        self.orders = {int(step): k for k, step in enumerate(shape_plan()[0])}  #: plan step of each order
         self.bars = Fleet()
         self.contacts, self.settled_error, self.deformed_error, self.error = 0, math.nan, 0.0, math.nan
         return FormationRobot(n, self.centres)
@@ -100,7 +102,10 @@ class AffineFormation(Experiment):
         return self.passes[-1][2] + 2 * RECOVER
 
     def before_step(self, step: int) -> None:
-        """The bars: the leaders change shapes by their own clocks (:class:`FormationRobot`)."""
+        """The operator's orders to the leaders (the plan's shapes, on the world's time), and the bars."""
+        if step in self.orders:
+            assert self.engine is not None
+            self.engine.memory["order"][self.leader] = self.orders[step]
         for _, enter, leave, _, gap in self.passes:
             if step == enter:
                 self.bars = Fleet(

@@ -56,11 +56,13 @@ class FormationRobot(SwarmRobot):
     """A leader or a follower of an affine formation, by its place (see the module docs).
 
     A leader takes each shape of the plan (:func:`~dream.experiments.affine_formation.plan.shape_plan`)
-    by its own clock: the aims of its formation's leaders move to the new places at a steady pace
-    over ``MORPH`` decisions (:func:`dream.rules.morph`), shifted clear of the robots it takes for
-    crashed (which alone it avoids), and it sends them with its position. A follower obeys the
-    stress law on where it takes its formation to be (:meth:`positions`), through HRVO, checking
-    the claims it hears against what it sees (:meth:`judge`).
+    when the operator orders it: the experiment sets the memory field ``order`` to the plan's step
+    at the world's time, so that clocks that drift do not split a formation. The aims of its
+    formation's leaders then move to the new places at a steady pace over ``MORPH`` decisions
+    (:func:`dream.rules.morph`), shifted clear of the robots it takes for crashed (which alone it
+    avoids), and it sends them with its position. A follower obeys the stress law on where it
+    takes its formation to be (:func:`positions`), through HRVO, checking the claims it hears
+    against what it sees (:func:`judge`).
     """
 
     period = CONTROL_GAP
@@ -73,6 +75,7 @@ class FormationRobot(SwarmRobot):
         "strikes": np.zeros(MEMBERS, dtype=np.int64),  # decisions in a row each one's claim was blamed
         "liar": np.zeros(MEMBERS, dtype=np.int64),  # robots taken for liars
         "liar_at": np.full((MEMBERS, 2), np.nan),  # where a liar was seen last (NaN: not located)
+        "order": 0,  # the step of the plan the operator has ordered last (set by the experiment)
         "phase": -1,  # the leader's step of the plan
         "start": np.full((LEADERS, 2), np.nan),  # the leaders' places its aims left from
         "goals": np.full((LEADERS, 2), np.nan),  # and the places they go to
@@ -87,8 +90,7 @@ class FormationRobot(SwarmRobot):
         self.centres = centres  #: the centres ``(n / 7, 2)`` of the formations' tiles
         self.tiles = np.array([tile_bounds(centre) for centre in centres]).reshape(-1, 4)  #: and their bounds
         self.nominal = formation("nominal")  #: the nominal shape about a tile's centre
-        steps, shapes, offsets = shape_plan()
-        self.plan_steps = steps
+        _, shapes, offsets = shape_plan()
         self.plan_places = np.array([formation(shape) for shape in shapes]) + offsets[:, None, :]
 
     def start(self, ids: np.ndarray) -> np.ndarray:
@@ -147,10 +149,10 @@ class FormationRobot(SwarmRobot):
         return rules.morph(start, goals, memory["decisions"], MORPH)
 
     def plan(self, view: View, rows: np.ndarray, alive: np.ndarray) -> None:
-        """The leaders ``rows`` take the plan's shape of their clock, or a new shift clear of the
-        robots they now take for crashed: their aims set off for the new places."""
+        """The leaders ``rows`` take the shape the operator ordered last, or a new shift clear of
+        the robots they now take for crashed: their aims set off for the new places."""
         memory, ids = view.memory, view.ids[rows]
-        phase = np.searchsorted(self.plan_steps, view.clock[rows], side="right") - 1
+        phase = memory["order"][rows]
         silent = (~alive & (memory["news"][rows] > 0)).astype(np.int64)
         moved = phase > memory["phase"][rows]
         changed = (silent != memory["silent"][rows]).any(axis=1)
