@@ -31,7 +31,7 @@ from dream import kernels, rules
 from dream._csr import spans
 from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
 from dream.kernels._neighbours import Heard, Perceived
-from dream.robot import GUARD_HORIZON, guard_distance
+from dream.robot import guard_distance
 from dream.sensors import seen_velocity
 from dream.specs import ArenaSpec, SimulatorSpec
 from dream.swarm import draws
@@ -199,10 +199,19 @@ class Engine:
             if key not in self.memory:
                 raise ValueError(f"{name} remembers {key!r}, which its memory does not declare: add it to `memory`")
             self.memory[key][rows] = _per_robot(values, len(rows), self.memory[key].dtype, f"{name} memory {key!r}")
-        straight = None
+        straight = safety = None
         if view.straight is not None:
             straight = _per_robot(view.straight, len(rows), np.dtype(bool), f"{name}'s rows driven direct")
-        out[:, rows] = self._drive(rows, wished, self.belief[rows], view.seen, straight)
+        if view.safety is not None:
+            safety = _per_robot(view.safety, len(rows), np.dtype(np.float64), f"{name}'s safety radii")
+            if not (np.isfinite(safety).all() and (safety >= 0).all()):
+                raise ValueError(f"{name}'s safety radii must be finite and >= 0")
+        if view.turn is not None:
+            side = _per_robot(view.turn[0], len(rows), np.dtype(np.float64), f"{name}'s sides to step aside to")
+            stop = _per_robot(view.turn[1], len(rows), np.dtype(bool), f"{name}'s rows that stop stepping aside")
+            self.side[rows] = np.where(side != 0.0, np.sign(side), self.side[rows])
+            self.sidestep[rows[stop]] = 0
+        out[:, rows] = self._drive(rows, wished, self.belief[rows], view.seen, straight, safety)
         if view.said is None:
             return None
         message = self._message(view.said, len(rows))
@@ -212,14 +221,47 @@ class Engine:
         return rows[saying], {key: values[saying] for key, values in message.items()}
 
     def _drive(
-        self, rows: np.ndarray, wished: np.ndarray, pose: np.ndarray, seen: Neighbourhood, straight: np.ndarray | None
+        self,
+        rows: np.ndarray,
+        wished: np.ndarray,
+        pose: np.ndarray,
+        seen: Neighbourhood,
+        straight: np.ndarray | None,
+        safety: np.ndarray | None = None,
     ) -> np.ndarray:
         """The unicycle commands ``(2, k)`` that carry out ``wished`` ``(k, 2)``: through HRVO on the
         robots' own detections (if they avoid, and but for the rows ``straight`` flags), the
-        conversion, the limits and the motion guard."""
+        conversion, the limits and the motion guard; ``safety`` ``(k,)``: each row's safety radius
+        (m) instead of the Avoid's. Rows of one radius go through the kernels together (a row's
+        result never depends on the others')."""
+        avoid = self.robot.avoid
+        if avoid is None or safety is None:
+            return self._drive_apart(rows, wished, pose, seen, straight, None if avoid is None else avoid.safety)
+        out = np.empty((2, len(rows)))
+        for radius in np.unique(safety):
+            part = np.flatnonzero(safety == radius)
+            counts = np.diff(seen.offsets)[part]
+            hood = Neighbourhood(
+                np.concatenate(([0], np.cumsum(counts))),
+                {name: seen[name][spans(seen.offsets[:-1][part], counts)] for name in (*DETECTION, "dx", "dy")},
+            )
+            cut = None if straight is None else straight[part]
+            out[:, part] = self._drive_apart(rows[part], wished[part], pose[part], hood, cut, float(radius))
+        return out
+
+    def _drive_apart(
+        self,
+        rows: np.ndarray,
+        wished: np.ndarray,
+        pose: np.ndarray,
+        seen: Neighbourhood,
+        straight: np.ndarray | None,
+        safety: float | None,
+    ) -> np.ndarray:
+        """:meth:`_drive` for rows that keep one ``safety`` radius (m)."""
         robot, avoid = self.robot, self.robot.avoid
         chosen = wished
-        if avoid is not None:
+        if avoid is not None and safety is not None:
             chosen = wished.copy()
             steer: slice | np.ndarray = slice(None)  # the rows that go through HRVO
             entries: slice | np.ndarray = slice(None)  # and their detections
@@ -240,7 +282,7 @@ class Engine:
                 pose[steer, :2],
                 offsets,
                 detections,
-                safety=avoid.safety,
+                safety=safety,
                 v_max=robot.spec.v_max,
                 bounds=self.arena.shrunk(margin) if avoid.check_boundaries else None,
                 n_angles=avoid.n_angles,
@@ -255,10 +297,10 @@ class Engine:
                 )
         self.dxi[rows] = chosen
         out = kernels.actuator_limit(kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain), self.limits)
-        if avoid is not None and avoid.guard:
-            near = guard_distance(robot.spec.diameter, avoid.safety)
+        if avoid is not None and safety is not None and avoid.guard:
+            near = guard_distance(robot.spec.diameter, safety)
             stop = kernels.motion_guard(
-                out[0], pose[:, 2], seen.offsets, seen["dx"], seen["dy"], near=near, horizon=GUARD_HORIZON
+                out[0], pose[:, 2], seen.offsets, seen["dx"], seen["dy"], near=near, horizon=avoid.horizon
             )
             out[0, stop] = 0.0
         return out

@@ -30,6 +30,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from dream._checks import as_offsets, check_nonnegative
+from dream.robot import GUARD_HORIZON
 from dream.specs import GRITSBOT, RobotSpec
 from dream.swarm.neighbourhood import Neighbourhood
 
@@ -103,7 +104,7 @@ class Avoid:
     ``safety`` (m, centre to centre), and that keeps the robot ``margin`` (m, default its radius)
     inside the arena when ``check_boundaries``; a robot HRVO stops while it wants to move steps
     aside for ``sidestep`` decisions; the motion guard (``guard``) stops a unicycle whose turn
-    would close in on a detected robot's body.
+    would close in on a detected robot's body within ``horizon`` (s).
     """
 
     safety: float = 0.24
@@ -111,12 +112,14 @@ class Avoid:
     margin: float | None = None
     sidestep: int = 10
     guard: bool = True
+    horizon: float = GUARD_HORIZON
     n_angles: int = 20
     n_speeds: int = 10
     include_preferred: bool = True
 
     def __post_init__(self) -> None:
         check_nonnegative(self.safety, "Avoid safety")
+        check_nonnegative(self.horizon, "Avoid horizon")
         if self.margin is not None:
             check_nonnegative(self.margin, "Avoid margin")
         for name in ("sidestep", "n_angles", "n_speeds"):
@@ -157,6 +160,8 @@ class View:
     said: dict[str, np.ndarray] | None = field(default=None, repr=False)
     saying: Any = field(default=None, repr=False)  #: which rows send (``where`` of :meth:`send`)
     straight: Any = field(default=None, repr=False)  #: which rows skip HRVO (:meth:`direct`)
+    safety: Any = field(default=None, repr=False)  #: each row's safety radius (:meth:`keep_apart`)
+    turn: Any = field(default=None, repr=False)  #: each row's side and stop (:meth:`aside`)
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -174,6 +179,18 @@ class View:
         neighbours' velocity obstacles would forbid the very direction of its place. The motion
         guard still checks them. A later call replaces an earlier one."""
         self.straight = rows
+
+    def keep_apart(self, safety: Any) -> None:
+        """Plan the rows' HRVO and motion guard with their own combined safety radii ``safety``
+        ``(k,)`` (m) instead of :attr:`Avoid.safety`: for a robot that squeezes through a gap, say.
+        A later call replaces an earlier one."""
+        self.safety = safety
+
+    def aside(self, side: Any = 0.0, stop: Any = False) -> None:
+        """Choose how the rows step aside when HRVO blocks them: ``side`` ``(k,)`` (1.0: to the
+        right, -1.0: to the left, 0.0: as before) and ``stop`` ``(k,)`` bool (stop stepping aside
+        now). A later call replaces an earlier one."""
+        self.turn = (side, stop)
 
 
 class SwarmRobot:
