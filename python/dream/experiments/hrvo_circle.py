@@ -2,7 +2,7 @@
 
 Each robot heads for its goal on a ring, then the antipode, then its goal again, avoiding the
 others with HRVO on its movement sensor; it moves on once it knows that every robot has got as
-far, from range-radio messages of eight integers whatever N (an arc barrier with a bounded
+far, from range-radio messages of nine integers whatever N (an arc barrier with a bounded
 failure detector, :mod:`dream.rules.ring`). One :class:`CircleRobot`, written on arrays, runs
 robot by robot and as one swarm (``swarm=True``) with the same poses at every step. The story
 (roundabout, side-step, settling, squeezing, the packed ring) is in docs/experiments/hrvo-circle.md.
@@ -58,8 +58,8 @@ CONTROL_GAP = 4  #: steps between two decisions of a robot
 START_DELAY = 20  #: robot i decides first after this plus i % 10 steps
 RADIO_RANGE = 1.0  #: the range radio's reach (m)
 #: A message: the sender's level, its arc, the level it knows complete, and the two robots it
-#: watches beyond its arc with their ages (:func:`dream.rules.watch_ends`).
-MESSAGE = ("state", "left", "right", "released", "watch_left", "age_left", "watch_right", "age_right")
+#: watches beyond its arc with their ages (:func:`dream.rules.watch_ends`), and whether it knows of a crash.
+MESSAGE = ("state", "left", "right", "released", "watch_left", "age_left", "watch_right", "age_right", "suspects")
 
 
 @dataclass(frozen=True)
@@ -304,7 +304,7 @@ class CircleRobot(SwarmRobot):
         )
         watched = np.column_stack((memory["watch_left"], memory["watch_right"]))
         ages = np.column_stack((memory["age_left"], memory["age_right"]))
-        ends, ages = rules.watch_ends(n, ids, left, right, watched, ages, rows, senders, fields[:, 4:])
+        ends, ages = rules.watch_ends(n, ids, left, right, watched, ages, rows, senders, fields[:, 4:8])
         # A robot silent for SILENCE rounds is taken for crashed: the arc grows over it.
         quiet = (ages > SILENCE) & talking[:, None] & (left + right + 1 < n)[:, None]
         left, right = np.minimum(left + quiet[:, 0], n - 1), np.minimum(right + quiet[:, 1], n - 1)
@@ -312,7 +312,10 @@ class CircleRobot(SwarmRobot):
         # At least its own level, not equal to it: the others may have gone ahead of a robot
         # taken for crashed while out of radio reach.
         go = talking & rules.moves_on(state, released >= state, unreached, CIRCLES)
-        suspects = (memory["suspects"] > 0) | quiet.any(axis=1) | (released > state)
+        # Whether some robot is taken for crashed (news of it spreads), or this one was.
+        told = np.zeros(len(ids), dtype=bool)
+        told[rows[fields[:, 8] > 0]] = True
+        suspects = (memory["suspects"] > 0) | told | quiet.any(axis=1) | (released > state)
         for key, value in (("left", left), ("right", right), ("released", released), ("suspects", suspects)):
             memory[key] = np.where(talking, value, memory[key]).astype(np.int64)
         for at, side in enumerate(("left", "right")):
