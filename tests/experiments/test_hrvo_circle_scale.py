@@ -139,28 +139,3 @@ def test_rules_decide_the_same_for_one_robot_and_for_the_swarm(rng):
     speed = np.hypot(*desired.T)
     assert np.all(speed <= 0.2 + 1e-12) and np.all(speed[:3] == 0)
     assert np.all(after[~chosen.any(axis=1) & desired.any(axis=1)] == 10)  # blocked robots step aside
-
-
-def test_circle_robot_decides_as_the_swarm_rules_do(rng):
-    # The per-robot and swarm modes differ by design in timing (robots decide on their own
-    # timers; the swarm decides every step) and in what a robot knows of its neighbours'
-    # velocities, so their trajectories part. What they share is every decision rule: given the
-    # same pose, goal and counters, a CircleRobot asks HRVO for what the swarm rules give.
-    n = 6
-    layout = hrvo_circle.circle_layout(n)
-    goals = hrvo_circle.circle_goals(n)
-    poses = np.vstack((rng.uniform(-1.2, 1.2, (2, n)), rng.uniform(-np.pi, np.pi, n)))
-    sidestep = np.array([0, 3, 0, 1, 0, 2])
-    side = np.array([1.0, -1.0, 1.0, 1.0, -1.0, 1.0])
-    asked = np.zeros((n, 2))
-    for i in range(n):
-        robot = hrvo_circle.CircleRobot(i, f"r{i}", goals[i], n, semi_axes=layout.semi_axes, safety=layout.safety)
-        robot.update_odom(poses[:, i])
-        robot.sidestep, robot.side = int(sidestep[i]), float(side[i])
-        robot.HRVO = lambda detections, wanted, i=i: asked.__setitem__(i, wanted) or np.zeros(2)  # record the ask
-        robot.update(np.zeros((2, n)))
-    p = poses[:2].T
-    aim = rules.roundabout_aim(p, goals[:, 0], layout.semi_axes, hrvo_circle.ISLAND)
-    desired = rules.preferred_velocity(p, aim, goals[:, 0], 0.2, hrvo_circle.APPROACH_GAIN)
-    wanted, _ = rules.sidestep_preference(desired, sidestep, side)
-    np.testing.assert_allclose(asked, wanted, rtol=0, atol=1e-15)

@@ -306,8 +306,11 @@ class CircleRobot(SwarmRobot):
         ages = np.column_stack((memory["age_left"], memory["age_right"]))
         ends, ages = rules.watch_ends(n, ids, left, right, watched, ages, rows, senders, fields[:, 4:8])
         # A robot silent for SILENCE rounds is taken for crashed: the arc grows over it.
-        quiet = (ages > SILENCE) & talking[:, None] & (left + right + 1 < n)[:, None]
-        left, right = np.minimum(left + quiet[:, 0], n - 1), np.minimum(right + quiet[:, 1], n - 1)
+        quiet = (ages > SILENCE) & talking[:, None]
+        quiet[:, 0] &= left + right + 1 < n
+        left = left + quiet[:, 0]
+        quiet[:, 1] &= left + right + 1 < n  # one robot beyond both ends: once
+        right = right + quiet[:, 1]
         released = rules.arc_release(n, state, left, right, released)
         # At least its own level, not equal to it: the others may have gone ahead of a robot
         # taken for crashed while out of radio reach.
