@@ -4,8 +4,8 @@ Each robot counts its radio rounds as its heartbeat and sends the highest heartb
 of every robot; receivers keep the element-wise maximum, so heartbeats spread like gossip and
 a robot need not hear another directly. A robot heard from once whose heartbeat has not
 risen for ``silence`` of this robot's own rounds is taken for crashed (its radio fell
-silent). Rounds are local: no clock is shared. Used by hrvo-circle (survivors stop waiting
-for the crashed) and affine-formation (survivors stop listening to them).
+silent). Rounds are local: no clock is shared. Used by affine-formation (survivors stop
+listening to the crashed); hrvo-circle's barrier has a bounded one (:func:`dream.rules.watch_ends`).
 """
 
 from __future__ import annotations

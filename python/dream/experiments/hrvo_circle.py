@@ -21,7 +21,7 @@ from dream import kernels, rules
 from dream.backends import initial_poses
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
-from dream.robot import GUARD_HORIZON, guard_distance
+from dream.robot import GUARD_HORIZON, SIDESTEP_UPDATES, guard_distance
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec, SimulatorSpec
 from dream.swarm import Avoid, Movement, Radio, SwarmRobot, View
 
@@ -49,7 +49,6 @@ PACKED_GUARD_HORIZON = 2 * GUARD_HORIZON  #: how far ahead a packed ring's motio
 CORRIDOR = 2 * SAFETY  #: free width between the ring and the walls of a grown arena (m)
 ISLAND = 0.5  #: the roundabout's island, as a fraction of the ring (see dream.rules.roundabout_aim)
 APPROACH_GAIN = 1.0  #: preferred speed per metre left to the goal near it (1/s)
-SIDESTEP_UPDATES = 10  #: decisions a blocked robot steps aside for
 SILENCE = 20  #: radio rounds without news of a robot after which it is taken for crashed
 STILL = 1e-3  #: a detected robot slower than this (m/s) stands still
 STALL = 120  #: decisions without :data:`PROGRESS` towards its goal after which a robot is stalled
