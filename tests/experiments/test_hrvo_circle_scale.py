@@ -45,11 +45,12 @@ def test_hrvo_circle_swarm_mode_completes_a_large_swarm(swarm_of_40):
     assert_clean_completion(swarm_of_40)
 
 
-def test_hrvo_circle_swarm_mode_moves_as_the_hand_written_batch_loop_did(swarm_of_40):
-    # Poses recorded with hrvo_circle.run_batch, the second loop that swarm mode replaced: every
-    # 500 steps of n=40 (seed 0, done at step 6046) and every 150 steps of n=200 (seed 1, 300 steps).
-    expected = np.load(DATA / "hrvo_circle_batch_loop.npz")
-    assert swarm_of_40.completed_step == 6046
+def test_hrvo_circle_swarm_keeps_its_pinned_trajectories(swarm_of_40):
+    # Poses of the CircleRobot swarm, pinned when it replaced the hand-written swarm mode (which
+    # finished n=40 seed 0 at step 6046): every 500 steps of n=40 (seed 0, done at step 5852) and
+    # every 150 steps of n=200 (seed 1, 300 steps).
+    expected = np.load(DATA / "hrvo_circle_swarm.npz")
+    assert swarm_of_40.completed_step == expected["n40_seed0_done"] == 5852
     np.testing.assert_allclose(swarm_of_40.trace[::500], expected["n40_seed0"], rtol=0, atol=1e-9)
     wide = dream.run("hrvo-circle", n=200, seed=1, steps=300, backend="fast", swarm=True, trace=True)
     assert (wide.completed_step, wide.collisions, wide.boundary, wide.actuator) == (None, 0, 0, 0)
