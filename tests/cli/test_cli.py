@@ -36,8 +36,7 @@ def test_cli_run_prints_summary_and_writes_json(tmp_path, capsys):
 def test_cli_run_reports_bad_input_without_traceback(capsys):
     assert main(["run", "hrvo-circle", "-n", "52", "--backend", "robotarium", "--swarm", "--steps", "5"]) == 2
     err = capsys.readouterr().err
-    # rps's ring holds at most 51 robots.
-    assert "n=52 robots do not fit" in err and "Traceback" not in err
+    assert "the Robotarium backend runs at most 50 robots" in err and "Traceback" not in err
 
 
 @pytest.mark.parametrize(
