@@ -96,7 +96,7 @@ def test_packed_ring_is_the_same_robot_by_robot_and_as_a_swarm():
     # Its docks, inward side-steps, parking and clear final approach run both ways alike (the
     # hand-written swarm mode refused the packed ring).
     robots, swarm = (
-        hrvo_circle.run(n=40, seed=1, backend="robotarium", steps=700, trace=True, swarm=way) for way in (False, True)
+        hrvo_circle.run(n=40, seed=1, backend="robotarium", steps=400, trace=True, swarm=way) for way in (False, True)
     )
     assert np.array_equal(swarm.trace, robots.trace) and swarm.swarm
     assert np.abs(robots.trace[-1] - robots.trace[0]).max() > 0.5 and robots.collisions == 0

@@ -23,14 +23,14 @@ def assert_clean_completion(result):
 
 @pytest.mark.parametrize("seed", range(3))
 def test_hrvo_circle_twenty_robots_complete_on_rps(seed):
-    result = hrvo_circle.run(n=20, seed=seed, backend="robotarium")
+    result = hrvo_circle.run(n=20, seed=seed, backend="robotarium", swarm=True)  # robot by robot: the same run
     assert result.backend == "robotarium"
     assert_clean_completion(result)
 
 
 @pytest.mark.skipif(os.environ.get("DREAM_PURE_PYTHON") == "1", reason="the largest case: too slow with NumPy HRVO")
 def test_hrvo_circle_hundred_robots_complete_on_fast():
-    result = hrvo_circle.run(n=100, seed=0, backend="fast")
+    result = hrvo_circle.run(n=100, seed=0, backend="fast", swarm=True)  # robot by robot: the same run
     assert result.backend == "fast"
     assert_clean_completion(result)
 

@@ -279,7 +279,8 @@ class CircleRobot(SwarmRobot):
             memory["squeezing"], memory["stalled"], STALL, outside, seen.min("distance"), layout.safety
         )
         memory["squeezing"] = squeezing.astype(np.int64)
-        view.keep_apart(np.where(squeezing, self.squeeze_to, layout.safety))
+        if squeezing.any():
+            view.keep_apart(np.where(squeezing, self.squeeze_to, layout.safety))
         aim = rules.roundabout_aim(here, goal, layout.semi_axes, ISLAND)
         return rules.preferred_velocity(here, aim, goal, self.spec.v_max, APPROACH_GAIN)
 

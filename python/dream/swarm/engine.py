@@ -235,8 +235,11 @@ class Engine:
         (m) instead of the Avoid's. Rows of one radius go through the kernels together (a row's
         result never depends on the others')."""
         avoid = self.robot.avoid
-        if avoid is None or safety is None:
-            return self._drive_apart(rows, wished, pose, seen, straight, None if avoid is None else avoid.safety)
+        if avoid is None:
+            return self._drive_apart(rows, wished, pose, seen, straight, None)
+        if safety is None or not len(safety) or (safety == safety[0]).all():  # one radius for all the rows
+            radius = avoid.safety if safety is None or not len(safety) else float(safety[0])
+            return self._drive_apart(rows, wished, pose, seen, straight, radius)
         out = np.empty((2, len(rows)))
         for radius in np.unique(safety):
             part = np.flatnonzero(safety == radius)
@@ -503,6 +506,8 @@ def _per_robot(values: Any, k: int, kind: np.dtype, what: str) -> np.ndarray:
     """``values`` as ``(k,)`` of ``kind``: one value per deciding robot, or one for all of them;
     anything else (a shape that would spread one robot's value over the others, a float for an
     int field) is refused, naming ``what``."""
+    if type(values) is np.ndarray and values.shape == (k,) and values.dtype == kind:
+        return values  # already one value of its kind per robot (most memory): no copy to make
     array = np.asarray(values)
     if array.shape not in ((), (k,)):
         raise ValueError(f"{what} must have one value per deciding robot, shape ({k},), got shape {array.shape}")
