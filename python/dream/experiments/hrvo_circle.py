@@ -254,11 +254,12 @@ class CircleRobot(SwarmRobot):
         unreached = memory["unreached"].astype(bool)
         goal = self.goals(ids, memory["heading"])
         _, reached = rules.arrival(here, goal, unreached, layout.arrival)
-        still = np.hypot(seen["vx"], seen["vy"]) < STILL
-        reach = np.where(memory["stalled"] >= STALL, 2 * layout.safety, layout.safety) + layout.arrival
-        offsets = np.column_stack((seen["dx"], seen["dy"]))
-        taken = rules.goal_taken(here, goal, seen.offsets, offsets, still, reach, layout.safety)
-        reached |= unreached & (memory["suspects"] > 0) & taken
+        doubting = unreached & (memory["suspects"] > 0)  # it may take a goal a standing robot holds
+        if doubting.any():
+            still = np.hypot(seen["vx"], seen["vy"]) < STILL
+            reach = np.where(memory["stalled"] >= STALL, 2 * layout.safety, layout.safety) + layout.arrival
+            offsets = np.column_stack((seen["dx"], seen["dy"]))
+            reached |= doubting & rules.goal_taken(here, goal, seen.offsets, offsets, still, reach, layout.safety)
         memory["state"] = memory["state"] + reached
         memory["left"], memory["right"] = (np.where(reached, 0, memory[key]) for key in ("left", "right"))
         memory["unreached"] = (unreached & ~reached).astype(np.int64)
