@@ -307,11 +307,7 @@ class CircleRobot(SwarmRobot):
         ages = np.column_stack((memory["age_left"], memory["age_right"]))
         ends, ages = rules.watch_ends(n, ids, left, right, watched, ages, rows, senders, fields[:, 4:8])
         # A robot silent for SILENCE rounds is taken for crashed: the arc grows over it.
-        quiet = (ages > SILENCE) & talking[:, None]
-        quiet[:, 0] &= left + right + 1 < n
-        left = left + quiet[:, 0]
-        quiet[:, 1] &= left + right + 1 < n  # one robot beyond both ends: once
-        right = right + quiet[:, 1]
+        left, right, quiet = rules.grow_over(n, left, right, (ages > SILENCE) & talking[:, None])
         released = rules.arc_release(n, state, left, right, released)
         # At least its own level, not equal to it: the others may have gone ahead of a robot
         # taken for crashed while out of radio reach.
@@ -344,8 +340,8 @@ class CircleRobot(SwarmRobot):
         right = desired[:, 1] * outwards[:, 0] - desired[:, 0] * outwards[:, 1]
         view.aside(np.where(band & ~near, np.where(right <= 0.0, 1.0, -1.0), 0.0), stop=near)
         clearance = guard_distance(self.spec.diameter, layout.safety)
-        others = np.column_stack((seen["dx"], seen["dy"])) + 0.0
-        clear = near & rules.clear_way(here, goal, others + here[seen.owner], clearance, seen.offsets)
+        others = np.column_stack((seen["dx"], seen["dy"])) + here[seen.owner]
+        clear = near & rules.clear_way(here, goal, others, clearance, seen.offsets)
         parked = view.memory["unreached"] == 0  # neighbours dock beside a robot that keeps its place
         view.direct(clear | parked)
         return np.where(parked[:, None], 0.0, desired)

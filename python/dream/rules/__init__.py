@@ -26,6 +26,7 @@ from dream.rules.ring import (  # noqa: F401 (read from dream.rules too)
     clear_way,
     dock,
     goal_taken,
+    grow_over,
     outside_ring,
     squeezes,
     stall,

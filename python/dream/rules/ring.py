@@ -119,6 +119,19 @@ def watch_ends(
     return ends, ages
 
 
+def grow_over(n: int, left: Any, right: Any, silent: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(left, right, grown)``: each arc (:func:`arc_merge`) grown by one over the robot beyond
+    each end flagged ``silent`` ``(k, 2)`` (taken for crashed: the others stop waiting for it),
+    never beyond all ``n`` robots (one robot beyond both ends is passed once); ``grown`` ``(k, 2)``
+    flags the ends that grew."""
+    grown = np.array(silent, dtype=bool, copy=True).reshape(-1, 2)
+    left, right = np.asarray(left, dtype=np.int64), np.asarray(right, dtype=np.int64)
+    grown[:, 0] &= left + right + 1 < n
+    left = left + grown[:, 0]
+    grown[:, 1] &= left + right + 1 < n
+    return left, right + grown[:, 1], grown
+
+
 def stall(distance: Any, closest: Any, stalled: Any, unreached: Any, progress: float) -> tuple[Any, Any]:
     """``(closest, stalled)`` after a decision ``distance`` (m) from the goal: a robot that has come
     ``progress`` (m) closer than ``closest`` since its last progress starts counting again; one
