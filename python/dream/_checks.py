@@ -78,10 +78,15 @@ def check_rows(index: np.ndarray, name: str, length: int) -> None:
 
 def all_finite(array: np.ndarray) -> bool:
     """Whether every value of the float ``array`` is finite; a robot's small arrays through
-    :func:`math.isfinite` (several times faster there than NumPy's per-call cost)."""
+    :func:`math.isfinite` (several times faster there than NumPy's per-call cost). A large
+    array's sum is finite only if every value is, and summing needs no mask of the array's size:
+    the values are tested one by one only when the sum is not finite (a NaN, an infinity or an
+    overflow)."""
     if array.size <= 64:
         return all(map(math.isfinite, array.ravel().tolist()))
-    return bool(np.isfinite(array).all())
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = np.sum(array)
+    return bool(np.isfinite(total) or np.isfinite(array).all())
 
 
 def as_poses(value: Any, name: str = "poses", n: int | None = None) -> FloatArray:

@@ -14,6 +14,7 @@ use rayon::prelude::*;
 
 use crate::error::{check_finite, check_len, try_room, GeomError, Result};
 use crate::neighbours::{within, wrap_angle};
+use crate::parallel::concat;
 
 /// Rows from which the robots are perceived for on every thread.
 const PARALLEL_ROWS: usize = 512;
@@ -42,13 +43,6 @@ pub struct Perceived {
 }
 
 impl Perceived {
-    fn with_offsets() -> Self {
-        Perceived {
-            offsets: vec![0],
-            ..Perceived::default()
-        }
-    }
-
     /// Room for `count` more entries (and `rows` more rows); the bearings and offsets only
     /// where `seen`.
     fn room(&mut self, rows: usize, count: usize, seen: bool) -> Result<()> {
@@ -64,17 +58,27 @@ impl Perceived {
         Ok(())
     }
 
-    /// Appends the rows of `part` (whose offsets start at 0, the leading 0 left out).
-    fn extend(&mut self, part: Perceived) -> Result<()> {
-        self.room(part.offsets.len(), part.ids.len(), !part.bearings.is_empty())?;
-        let base = self.ids.len() as i64;
-        self.offsets.extend(part.offsets.iter().map(|o| o + base));
-        self.ids.extend_from_slice(&part.ids);
-        self.distances.extend_from_slice(&part.distances);
-        self.bearings.extend_from_slice(&part.bearings);
-        self.dxs.extend_from_slice(&part.dxs);
-        self.dys.extend_from_slice(&part.dys);
-        Ok(())
+    /// The parts' rows one after the other (each part's offsets start at 0, the leading 0 left
+    /// out, so each is shifted by the entries before it).
+    fn join(parts: &[Perceived]) -> Result<Self> {
+        const WHAT: &str = "perceived robots";
+        let mut shifted = Vec::with_capacity(parts.len() + 1);
+        shifted.push(vec![0_i64]);
+        let mut base = 0_i64;
+        for part in parts {
+            shifted.push(part.offsets.iter().map(|o| o + base).collect());
+            base += part.ids.len() as i64;
+        }
+        let column =
+            |of: fn(&Perceived) -> &Vec<f64>| concat(&parts.iter().map(|p| &of(p)[..]).collect::<Vec<_>>(), WHAT);
+        Ok(Perceived {
+            offsets: concat(&shifted.iter().map(|o| &o[..]).collect::<Vec<_>>(), WHAT)?,
+            ids: concat(&parts.iter().map(|p| &p.ids[..]).collect::<Vec<_>>(), WHAT)?,
+            distances: column(|p| &p.distances)?,
+            bearings: column(|p| &p.bearings)?,
+            dxs: column(|p| &p.dxs)?,
+            dys: column(|p| &p.dys)?,
+        })
     }
 }
 
@@ -181,11 +185,8 @@ pub fn perceive(
     } else {
         vec![sort_out(rows)?]
     };
-    let (mut seen, mut heard) = (Perceived::with_offsets(), Perceived::with_offsets());
-    for (s, h) in parts {
-        seen.extend(s)?;
-        heard.extend(h)?;
-    }
+    let (seen, heard): (Vec<Perceived>, Vec<Perceived>) = parts.into_iter().unzip();
+    let (seen, mut heard) = (Perceived::join(&seen)?, Perceived::join(&heard)?);
     if all_heard {
         heard.offsets = rows.iter().map(|&i| near.indptr[i as usize]).collect();
         heard.offsets.push(near.indptr[n]);
