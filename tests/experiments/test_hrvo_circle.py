@@ -105,6 +105,34 @@ def test_hrvo_circle_is_the_same_robot_by_robot_and_as_a_swarm(faults):
         assert robots.faults["messages_lost"] > 0 and len(robots.faults["events"]) == 2
 
 
+def test_hrvo_circle_is_the_same_both_ways_under_every_fault_kind():
+    every = dream.Faults(
+        loss=0.2,
+        burst=(0.05, 0.3),
+        distance_loss=0.2,
+        latency=3,
+        jitter=2,
+        crash=0.1,
+        crash_at=40,
+        stuck=0.1,
+        stuck_at=60,
+        byzantine=2,
+        lie="random",
+        sensor_dropout=0.05,
+        sensor_noise=0.01,
+        drift=0.05,
+        clock_jitter=1,
+        actuator_noise=0.01,
+    )
+    robots, swarm = (
+        hrvo_circle.run(n=20, seed=1, backend="fast", steps=500, trace=True, swarm=way, faults=every)
+        for way in (False, True)
+    )
+    assert np.array_equal(swarm.trace, robots.trace) and robots.faults == swarm.faults
+    assert robots.faults["messages_lost"] > 0 and robots.faults["readings_dropped"] > 0
+    assert robots.collisions == swarm.collisions == 0
+
+
 def test_hrvo_circle_full_ring_on_rps_does_not_collide():
     # rps's arena cannot grow: as many robots as its ring holds with the 5 cm tolerance, goals on
     # the ellipse filling it (the packed ring beyond: test_hrvo_circle_packed.py).
