@@ -205,7 +205,9 @@ def test_large_swarms_step_and_validate_on_every_core_as_the_reference(rng):
     assert_allclose(dxu, _reference.dxi_to_dxu(commands / 10, poses, 0.8, 3.0), **TOL)
     limits = dict(max_linear=0.2, max_angular=3.6, wheel_radius=0.016, base_length=0.105, max_wheel=12.5)
     assert_array_equal(_core.actuator_limit(dxu * 5, **limits), _reference.actuator_limit(dxu * 5, **limits))
-    assert_array_equal(_core.threshold_velocities(dxu * 5, 0.2, 3.6), _reference.threshold_velocities(dxu * 5, 0.2, 3.6))
+    assert_array_equal(
+        _core.threshold_velocities(dxu * 5, 0.2, 3.6), _reference.threshold_velocities(dxu * 5, 0.2, 3.6)
+    )
 
 
 @pytest.mark.parametrize("offset", [0.0, 0.025])
