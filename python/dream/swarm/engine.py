@@ -31,6 +31,7 @@ from dream import kernels, rules
 from dream._csr import spans
 from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
 from dream.kernels._neighbours import Heard, Perceived
+from dream.obstacles import sensed
 from dream.robot import GUARD_HORIZON, guard_distance
 from dream.sensors import seen_velocity
 from dream.specs import ArenaSpec, SimulatorSpec
@@ -122,6 +123,8 @@ class Engine:
         rows = rows[self._odometry(t, rows, x, faults)]
         if self.robot.movement is not None:  # a robot whose sensor reading is lost holds its command
             rows = rows[self._kept(t, rows, np.full(len(rows), -2), faults)]
+        if self.robot.obstacles is not None:  # so does one whose obstacle reading is lost
+            rows = rows[self._kept(t, rows, np.full(len(rows), -3), faults)]
         if not len(rows):
             return []
         # What the sensors see of the others' motion: their commands before anyone decides now.
@@ -179,6 +182,7 @@ class Engine:
             self._sense(t, rows, seen, velocities, faults).frozen(),
             self._hear(t, rows, heard, faults).frozen(),
             {key: values[rows] for key, values in self.memory.items()},
+            self._obstacles(t, rows, x, faults).frozen(),
         )
         if self.focus is not None:
             self._keep_focus(t, rows, view, self.focus)
@@ -254,9 +258,12 @@ class Engine:
                     steered, want, self.sidestep[ids], self.side[ids], avoid.sidestep
                 )
         self.dxi[rows] = chosen
-        out = kernels.actuator_limit(kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain), self.limits)
-        if avoid is not None and avoid.guard:
-            near = guard_distance(robot.spec.diameter, avoid.safety)
+        out = kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain)
+        if robot.halts:  # no wish, no command (the conversion alone turns some robots at full speed)
+            out[:, ~chosen.any(axis=1)] = 0.0
+        out = kernels.actuator_limit(out, self.limits)
+        if robot.guard is not None or (avoid is not None and avoid.guard):
+            near = robot.guard.near if robot.guard is not None else guard_distance(robot.spec.diameter, avoid.safety)
             stop = kernels.motion_guard(
                 out[0], pose[:, 2], seen.offsets, seen["dx"], seen["dy"], near=near, horizon=GUARD_HORIZON
             )
@@ -305,7 +312,8 @@ class Engine:
 
     def _kept(self, t: int, me: np.ndarray, others: np.ndarray, faults: FaultState | None) -> np.ndarray:
         """Which readings of robots ``me`` the dropout fault keeps (``others``: -1 for the odometry,
-        -2 for the movement sensor's reading, which is lost whole, as an object sensor's is)."""
+        -2 for the movement sensor's reading and -3 for the obstacle sensor's, each lost whole, as
+        an object sensor's is)."""
         if faults is None or not faults.faults.sensor_dropout:
             return np.ones(len(me), dtype=bool)
         kept = draws.uniform(self.seed, draws.DROPOUT, t, me, others) >= faults.faults.sensor_dropout
@@ -338,6 +346,24 @@ class Engine:
             dy = columns["distance"] * np.sin(columns["bearing"])
         columns["dx"], columns["dy"] = dx, dy
         return Neighbourhood(offsets, columns)
+
+    def _obstacles(self, t: int, rows: np.ndarray, x: np.ndarray, faults: FaultState | None) -> Neighbourhood:
+        """The obstacle sensor's reading of ``rows`` (:class:`~dream.swarm.robot.Obstacles`): the
+        obstacles sensed, with the sensor's noise and the world's."""
+        sensor = self.robot.obstacles
+        if sensor is None:
+            return Neighbourhood(np.zeros(len(rows) + 1, dtype=np.int64), {"dx": np.zeros(0), "dy": np.zeros(0)})
+        here = x[:2, rows].T
+        closest = sensed(sensor.obstacles, here, sensor.range)  # (k, obstacles, 2), NaN: not sensed
+        found = ~np.isnan(closest[..., 0])
+        owners, which = np.nonzero(found)
+        dx, dy = (closest[found] - here[owners]).T
+        sigma = math.hypot(sensor.noise, 0.0 if faults is None else faults.faults.sensor_noise)
+        if sigma > 0:
+            noise = draws.normal(self.seed, draws.OBSTACLE_NOISE, t, rows[owners, None], which[:, None], np.arange(2))
+            dx, dy = dx + sigma * noise[:, 0], dy + sigma * noise[:, 1]
+        offsets = np.concatenate(([0], np.cumsum(found.sum(axis=1))))
+        return Neighbourhood(offsets, {"dx": dx, "dy": dy, "distance": np.hypot(dx, dy)})
 
     # -- radio -------------------------------------------------------------------------------
     def _hear(self, t: int, rows: np.ndarray, heard: Heard, faults: FaultState | None) -> Neighbourhood:

@@ -23,13 +23,14 @@ world's faults applied to the arrays, and both give the same poses at every step
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
 
 from dream._checks import as_offsets, check_nonnegative
+from dream.obstacles import Obstacle
 from dream.specs import GRITSBOT, RobotSpec
 from dream.swarm.neighbourhood import Neighbourhood
 
@@ -125,6 +126,38 @@ class Avoid:
                 raise ValueError(f"Avoid {name} must be a whole number >= {int(name != 'sidestep')}, got {value!r}")
 
 
+@dataclass(frozen=True)
+class Obstacles:
+    """An obstacle sensor: the closest point of each of ``obstacles`` (the world's
+    :class:`~dream.obstacles.Obstacle` list, read where they are now, moving ones too) within
+    ``range`` (m, inclusive), none for an obstacle the robot is inside of, with Gaussian ``noise``
+    on every coordinate."""
+
+    obstacles: Sequence[Obstacle] = field(default=(), compare=False)
+    range: float = 1.0
+    noise: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("range", "noise"):
+            check_nonnegative(getattr(self, name), f"Obstacles {name}")
+        if not all(isinstance(o, Obstacle) for o in self.obstacles):
+            raise ValueError("`Obstacles obstacles` must be a sequence of dream.Obstacle")
+
+
+@dataclass(frozen=True)
+class Guard:
+    """The motion guard with a distance of its own: a unicycle whose drive along its heading
+    would bring it within ``near`` (m, centre to centre) of a robot it sees in the next
+    :data:`~dream.robot.GUARD_HORIZON` seconds gets no linear speed (it still turns). Without
+    :class:`Avoid` it is the robot's only safety layer (no HRVO); with it, it replaces the
+    distance :class:`Avoid` derives from its safety radius."""
+
+    near: float
+
+    def __post_init__(self) -> None:
+        check_nonnegative(self.near, "Guard near")
+
+
 @dataclass
 class View:
     """What the robots deciding now know, one row per robot (``k`` of them).
@@ -146,6 +179,10 @@ class View:
         The messages the radio delivered: ``sender`` and the declared fields.
     memory : dict of (k,) arrays
         The robots' memory (:attr:`SwarmRobot.memory`); change it in place or assign new arrays.
+    obstacles : Neighbourhood
+        (read-only) The obstacle sensor's reading (:class:`Obstacles`), one entry per obstacle
+        sensed, in the sensor's order: columns ``dx``, ``dy`` (the closest point less the
+        robot's position) and ``distance``; empty rows without an obstacle sensor.
     """
 
     ids: np.ndarray
@@ -154,6 +191,7 @@ class View:
     seen: Neighbourhood
     heard: Neighbourhood
     memory: dict[str, np.ndarray]
+    obstacles: Neighbourhood | None = None
     said: dict[str, np.ndarray] | None = field(default=None, repr=False)
     saying: Any = field(default=None, repr=False)  #: which rows send (``where`` of :meth:`send`)
     straight: Any = field(default=None, repr=False)  #: which rows skip HRVO (:meth:`direct`)
@@ -189,6 +227,14 @@ class SwarmRobot:
         The radio and its message fields.
     avoid : Avoid or None
         The HRVO safety layer on the wished velocities.
+    obstacles : Obstacles or None
+        The obstacle sensor.
+    guard : Guard or None
+        The motion guard at a distance of its own (with or without :attr:`avoid`).
+    halts : bool
+        A robot that wishes no velocity gets no command at all (default False: the unicycle
+        conversion's, which for a zero wish turns a robot heading between -pi and -pi/2 at full
+        speed, ``atan2(+0, -0) = pi``).
     memory : dict
         Each memory field's initial value (a float or an int), kept per robot between decisions.
     odometry_noise : float
@@ -203,6 +249,9 @@ class SwarmRobot:
     movement: Movement | None = None
     radio: Radio | None = None
     avoid: Avoid | None = None
+    obstacles: Obstacles | None = None
+    guard: Guard | None = None
+    halts: bool = False
     memory: ClassVar[dict[str, float | int]] = {}
     odometry_noise: float = 0.0
     vel_gain: float = 0.8
