@@ -228,6 +228,7 @@ def test_the_decision_gets_rows_never_the_swarm():
         "seen",
         "heard",
         "memory",
+        "obstacles",
         "said",
         "saying",
         "straight",
