@@ -297,7 +297,8 @@ class VoronoiCoverage(Experiment):
         }
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
-        """The robots' centroids and their last cells (kept from the first frame on)."""
+        """The robots' centroids and their last cells (kept from the first frame on; none when a
+        learner, :mod:`dream.rl`, drives the robots)."""
         assert self.engine is not None
         self.team.keep_cells = True
         memory, cells = self.engine.memory, self.team.cells
@@ -305,7 +306,7 @@ class VoronoiCoverage(Experiment):
             step,
             self.arena,
             poses,
-            goals=np.column_stack((memory["goal_x"], memory["goal_y"])),
+            goals=np.column_stack((memory["goal_x"], memory["goal_y"])) if "goal_x" in memory else None,
             obstacles=[o.polygon for o in self.obstacles],
             obstacle_moving=[o.moving for o in self.obstacles],
             cells=[cells.get(i, np.zeros((0, 2))) for i in range(self.n)],
