@@ -143,3 +143,16 @@ def test_merged_rows_keep_each_kind_in_order():
     b = (np.array([0, 0, 1, 3]), np.array([10.0, 20.0, 30.0]))
     offsets, values = merged(a, b)
     assert offsets.tolist() == [0, 2, 3, 6] and values.tolist() == [1.0, 2.0, 10.0, 3.0, 20.0, 30.0]
+
+
+def test_cells_from_the_board_are_the_cells_from_the_rows(monkeypatch):
+    # Without losses the engine finds each cell's messages near it on the board (heard_cells);
+    # with them, View.cells goes through every message delivered. Forced through the rows, a
+    # whole coverage run (packed start: many ties between equidistant neighbours) is the same.
+    from dream.experiments import voronoi_coverage as vc
+
+    board = vc.run(n=40, seed=2, backend="fast", steps=200, swarm=True, trace=True)
+    monkeypatch.setattr(Engine, "_lossless", lambda self, faults: False)
+    rows = vc.run(n=40, seed=2, backend="fast", steps=200, swarm=True, trace=True)
+    assert np.array_equal(board.trace, rows.trace)
+    assert np.ptp(board.trace[:, :2], axis=0).max() > 0.3  # the team did spread

@@ -23,7 +23,7 @@ from dream.frames import Frame
 from dream.obstacles import Obstacle, touching
 from dream.robot import GUARD_MARGIN
 from dream.specs import GRITSBOT, ROBOTARIUM, TIME_STEP, ArenaSpec, SimulatorSpec
-from dream.swarm import Guard, Movement, Obstacles, Radio, SwarmRobot, View, known_cells
+from dream.swarm import Guard, Movement, Obstacles, Radio, SwarmRobot, View
 
 NAME = "voronoi-coverage"
 CELL_RADIUS = 1.0  #: radius of the disc a robot's cell starts from (m)
@@ -154,7 +154,7 @@ class CoverageRobot(SwarmRobot):
     Each decision it sends where it is (moving: where it will be at its next decision,
     :data:`LEAD`), clips its cell by the positions it hears, the robots it sees that no message
     accounts for (a crashed robot, say: otherwise its cell would lead straight into it) and
-    virtual agents for the obstacles it senses (:func:`dream.swarm.known_cells`), and heads for
+    virtual agents for the obstacles it senses (:meth:`dream.swarm.View.cells`), and heads for
     the centroid with :data:`MOMENTUM` of its last step (:func:`dream.rules.approach`). No HRVO:
     the cells keep the robots apart, and the motion guard (:class:`~dream.swarm.Guard`) stops a
     unicycle whose turn would close in on a robot it sees. A robot that wants no velocity gets no
@@ -179,24 +179,21 @@ class CoverageRobot(SwarmRobot):
         return START_DELAY + ids % 5
 
     def decide(self, view: View) -> np.ndarray:
-        here, memory, heard, seen, sensed = view.pose[:, :2], view.memory, view.heard, view.seen, view.obstacles
+        here, memory, seen, sensed = view.pose[:, :2], view.memory, view.seen, view.obstacles
         assert sensed is not None  # the engine's view has every reading
         last = np.column_stack((memory["last_x"], memory["last_y"]))
         moving = memory["moving"].astype(bool)
         said = here + rules.momentum(here, last, moving, LEAD)
         view.send(x=said[:, 0], y=said[:, 1])
-        messages = np.column_stack((heard["x"], heard["y"]))
         sighted = here[seen.owner] + np.column_stack((seen["dx"], seen["dy"]))
-        silent = rules.far_from(sighted, messages, SAME_ROBOT, offsets=(seen.offsets, heard.offsets))
         owners = sensed.owner
         points = here[owners] + np.column_stack((sensed["dx"], sensed["dy"]))
         agents = kernels.obstacle_agents(here[owners], points, robot_radius=self.spec.radius, margin=MARGIN)
         real = ~np.isnan(agents[:, 0])  # none for an obstacle the robot touches
-        cells = known_cells(
-            here,
-            (heard.offsets, messages),
-            (seen.where(silent).offsets, sighted[silent]),
-            (sensed.where(real).offsets, agents[real]),
+        cells = view.cells(
+            seen=(seen.offsets, sighted),
+            same=SAME_ROBOT,
+            virtual=(sensed.where(real).offsets, agents[real]),
             radius=CELL_RADIUS,
             bounds=self.bounds,
             polygons=self.keep_cells,

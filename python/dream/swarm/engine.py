@@ -23,6 +23,7 @@ messages leave the air.
 from __future__ import annotations
 
 import math
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -30,6 +31,7 @@ import numpy as np
 from dream import kernels, rules
 from dream._csr import spans
 from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
+from dream.kernels import VoronoiCells
 from dream.kernels._neighbours import Heard, Perceived
 from dream.obstacles import sensed
 from dream.robot import GUARD_HORIZON, guard_distance
@@ -184,6 +186,8 @@ class Engine:
             {key: values[rows] for key, values in self.memory.items()},
             self._obstacles(t, rows, x, faults).frozen(),
         )
+        if by_range and self._lossless(faults):
+            view.board_cells = partial(self._board_cells, rows, x[:2].T, talking)
         if self.focus is not None:
             self._keep_focus(t, rows, view, self.focus)
         return view
@@ -393,6 +397,38 @@ class Engine:
             faults.messages_lost += int((~through).sum())
         self.traffic.received(rows, offsets, through)
         return inbox.where(through)
+
+    def _lossless(self, faults: FaultState | None) -> bool:
+        """Whether every message in the radio's range gets through (no loss of any kind)."""
+        f = None if faults is None else faults.faults
+        radio_loss = 0.0 if self.robot.radio is None else self.robot.radio.loss
+        return radio_loss == 0 and (f is None or (f.loss == 0 and f.distance_loss == 0 and f.burst is None))
+
+    def _board_cells(
+        self,
+        rows: np.ndarray,
+        positions: np.ndarray,
+        talking: np.ndarray,
+        here: np.ndarray,
+        fields: tuple[str, str],
+        seen: tuple[Any, Any],
+        same: float,
+        virtual: tuple[Any, Any],
+        **shape: Any,
+    ) -> VoronoiCells:
+        """:meth:`View.cells` of ``rows`` when every message in range gets through: what each hears
+        is what the talking robots within range of it (``positions`` ``(n, 2)``) have on the board,
+        and :func:`dream.kernels.heard_cells` looks only at the messages near each cell."""
+        missing = [name for name in fields if name not in self.board]
+        if missing:
+            raise KeyError(f"no field {missing[0]!r} in the radio's messages (its fields: {', '.join(self.board)})")
+        board = np.column_stack([self.board[name] for name in fields]).astype(np.float64)
+        said = np.where(talking[:, None], board, np.nan)
+        assert self.robot.radio is not None  # a range radio
+        radio_range = self.robot.radio.range
+        return kernels.heard_cells(
+            here, rows, positions, said, range=radio_range, seen=seen, same=same, virtual=virtual, **shape
+        )
 
     def _burst(self, t: int, me: np.ndarray, others: np.ndarray, burst: tuple[float, float]) -> np.ndarray:
         """Each link's Gilbert-Elliott state after this message (True: in a loss burst)."""

@@ -29,10 +29,16 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from dream._checks import as_offsets, check_nonnegative
+from dream import rules
+from dream._checks import Bounds, as_offsets, check_nonnegative
+from dream.kernels import VoronoiCells
 from dream.obstacles import Obstacle
 from dream.specs import GRITSBOT, RobotSpec
+from dream.swarm.cells import known_cells
 from dream.swarm.neighbourhood import Neighbourhood
+
+#: CSR rows of points, one row per deciding robot: ``(offsets (k + 1,), points (m, 2))``.
+Rows = tuple[Any, Any]
 
 
 @dataclass(frozen=True)
@@ -195,6 +201,8 @@ class View:
     said: dict[str, np.ndarray] | None = field(default=None, repr=False)
     saying: Any = field(default=None, repr=False)  #: which rows send (``where`` of :meth:`send`)
     straight: Any = field(default=None, repr=False)  #: which rows skip HRVO (:meth:`direct`)
+    #: The engine's way to :meth:`cells` when every message in range got through (None: the rows').
+    board_cells: Any = field(default=None, repr=False)
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -212,6 +220,42 @@ class View:
         neighbours' velocity obstacles would forbid the very direction of its place. The motion
         guard still checks them. A later call replaces an earlier one."""
         self.straight = rows
+
+    def cells(
+        self,
+        x: str = "x",
+        y: str = "y",
+        *,
+        seen: Rows | None = None,
+        same: float = 0.0,
+        virtual: Rows | None = None,
+        radius: float,
+        bounds: Bounds,
+        resolution: int = 64,
+        polygons: bool = False,
+    ) -> VoronoiCells:
+        """Each deciding robot's Voronoi cell from what it alone knows (:func:`dream.swarm.known_cells`):
+        the disc of ``radius`` (m) around its odometry position within ``bounds``, clipped by the
+        positions its messages give (fields ``x`` and ``y``), then by the positions it sees,
+        ``seen`` (CSR rows ``(offsets (k + 1,), points (m, 2))``), that lie farther than ``same``
+        (m) from every one of those (a robot seen that no message accounts for, a crashed one
+        say), then by its ``virtual`` agents (CSR rows; :func:`dream.kernels.obstacle_agents`).
+
+        When every message in the radio's range got through (no loss of any kind), the engine
+        looks only at the messages near each cell (:func:`dream.kernels.heard_cells`): a robot in a
+        crowd hears hundreds, of which a dozen shape its cell. The cells are the same, to the bit.
+        """
+        empty: Rows = (np.zeros(len(self) + 1, dtype=np.int64), np.zeros((0, 2)))
+        seen, virtual = seen or empty, virtual or empty
+        here = self.pose[:, :2]
+        shape = {"radius": radius, "bounds": bounds, "resolution": resolution, "polygons": polygons}
+        if self.board_cells is not None:
+            return self.board_cells(here, (x, y), seen, same, virtual, **shape)  # type: ignore[no-any-return]
+        heard = self.heard
+        messages = np.column_stack((heard[x], heard[y])).reshape(-1, 2)
+        far = rules.far_from(seen[1], messages, same, offsets=(seen[0], heard.offsets))
+        silent = (np.concatenate(([0], np.cumsum(far)))[np.asarray(seen[0])], np.asarray(seen[1])[far])
+        return known_cells(here, (heard.offsets, messages), silent, virtual, **shape)
 
 
 class SwarmRobot:
