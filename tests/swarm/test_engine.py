@@ -232,6 +232,7 @@ def test_the_decision_gets_rows_never_the_swarm():
         "said",
         "saying",
         "straight",
+        "board_cells",
     }
     assert all(len(ids) == 6 for _, ids, _ in robot.views)
 

@@ -156,3 +156,31 @@ def test_cells_from_the_board_are_the_cells_from_the_rows(monkeypatch):
     rows = vc.run(n=40, seed=2, backend="fast", steps=200, swarm=True, trace=True)
     assert np.array_equal(board.trace, rows.trace)
     assert np.ptp(board.trace[:, :2], axis=0).max() > 0.3  # the team did spread
+
+
+def test_a_deferred_neighbourhood_is_found_once_and_only_when_read():
+    calls = []
+
+    def load():
+        calls.append(1)
+        return dream.swarm.Neighbourhood(np.array([0, 2, 3]), {"v": np.array([1.0, 2.0, 4.0])})
+
+    hood = dream.swarm.neighbourhood.Deferred(load)
+    assert calls == []
+    assert len(hood) == 2 and hood.sum("v").tolist() == [3.0, 4.0] and hood.count.tolist() == [2, 1]
+    assert calls == [1]
+
+
+@pytest.mark.parametrize("faults", [None, Faults(loss=0.2, latency=2)], ids=["lossless", "lossy"])
+def test_runs_are_the_same_whether_or_not_the_messages_are_counted(tmp_path, faults):
+    # Without an output that shows the message counts (a trajectory log, a recording) the runner
+    # does not count them, and a lossless inbox is found only when the decision reads it (a
+    # coverage robot's never is): the run is the same.
+    from dream.experiments import voronoi_coverage as vc
+
+    runs = [
+        vc.run(n=30, seed=1, steps=150, backend="fast", swarm=True, trace=True, faults=faults, log=log)
+        for log in (None, tmp_path / "run.parquet")
+    ]
+    assert np.array_equal(runs[0].trace, runs[1].trace)
+    assert np.ptp(runs[0].trace[:, :2], axis=0).max() > 0.3

@@ -38,7 +38,7 @@ from dream.robot import GUARD_HORIZON, guard_distance
 from dream.sensors import seen_velocity
 from dream.specs import ArenaSpec, SimulatorSpec
 from dream.swarm import draws
-from dream.swarm.neighbourhood import Neighbourhood
+from dream.swarm.neighbourhood import Deferred, Neighbourhood
 from dream.swarm.robot import SwarmRobot, View
 from dream.traffic import Traffic
 
@@ -93,6 +93,9 @@ class Engine:
         }
         self.lossy = np.zeros(0, dtype=np.int64)  #: links (receiver * n + sender) in a loss burst
         self.traffic = Traffic(n)  #: each robot's messages sent, heard and lost so far
+        #: whether to count them (the runner counts only for an output that reads them: the
+        #: trajectory log, a recording; without, a lossless inbox is found only when read)
+        self.count_traffic = True
         self.focus: int | None = None  #: a robot whose last readings and inbox to keep (for a recording)
         #: robot :attr:`focus`'s last decision: its ``step``, and the columns of what it ``seen`` and ``heard``
         self.focus_view: dict[str, Any] = {}
@@ -165,16 +168,30 @@ class Engine:
         """What the robots ``rows`` perceive and hear."""
         movement, radio = self.robot.movement, self.robot.radio
         by_range = radio is not None and radio.graph is None
+        lossless = by_range and self._lossless(faults)
+        # Without losses and counts to keep, the inbox is found only if the decision reads it
+        # (View.cells need not: a robot in a crowd hears hundreds of messages).
+        deferred = lossless and not self.count_traffic
         seen, heard = kernels.perceive(
             x[:2].T,
             x[2],
             rows,
             sight=None if movement is None else (movement.range, movement.fov, movement.direction),
-            radio_range=radio.range if radio is not None and by_range else None,
-            talking=talking if by_range else None,
+            radio_range=radio.range if radio is not None and by_range and not deferred else None,
+            talking=talking if by_range and not deferred else None,
         )
         if radio is not None and radio.graph is not None:
             heard = _linked(radio.graph, rows, x, talking)
+        inbox: Neighbourhood
+        if deferred:
+            assert radio is not None
+            inbox = Deferred(
+                lambda: self._hear(
+                    t, rows, kernels.perceive(x[:2].T, x[2], rows, radio_range=radio.range, talking=talking)[1], faults
+                ).frozen()
+            )
+        else:
+            inbox = self._hear(t, rows, heard, faults).frozen()
         ids = rows.copy()
         ids.flags.writeable = False
         view = View(
@@ -182,11 +199,11 @@ class Engine:
             clock.copy(),
             self.belief[rows],
             self._sense(t, rows, seen, velocities, faults).frozen(),
-            self._hear(t, rows, heard, faults).frozen(),
+            inbox,
             {key: values[rows] for key, values in self.memory.items()},
             self._obstacles(t, rows, x, faults).frozen(),
         )
-        if by_range and self._lossless(faults):
+        if lossless:
             view.board_cells = partial(self._board_cells, rows, x[:2].T, talking)
         if self.focus is not None:
             self._keep_focus(t, rows, view, self.focus)
@@ -384,7 +401,8 @@ class Engine:
             keep = keep * (1.0 - f.loss) * np.maximum(1.0 - f.distance_loss * gaps, 0.0)
         lossy = np.broadcast_to(keep < 1.0, senders.shape)
         if not lossy.any() and (f is None or f.burst is None):
-            self.traffic.received(rows, offsets)
+            if self.count_traffic:
+                self.traffic.received(rows, offsets)
             return inbox
         me = np.repeat(rows, np.diff(offsets))
         through = np.ones(len(senders), dtype=bool)
@@ -395,7 +413,8 @@ class Engine:
             through &= ~self._burst(t, me, senders, f.burst)
         if faults is not None:
             faults.messages_lost += int((~through).sum())
-        self.traffic.received(rows, offsets, through)
+        if self.count_traffic:
+            self.traffic.received(rows, offsets, through)
         return inbox.where(through)
 
     def _lossless(self, faults: FaultState | None) -> bool:
@@ -459,7 +478,8 @@ class Engine:
         if not said:
             return
         senders = np.concatenate([rows for rows, _ in said])
-        np.add.at(self.traffic.sent, senders, 1)
+        if self.count_traffic:
+            np.add.at(self.traffic.sent, senders, 1)
         fields = {key: np.concatenate([message[key] for _, message in said]) for key in self.kinds}
         delay = np.full(len(senders), self.robot.radio.latency if self.robot.radio is not None else 0)
         if faults is not None:
