@@ -283,8 +283,12 @@ class Engine:
         if robot.halts:  # no wish, no command (the conversion alone turns some robots at full speed)
             out[:, ~chosen.any(axis=1)] = 0.0
         out = kernels.actuator_limit(out, self.limits)
-        if robot.guard is not None or (avoid is not None and avoid.guard):
-            near = robot.guard.near if robot.guard is not None else guard_distance(robot.spec.diameter, avoid.safety)
+        near = None
+        if robot.guard is not None:
+            near = robot.guard.near
+        elif avoid is not None and avoid.guard:
+            near = guard_distance(robot.spec.diameter, avoid.safety)
+        if near is not None:
             stop = kernels.motion_guard(
                 out[0], pose[:, 2], seen.offsets, seen["dx"], seen["dy"], near=near, horizon=GUARD_HORIZON
             )

@@ -248,9 +248,10 @@ class View:
         empty: Rows = (np.zeros(len(self) + 1, dtype=np.int64), np.zeros((0, 2)))
         seen, virtual = seen or empty, virtual or empty
         here = self.pose[:, :2]
-        shape = {"radius": radius, "bounds": bounds, "resolution": resolution, "polygons": polygons}
+        shape: dict[str, Any] = {"radius": radius, "bounds": bounds, "resolution": resolution, "polygons": polygons}
         if self.board_cells is not None:
-            return self.board_cells(here, (x, y), seen, same, virtual, **shape)  # type: ignore[no-any-return]
+            cells: VoronoiCells = self.board_cells(here, (x, y), seen, same, virtual, **shape)
+            return cells
         heard = self.heard
         messages = np.column_stack((heard[x], heard[y])).reshape(-1, 2)
         far = rules.far_from(seen[1], messages, same, offsets=(seen[0], heard.offsets))
