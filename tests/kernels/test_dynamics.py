@@ -201,6 +201,26 @@ def test_large_swarms_step_and_validate_on_every_core_as_the_reference(rng):
     expected = _reference.validate(poses, commands, bounds, **WHEELS)
     assert expected[0] > 0 and expected[1] > 100
     assert _core.validate(poses, commands, bounds, **WHEELS) == expected
+    dxu = _core.dxi_to_dxu(commands / 10, poses, 0.8, 3.0)
+    assert_allclose(dxu, _reference.dxi_to_dxu(commands / 10, poses, 0.8, 3.0), **TOL)
+    limits = dict(max_linear=0.2, max_angular=3.6, wheel_radius=0.016, base_length=0.105, max_wheel=12.5)
+    assert_array_equal(_core.actuator_limit(dxu * 5, **limits), _reference.actuator_limit(dxu * 5, **limits))
+    assert_array_equal(_core.threshold_velocities(dxu * 5, 0.2, 3.6), _reference.threshold_velocities(dxu * 5, 0.2, 3.6))
+
+
+@pytest.mark.parametrize("offset", [0.0, 0.025])
+def test_validate_counts_a_large_swarm_spread_thin_as_the_reference(rng, offset):
+    # 6,000 robots in pairs along a ring 400 m across: too many cells for a dense table, so the
+    # grid lists its cells column by column; the counts are still every pair's, on every core.
+    n = 6000
+    angle = np.repeat(rng.uniform(0, 2 * np.pi, n // 2), 2)
+    radius = 200 + np.tile([0.0, 0.1], n // 2) + rng.uniform(0, 0.02, n)
+    poses = np.vstack((radius * np.cos(angle), radius * np.sin(angle), rng.uniform(-3, 3, n)))
+    commands = random_commands(rng, n)
+    rules = dict(WHEELS, collider_offset=offset, boundary_per_iteration=False)
+    expected = _reference.validate(poses, commands, (-150.0, 210.0, -210.0, 210.0), **rules)
+    assert expected[0] > 0 and expected[1] > 1000
+    assert _core.validate(poses, commands, (-150.0, 210.0, -210.0, 210.0), **rules) == expected
 
 
 @pytest.mark.parametrize("n", [2, 7, 30, 50])

@@ -272,10 +272,12 @@ impl Grid {
 
     /// The points of each occupied cell (a cell's points are contiguous, in increasing index).
     pub fn occupied(&self) -> impl Iterator<Item = &[usize]> + '_ {
-        self.starts
-            .windows(2)
-            .filter(|w| w[1] > w[0])
-            .map(|w| &self.members[w[0]..w[1]])
+        self.cell_runs().map(|run| &self.members[run])
+    }
+
+    /// The positions in cell order (see [`Grid::members`]) of each occupied cell, in cell order.
+    pub fn cell_runs(&self) -> impl Iterator<Item = Range<usize>> + '_ {
+        self.starts.windows(2).filter(|w| w[1] > w[0]).map(|w| w[0]..w[1])
     }
 
     fn slot(&self, cx: i64, cy: i64) -> Option<usize> {
