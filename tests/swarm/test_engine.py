@@ -228,11 +228,13 @@ def test_the_decision_gets_rows_never_the_swarm():
         "seen",
         "heard",
         "memory",
+        "obstacles",
         "said",
         "saying",
         "straight",
         "safety",
         "turn",
+        "board_cells",
     }
     assert all(len(ids) == 6 for _, ids, _ in robot.views)
 

@@ -461,3 +461,13 @@ def approach(
     distance = length(way)
     scale = np.minimum(1.0, v_max / (gain * np.maximum(distance, 1e-300)))
     return np.where((distance >= arrival)[..., None], gain * way * scale[..., None], 0.0)
+
+
+def momentum(positions: Any, last: Any, moving: Any, share: float) -> FloatArray:
+    """``share`` of the step ``positions - last`` ``(n, 2)`` or ``(2,)`` (m) that the robots
+    ``moving`` ``(n,)`` or ``()`` (bool: their last decision moved them) took since their last
+    decision at ``last``; zero for the others. Coverage adds it to a robot's way to its centroid
+    (:func:`approach`'s ``carry``, heavy-ball), and a moving robot sends where it is plus it: where
+    it will be at its next decision if it keeps its pace."""
+    step = np.asarray(positions, dtype=np.float64) - np.asarray(last, dtype=np.float64)
+    return np.where(np.asarray(moving, dtype=bool)[..., None], share * step, 0.0)
