@@ -146,8 +146,9 @@ def segment_reduce(values: _Floats, offsets: _Ints, op: str, index: _Ints | None
 def segment_any(flags: NDArray[np.bool_], offsets: _Ints) -> NDArray[np.bool_]:
     """(m,) bool: whether any entry of each row is set."""
 
-def segment_nearest(keys: _Floats, offsets: _Ints) -> _Ints:
-    """(m,) int: the entry of each row with the smallest key, -1 for none."""
+def segment_nearest(keys: _Floats, offsets: _Ints, k: int | None = None) -> _Ints:
+    """(m,) int: the entry of each row with the smallest key, -1 for none; with k, (m, k): each
+    row's k smallest, smallest first, -1 in the slots left."""
 
 def motion_guard(
     speeds: _Floats, headings: _Floats, offsets: _Ints, dx: _Floats, dy: _Floats, *, near: float, horizon: float

@@ -93,19 +93,38 @@ pub fn any(flags: &[bool], offsets: &[i64]) -> Result<Vec<bool>> {
 /// # Errors
 /// An invalid CSR.
 pub fn nearest(keys: &[f64], offsets: &[i64]) -> Result<Vec<i64>> {
+    nearest_k(keys, offsets, 1)
+}
+
+/// The `k` entries of each row with the smallest `key`, smallest first (of equals, the first
+/// entry first; NaN skipped), as indices into the entries, -1 in the slots a row cannot fill:
+/// `(m, k)` row-major. One pass per row, keeping the `k` best in order: for a few slots, cheaper
+/// than sorting the row.
+///
+/// # Errors
+/// An invalid CSR.
+pub fn nearest_k(keys: &[f64], offsets: &[i64], k: usize) -> Result<Vec<i64>> {
     check_offsets("offsets", offsets, keys.len(), "keys")?;
-    Ok(map_range(offsets.len() - 1, |r| {
-        let (start, end) = (offsets[r] as usize, offsets[r + 1] as usize);
-        let mut best = -1i64;
-        let mut least = f64::INFINITY;
-        for (e, &key) in keys[start..end].iter().enumerate() {
-            if !key.is_nan() && (best < 0 || key < least) {
-                least = key;
-                best = (start + e) as i64;
+    let row = |r: usize| {
+        let mut best = vec![-1i64; k];
+        let mut filled = 0;
+        for e in offsets[r] as usize..offsets[r + 1] as usize {
+            let key = keys[e];
+            if key.is_nan() {
+                continue;
             }
+            // The slot the entry takes: after every kept entry whose key is not larger.
+            let slot = best[..filled].partition_point(|&b| keys[b as usize] <= key);
+            if slot == k {
+                continue;
+            }
+            best.copy_within(slot..k - 1, slot + 1);
+            best[slot] = e as i64;
+            filled = (filled + 1).min(k);
         }
         best
-    }))
+    };
+    Ok(map_range(offsets.len() - 1, row).into_iter().flatten().collect())
 }
 
 #[cfg(test)]
@@ -125,9 +144,26 @@ mod tests {
         assert_eq!(mins[1], 1.0);
         assert_eq!(nearest(&values, &offsets).unwrap(), vec![-1, 0, 3]);
         assert_eq!(
+            nearest_k(&values, &offsets, 3).unwrap(),
+            vec![-1, -1, -1, 0, 1, -1, 3, -1, -1]
+        );
+        assert_eq!(
             any(&[false, true, false, false], &offsets).unwrap(),
             vec![false, true, false]
         );
+    }
+
+    #[test]
+    fn the_k_nearest_come_in_order_the_first_of_equals_first() {
+        let keys = [3.0, 1.0, 2.0, 1.0, f64::NAN, 0.5, 5.0];
+        let offsets = [0, 7];
+        assert_eq!(nearest_k(&keys, &offsets, 4).unwrap(), vec![5, 1, 3, 2]);
+        assert_eq!(nearest_k(&keys, &offsets, 0).unwrap(), Vec::<i64>::new());
+        assert_eq!(
+            nearest_k(&keys, &offsets, 9).unwrap(),
+            vec![5, 1, 3, 2, 0, 6, -1, -1, -1]
+        );
+        assert!(nearest_k(&keys, &[0, 8], 1).is_err());
     }
 
     #[test]
