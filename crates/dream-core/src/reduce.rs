@@ -105,21 +105,25 @@ pub fn nearest(keys: &[f64], offsets: &[i64]) -> Result<Vec<i64>> {
 /// An invalid CSR.
 pub fn nearest_k(keys: &[f64], offsets: &[i64], k: usize) -> Result<Vec<i64>> {
     check_offsets("offsets", offsets, keys.len(), "keys")?;
+    if k == 0 {
+        return Ok(Vec::new());
+    }
     let row = |r: usize| {
-        let mut best = vec![-1i64; k];
+        let (mut best, mut least) = (vec![-1i64; k], vec![f64::INFINITY; k]);
         let mut filled = 0;
         for e in offsets[r] as usize..offsets[r + 1] as usize {
             let key = keys[e];
-            if key.is_nan() {
+            // Not kept: NaN, or no nearer than the k kept (a tie keeps the earlier entry).
+            if key.is_nan() || (filled == k && key >= least[k - 1]) {
                 continue;
             }
-            // The slot the entry takes: after every kept entry whose key is not larger.
-            let slot = best[..filled].partition_point(|&b| keys[b as usize] <= key);
-            if slot == k {
-                continue;
+            // Insertion from the back, past the kept entries whose key is larger.
+            let mut slot = filled.min(k - 1);
+            while slot > 0 && least[slot - 1] > key {
+                (least[slot], best[slot]) = (least[slot - 1], best[slot - 1]);
+                slot -= 1;
             }
-            best.copy_within(slot..k - 1, slot + 1);
-            best[slot] = e as i64;
+            (least[slot], best[slot]) = (key, e as i64);
             filled = (filled + 1).min(k);
         }
         best
