@@ -77,6 +77,9 @@ def train_torch(env: BatchEnv, iterations: int, seeds: list[int], discount: floa
     from dream.rl import MlpPolicy
 
     torch.manual_seed(0)
+    # One thread: on tensors of a few robots, the thread pool's hand-offs cost more than they
+    # save (ten times the time on a busy 2-core machine).
+    torch.set_num_threads(1)
     policy = MlpPolicy(env.single_observation_space.shape[0], k=env.team.layout.k, avoid=True)
     optimiser = torch.optim.Adam(policy.parameters(), lr=3e-3)
     for iteration in range(iterations):
