@@ -12,6 +12,7 @@ __all__ = [
     "threshold_velocities",
     "threshold_wheels",
     "validate",
+    "colliding",
     "dxi_to_dxu",
     "actuator_limit",
     "neighbours",
@@ -59,6 +60,9 @@ def validate(
     boundary_per_iteration: bool = False,
 ) -> tuple[int, int, int]:
     """(boundary, collision, actuator) counts of one iteration by rps's criteria (0.0.0 by default, 2.1's with the options)."""
+
+def colliding(poses: NDArray[np.float64], *, diameter: float, collider_offset: float = 0.0) -> NDArray[np.bool_]:
+    """(n,) bool: the robots of the pairs validate counts as collisions."""
 
 def dxi_to_dxu(
     dxi: NDArray[np.float64], poses: NDArray[np.float64], vel_gain: float, ang_gain: float

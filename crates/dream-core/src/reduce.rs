@@ -111,8 +111,9 @@ pub fn nearest_k(keys: &[f64], offsets: &[i64], k: usize) -> Result<Vec<i64>> {
     let row = |r: usize| {
         let (mut best, mut least) = (vec![-1i64; k], vec![f64::INFINITY; k]);
         let mut filled = 0;
-        for e in offsets[r] as usize..offsets[r + 1] as usize {
-            let key = keys[e];
+        let start = offsets[r] as usize;
+        for (e, &key) in keys[start..offsets[r + 1] as usize].iter().enumerate() {
+            let e = start + e;
             // Not kept: NaN, or no nearer than the k kept (a tie keeps the earlier entry).
             if key.is_nan() || (filled == k && key >= least[k - 1]) {
                 continue;
