@@ -94,8 +94,7 @@ class Layout:
         m, k, at = len(view), self.k, self.slices
         out = np.zeros((m, self.size), dtype=np.float32)
         pose = view.pose
-        out[:, 0:2] = pose[:, :2]
-        out[:, 2], out[:, 3] = np.cos(pose[:, 2]), np.sin(pose[:, 2])
+        out[:, at["pose"]] = np.column_stack((pose[:, :2], np.cos(pose[:, 2]), np.sin(pose[:, 2])))
         if goals is not None:
             out[:, at["goal"]] = goals[view.ids] - pose[:, :2]
         if not k:

@@ -35,7 +35,6 @@ class LinearPolicy:
         if not (np.isfinite(self.weights).all() and np.isfinite(self.bias).all()):
             raise ValueError("weights and bias must be finite")
         self.k, self.avoid = int(k), bool(avoid)
-        self._columns = np.ascontiguousarray(self.weights.T)  # (2, size): each action's weights in a row
 
     @classmethod
     def zeros(cls, size: int, **settings: Any) -> LinearPolicy:
@@ -58,11 +57,11 @@ class LinearPolicy:
         return LinearPolicy(flat[: 2 * size].reshape(size, 2), flat[2 * size :], k=self.k, avoid=self.avoid)
 
     def __call__(self, obs: np.ndarray) -> np.ndarray:
-        # One dot product per row and action (vecdot), not a matrix product, whose rounding
-        # depends on how many rows it multiplies: a robot acts alike whether it decides alone
-        # or with the swarm.
+        # A stack of one-row products, each (1, size) @ (size, 2) computed alike, not one matrix
+        # product, whose rounding depends on how many rows it multiplies: a robot acts alike
+        # whether it decides alone or with the swarm.
         rows = np.asarray(obs, dtype=np.float64)[:, None, :]
-        return np.tanh(np.vecdot(rows, self._columns) + self.bias)
+        return np.tanh(np.matmul(rows, self.weights)[:, 0] + self.bias)
 
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write the weights file (``.npz``: ``weights``, ``bias``, ``k``, ``avoid``), whole or not at all."""
