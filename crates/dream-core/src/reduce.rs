@@ -6,9 +6,15 @@
 //! or a maximum (nothing to take them of); NaN entries are skipped by the minimum, the maximum
 //! and the nearest, and carried by the sum and the mean.
 
+use rayon::prelude::*;
+
 use crate::csr::check_offsets;
 use crate::error::{GeomError, Result};
 use crate::parallel::map_range;
+
+/// Entries from which the nearest of each row are picked on every thread: the messages of a few
+/// thousand robots, a few dozen each (their rows alone stay under [`map_range`]'s threshold).
+const PARALLEL_ENTRIES: usize = 32_768;
 
 /// What a row's entries become.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -129,7 +135,13 @@ pub fn nearest_k(keys: &[f64], offsets: &[i64], k: usize) -> Result<Vec<i64>> {
         }
         best
     };
-    Ok(map_range(offsets.len() - 1, row).into_iter().flatten().collect())
+    let rows = offsets.len() - 1;
+    let picked: Vec<Vec<i64>> = if keys.len() >= PARALLEL_ENTRIES {
+        (0..rows).into_par_iter().with_min_len(64).map(row).collect()
+    } else {
+        map_range(rows, row)
+    };
+    Ok(picked.into_iter().flatten().collect())
 }
 
 #[cfg(test)]
