@@ -6,17 +6,26 @@ rows at once: the median wall time of one step (perception of the robots due, th
 their observations, the policy, the engine's drive, the simulator with its validation, the
 rewards), as agent-steps per second (N per step), with and without the HRVO safety layer.
 The issue's target: 1,000,000 agent-steps/s at N = 10,000 on 2 cores.
-Run: ``python benches/bench_rl.py [N ...]`` (default 1,000 and 10,000).
+
+``--parts`` prints instead where a step's time goes (without HRVO): the process's CPU time in
+each part, over 60 steps. CPU time, unlike wall time, hardly grows when other jobs share the
+cores; with ``RAYON_NUM_THREADS=1`` it is the step's cost on one core.
+
+Run: ``python benches/bench_rl.py [--parts] [N ...]`` (default 1,000 and 10,000).
 """
 
 from __future__ import annotations
 
 import sys
+import time
+from collections import defaultdict
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from dream.rl import LinearPolicy, batch_env
+from dream.rl import BatchEnv, LinearPolicy, batch_env
 
 sys.path.insert(0, str(Path(__file__).parent))
 from harness import machine, median_seconds, show, table  # noqa: E402
@@ -24,30 +33,71 @@ from harness import machine, median_seconds, show, table  # noqa: E402
 RENDEZVOUS = str(Path(__file__).parents[1] / "examples" / "rendezvous.py")
 
 
-def step_seconds(n: int, avoid: bool) -> float:
+def started(n: int, avoid: bool) -> tuple[BatchEnv, Callable[[], None]]:
+    """The world past its start-up delays, and one step of it with a linear policy."""
     env = batch_env(RENDEZVOUS, n=n, max_steps=10**6, avoid=avoid)
     obs, _ = env.reset(seed=0)
     rng = np.random.default_rng(0)
     policy = LinearPolicy(0.1 * rng.standard_normal((obs.shape[1], 2)), np.zeros(2))
     state = {"obs": obs}
-    for _ in range(20):  # past the start-up delays: every robot on its clock, messages on the air
-        state["obs"] = env.step(policy(state["obs"]))[0]
 
     def one() -> None:
         state["obs"] = env.step(policy(state["obs"]))[0]
 
-    return median_seconds(one, min_time=0.2)
+    for _ in range(20):  # past the start-up delays: every robot on its clock, messages on the air
+        one()
+    return env, one
 
 
-def main(sizes: list[int]) -> None:
+def parts(n: int, steps: int = 60) -> None:
+    """Print the CPU time per step of each part of a step."""
+    env, one = started(n, avoid=False)
+    team, spent = env.team, defaultdict(float)
+
+    def timed(owner: Any, name: str, label: str) -> None:
+        call = getattr(owner, name)
+
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            start = time.process_time()
+            try:
+                return call(*args, **kwargs)
+            finally:
+                spent[label] += time.process_time() - start
+
+        setattr(owner, name, wrapper)
+
+    timed(team.engine, "perceive", "engine: perception (kernels.perceive, noise, radio)")
+    timed(team.layout, "rows", "observation rows (k nearest, masks)")
+    timed(team, "_colliding", "reward: who collides (kernels.colliding)")
+    timed(team.sim, "step", "simulator: validation and motion")
+    timed(team.engine, "act", "engine: drive (conversion, limits)")
+    timed(team, "_rewards", "reward: potential hook, arena")
+    timed(team.stepper, "after", "runner: after the step (done())")
+    timed(LinearPolicy, "__call__", "policy")
+    start = time.process_time()
+    for _ in range(steps):
+        one()
+    total = time.process_time() - start
+    print(f"N = {n:,}: {show(total / steps)} of CPU time a step")
+    rows = [[label, show(seconds / steps)] for label, seconds in sorted(spent.items(), key=lambda kv: -kv[1])]
+    rows.append(["the rest (environment, engine bookkeeping)", show((total - sum(spent.values())) / steps)])
+    print(table(["part", "CPU a step"], rows))
+
+
+def main(argv: list[str]) -> None:
     print(machine())
+    sizes = [int(arg) for arg in argv if arg != "--parts"] or [1000, 10000]
+    if "--parts" in argv:
+        for n in sizes:
+            parts(n)
+        return
     rows = []
     for n in sizes:
         for avoid in (False, True):
-            seconds = step_seconds(n, avoid)
+            seconds = median_seconds(started(n, avoid)[1], min_time=0.2)
             rows.append([f"{n:,}", "yes" if avoid else "no", show(seconds), f"{n / seconds:,.0f}"])
     print(table(["N", "HRVO", "step", "agent-steps/s"], rows))
 
 
 if __name__ == "__main__":
-    main([int(arg) for arg in sys.argv[1:]] or [1000, 10000])
+    main(sys.argv[1:])

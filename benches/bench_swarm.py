@@ -5,7 +5,7 @@ For each experiment, robot count and thread count, one fresh process runs ``--st
 per robot-step), the set-up time before the first step and the peak RSS per robot. Thread
 counts are set with ``RAYON_NUM_THREADS`` (the Rust kernels' pool), so one table also shows how
 the whole step scales with cores. The step is the mean over the steps past ``--warm-up``: the
-built-ins' robots start up to 14 steps apart and do little before (a step then costs a third
+built-ins' robots first decide up to 30 steps in and do little before (a step then costs a third
 to a tenth of one past it), and decisions on robots' own periods make steps unequal, hence a
 mean over many. The memory per robot is the peak RSS above a fixed
 :data:`FIXED` (the interpreter, NumPy, DREAM and their tables), over N: the cost issue's
@@ -49,7 +49,8 @@ result = dream.run(find(name), n=n, steps=steps, backend="fast", swarm=True,
                    progress=lambda step, cap: stamps.append(time.perf_counter()))
 gaps = [b - a for a, b in zip(stamps, stamps[1:])]
 print(json.dumps({
-    "n": result.n, "steps": result.steps, "step_s": statistics.mean(gaps[warm_up:]), "setup_s": stamps[0] - start - gaps[0],
+    "n": result.n, "steps": result.steps, "step_s": statistics.mean(gaps[warm_up:]),
+    "setup_s": stamps[0] - start - gaps[0],
     "rss": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, "collisions": result.collisions,
 }))
 """
@@ -83,16 +84,20 @@ def main() -> None:
     parser.add_argument("-e", "--experiments", nargs="+", default=EXPERIMENTS)
     parser.add_argument("-n", "--robots", nargs="+", type=int, default=[1_000, 10_000])
     parser.add_argument("--threads", nargs="+", type=int, default=None, help="RAYON_NUM_THREADS values")
-    parser.add_argument("--steps", type=int, default=30, help="steps a run")
-    parser.add_argument("--warm-up", type=int, default=15, help="steps left out of the mean: the robots' staggered start")
+    parser.add_argument("--steps", type=int, default=44, help="steps a run")
+    parser.add_argument(
+        "--warm-up", type=int, default=32, help="steps left out of the mean: the robots' staggered start"
+    )
     parser.add_argument("--timeout", type=float, default=900.0, help="seconds a run may take")
     args = parser.parse_args()
     print(machine())
     threads: list[int | None] = list(args.threads) if args.threads else [None]
     if args.steps < args.warm_up + 2:
         parser.error(f"--steps must be at least --warm-up + 2 = {args.warm_up + 2}")
-    print(f"{args.steps} steps a run, the mean step past the first {args.warm_up}, swarm mode on Fast; "
-          f"threads: {'all' if threads == [None] else threads}")
+    print(
+        f"{args.steps} steps a run, the mean step past the first {args.warm_up}, swarm mode on Fast; "
+        f"threads: {'all' if threads == [None] else threads}"
+    )
     print(
         f"| experiment | robots | threads | step (ms) | robot-steps/s | µs per robot-step | set-up (s) "
         f"| peak RSS | above 200 MiB, per robot | scaling |\n|{'---|' * 10}"

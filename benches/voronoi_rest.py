@@ -20,7 +20,32 @@ from typing import Any
 import numpy as np
 
 from dream.experiments import voronoi_coverage as vc
+from dream.swarm import View
 from harness import machine, table
+
+
+class TracedRobot(vc.CoverageRobot):
+    """A coverage robot that counts its reversals: consecutive moving decisions whose ways to the
+    centroid point apart (nothing else changes)."""
+
+    def __init__(self, n: int, *args: Any) -> None:
+        super().__init__(*args)
+        self.reversals = 0
+        self.moves = 0
+        self.way = np.zeros((n, 2))  # each robot's way to its centroid at its last moving decision
+        self.moved = np.zeros(n, dtype=bool)  # whether its last decision moved it
+
+    def decide(self, view: View) -> np.ndarray:
+        wished = super().decide(view)
+        who = view.ids
+        way = np.column_stack((view.memory["goal_x"], view.memory["goal_y"])) - view.pose[:, :2]
+        moving = wished.any(axis=1)
+        both = moving & self.moved[who]
+        self.reversals += int(np.count_nonzero(np.sum(way[both] * self.way[who[both]], axis=1) < 0))
+        self.moves += int(np.count_nonzero(both))
+        self.way[who[moving]] = way[moving]
+        self.moved[who] = moving
+        return wished
 
 
 class Traced(vc.VoronoiCoverage):
@@ -28,27 +53,14 @@ class Traced(vc.VoronoiCoverage):
 
     name = "voronoi-coverage-traced"
 
-    def build_swarm(self, n: int) -> None:
-        super().build_swarm(n)
+    def swarm_robot(self, n: int) -> vc.CoverageRobot:
+        team = super().swarm_robot(n)
+        assert team.guard is not None
+        self.team = TracedRobot(n, self.obstacles, self.arena, team.arrival, team.guard.near)
         self.starts = np.zeros(n, dtype=np.int64)
-        self.reversals = 0
-        self.moves = 0
         self.was_moving = np.zeros(n, dtype=bool)
-        self.way = np.zeros((n, 2))  # each robot's way to its centroid at its last moving decision
-        self.moved = np.zeros(n, dtype=bool)  # whether its last decision moved it
         self.movers: list[int] = []
-
-    def _decide(
-        self, step: int, who: np.ndarray, positions: np.ndarray, said: np.ndarray, commands: np.ndarray
-    ) -> None:
-        super()._decide(step, who, positions, said, commands)
-        way = self.team.centroid[who] - self.team.pose[:2, who].T
-        moving = np.any(commands[:, who] != 0, axis=0)
-        both = moving & self.moved[who]
-        self.reversals += int(np.count_nonzero(np.sum(way[both] * self.way[who[both]], axis=1) < 0))
-        self.moves += int(np.count_nonzero(both))
-        self.way[who[moving]] = way[moving]
-        self.moved[who] = moving
+        return self.team
 
     def after_step(self, step: int, poses: np.ndarray) -> None:
         super().after_step(step, poses)
@@ -63,9 +75,9 @@ def run(n: int, seed: int) -> list[Any]:
     seen: list[Traced] = []
 
     class Kept(Traced):
-        def build_swarm(self, n: int) -> None:
-            super().build_swarm(n)
+        def swarm_robot(self, n: int) -> vc.CoverageRobot:
             seen.append(self)
+            return super().swarm_robot(n)
 
     began = time.perf_counter()
     result = Kept.run(n=n, seed=seed, backend="fast", swarm=True, moving_obstacles=False)
@@ -82,7 +94,7 @@ def run(n: int, seed: int) -> list[Any]:
         f"{result.collisions} / {result.boundary} / {result.actuator} / {m['static_contacts']}",
         f"{m['cost_end'] / m['cost_ideal']:.2f}",
         f"{team.starts.mean():.0f} / {team.starts.max()}",
-        f"{team.reversals} of {team.moves}",
+        f"{team.team.reversals} of {team.team.moves}",
         tenths,
         f"{wall:.0f}",
     ]

@@ -12,6 +12,7 @@ __all__ = [
     "threshold_velocities",
     "threshold_wheels",
     "validate",
+    "colliding",
     "dxi_to_dxu",
     "actuator_limit",
     "neighbours",
@@ -59,6 +60,9 @@ def validate(
     boundary_per_iteration: bool = False,
 ) -> tuple[int, int, int]:
     """(boundary, collision, actuator) counts of one iteration by rps's criteria (0.0.0 by default, 2.1's with the options)."""
+
+def colliding(poses: NDArray[np.float64], *, diameter: float, collider_offset: float = 0.0) -> NDArray[np.bool_]:
+    """(n,) bool: the robots of the pairs validate counts as collisions."""
 
 def dxi_to_dxu(
     dxi: NDArray[np.float64], poses: NDArray[np.float64], vel_gain: float, ang_gain: float
@@ -146,8 +150,9 @@ def segment_reduce(values: _Floats, offsets: _Ints, op: str, index: _Ints | None
 def segment_any(flags: NDArray[np.bool_], offsets: _Ints) -> NDArray[np.bool_]:
     """(m,) bool: whether any entry of each row is set."""
 
-def segment_nearest(keys: _Floats, offsets: _Ints) -> _Ints:
-    """(m,) int: the entry of each row with the smallest key, -1 for none."""
+def segment_nearest(keys: _Floats, offsets: _Ints, k: int | None = None) -> _Ints:
+    """(m,) int: the entry of each row with the smallest key, -1 for none; with k, (m, k): each
+    row's k smallest, smallest first, -1 in the slots left."""
 
 def motion_guard(
     speeds: _Floats, headings: _Floats, offsets: _Ints, dx: _Floats, dy: _Floats, *, near: float, horizon: float

@@ -34,10 +34,9 @@ def test_cli_run_prints_summary_and_writes_json(tmp_path, capsys):
 
 
 def test_cli_run_reports_bad_input_without_traceback(capsys):
-    assert main(["run", "hrvo-circle", "-n", "40", "--backend", "robotarium", "--swarm", "--steps", "5"]) == 2
+    assert main(["run", "hrvo-circle", "-n", "52", "--backend", "robotarium", "--swarm", "--steps", "5"]) == 2
     err = capsys.readouterr().err
-    # hrvo-circle runs 40 robots on rps's packed ring robot by robot only.
-    assert "swarm mode is for rings that grow" in err and "Traceback" not in err
+    assert "the Robotarium backend runs at most 50 robots" in err and "Traceback" not in err
 
 
 @pytest.mark.parametrize(

@@ -6,8 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dream import rules
+from dream import kernels, rules
 from dream.experiments import hrvo_circle
+from dream.swarm import Neighbourhood, View
 
 
 def _round(n, mine, heard, rows, senders):
@@ -68,29 +69,37 @@ def test_barrier_releases_a_ring_within_a_pass_around_it():
 
 
 def test_robot_and_swarm_take_the_same_barrier_step():
+    # One CircleRobot decides for 60 robots at once and for each robot alone: the same round.
     n = 60
     rng = np.random.default_rng(4)
     goals = hrvo_circle.circle_goals(n)
-    team = hrvo_circle.CircleSwarm.start(goals)
-    team.state = rng.integers(1, 3, size=n)
-    team.left, team.right = rng.integers(0, 4, size=n), rng.integers(0, 4, size=n)
-    team.released = team.state - 1
+    robot = hrvo_circle.CircleRobot(hrvo_circle.circle_layout(n), hrvo_circle.PACKED_SAFETY, 30, hrvo_circle.SENSING)
+    state = rng.integers(1, 3, size=n)
+    memory = {key: np.full(n, value) for key, value in robot.memory.items()}
+    memory.update(state=state, left=rng.integers(0, 4, size=n), right=rng.integers(0, 4, size=n), released=state - 1)
+    memory.update(watch_left=rng.integers(-1, n, size=n), age_left=rng.integers(0, 30, size=n))
     positions = goals[:, 0] * (1 + 0.05 * rng.standard_normal((n, 1)))
-    robots = []
+    indptr, senders, _ = kernels.neighbours(positions, 1.0)
+    fields = {key: memory[key][senders] for key in hrvo_circle.MESSAGE}
+
+    def view(rows):
+        cut = np.concatenate([np.arange(indptr[i], indptr[i + 1]) for i in rows])
+        offsets = np.concatenate(([0], np.cumsum(np.diff(indptr)[rows])))
+        heard = Neighbourhood(offsets, {"sender": senders[cut], **{key: fields[key][cut] for key in fields}})
+        seen = Neighbourhood(np.zeros(len(rows) + 1, dtype=np.int64), {key: np.zeros(0) for key in SEEN})
+        pose = np.column_stack((positions[rows], np.zeros(len(rows))))
+        mine = {key: values[rows].copy() for key, values in memory.items()}
+        return View(np.asarray(rows), np.full(len(rows), 50.0), pose, seen, heard, mine)
+
+    swarm = view(np.arange(n))
+    robot.decide(swarm)
     for i in range(n):
-        robot = hrvo_circle.CircleRobot(i, f"robot_{i}", goals[i], n)
-        robot.state, robot.left, robot.right, robot.released = (
-            int(team.state[i]),
-            int(team.left[i]),
-            int(team.right[i]),
-            int(team.released[i]),
-        )
-        robot.change_state = True  # travelling: it only learns
-        robots.append(robot)
-    sent = [(i, r.state, r.left, r.right, r.released, np.zeros(n, dtype=np.int64)) for i, r in enumerate(robots)]
-    hrvo_circle._radio_round(team, positions)
-    for i, robot in enumerate(robots):
-        near = np.hypot(*(positions - positions[i]).T) <= 1.0
-        robot.update_radio([sent[j] for j in np.flatnonzero(near) if j != i])
-        assert (robot.left, robot.right, robot.released) == (team.left[i], team.right[i], team.released[i])
-    assert team.left.sum() + team.right.sum() > 0 and (team.released == team.state).any()
+        alone = view([i])
+        np.testing.assert_array_equal(robot.decide(alone), robot.decide(view([i])))
+        for key, values in alone.memory.items():
+            assert values[0] == swarm.memory[key][i], (i, key)
+    assert (swarm.memory["left"] + swarm.memory["right"] > memory["left"] + memory["right"]).any()
+    assert (swarm.memory["released"] == state).any()
+
+
+SEEN = ("distance", "bearing", "dx", "dy", "vx", "vy")

@@ -80,8 +80,6 @@ def test_packed_ring_is_refused_where_it_cannot_succeed():
     refusal = r"only rps 0.0.0's rules leave room for: rps2's colliders .* at most 30 robots"
     with pytest.raises(ValueError, match=refusal):
         _packed_under(RPS2)  # the lab's rps 2.1, installed, is the only way there: Fast grows the ring
-    with pytest.raises(ValueError, match="swarm mode is for rings that grow"):
-        dream.run("hrvo-circle", n=40, backend="robotarium", swarm=True, steps=1)
     with pytest.raises(ValueError, match="at most 51 robots fit"):
         hrvo_circle.circle_layout(52, grow=False)
 
@@ -91,8 +89,17 @@ def _packed_under(rules_spec):
     exp = hrvo_circle.HrvoCircle()
     exp.check(40, "robotarium")
     exp.n, exp.rules, exp.arena = 40, rules_spec, exp.arena_for(40)
-    with dream.World(0):
-        exp.build(40)
+    exp.swarm_robot(40)
+
+
+def test_packed_ring_is_the_same_robot_by_robot_and_as_a_swarm():
+    # Its docks, inward side-steps, parking and clear final approach run both ways alike (the
+    # hand-written swarm mode refused the packed ring).
+    robots, swarm = (
+        hrvo_circle.run(n=40, seed=1, backend="robotarium", steps=400, trace=True, swarm=way) for way in (False, True)
+    )
+    assert np.array_equal(swarm.trace, robots.trace) and swarm.swarm
+    assert np.abs(robots.trace[-1] - robots.trace[0]).max() > 0.5 and robots.collisions == 0
 
 
 def test_a_robot_that_changes_its_safety_radius_plans_with_the_new_one():

@@ -23,14 +23,14 @@ def assert_clean_completion(result):
 
 @pytest.mark.parametrize("seed", range(3))
 def test_hrvo_circle_twenty_robots_complete_on_rps(seed):
-    result = hrvo_circle.run(n=20, seed=seed, backend="robotarium")
+    result = hrvo_circle.run(n=20, seed=seed, backend="robotarium", swarm=True)  # robot by robot: the same run
     assert result.backend == "robotarium"
     assert_clean_completion(result)
 
 
 @pytest.mark.skipif(os.environ.get("DREAM_PURE_PYTHON") == "1", reason="the largest case: too slow with NumPy HRVO")
 def test_hrvo_circle_hundred_robots_complete_on_fast():
-    result = hrvo_circle.run(n=100, seed=0, backend="fast")
+    result = hrvo_circle.run(n=100, seed=0, backend="fast", swarm=True)  # robot by robot: the same run
     assert result.backend == "fast"
     assert_clean_completion(result)
 
@@ -45,11 +45,12 @@ def test_hrvo_circle_swarm_mode_completes_a_large_swarm(swarm_of_40):
     assert_clean_completion(swarm_of_40)
 
 
-def test_hrvo_circle_swarm_mode_moves_as_the_hand_written_batch_loop_did(swarm_of_40):
-    # Poses recorded with hrvo_circle.run_batch, the second loop that swarm mode replaced: every
-    # 500 steps of n=40 (seed 0, done at step 6046) and every 150 steps of n=200 (seed 1, 300 steps).
-    expected = np.load(DATA / "hrvo_circle_batch_loop.npz")
-    assert swarm_of_40.completed_step == 6046
+def test_hrvo_circle_swarm_keeps_its_pinned_trajectories(swarm_of_40):
+    # Poses of the CircleRobot swarm, pinned when it replaced the hand-written swarm mode (which
+    # finished n=40 seed 0 at step 6046): every 500 steps of n=40 (seed 0, done at step 5852) and
+    # every 150 steps of n=200 (seed 1, 300 steps).
+    expected = np.load(DATA / "hrvo_circle_swarm.npz")
+    assert swarm_of_40.completed_step == expected["n40_seed0_done"] == 5852
     np.testing.assert_allclose(swarm_of_40.trace[::500], expected["n40_seed0"], rtol=0, atol=1e-9)
     wide = dream.run("hrvo-circle", n=200, seed=1, steps=300, backend="fast", swarm=True, trace=True)
     assert (wide.completed_step, wide.collisions, wide.boundary, wide.actuator) == (None, 0, 0, 0)
@@ -139,28 +140,3 @@ def test_rules_decide_the_same_for_one_robot_and_for_the_swarm(rng):
     speed = np.hypot(*desired.T)
     assert np.all(speed <= 0.2 + 1e-12) and np.all(speed[:3] == 0)
     assert np.all(after[~chosen.any(axis=1) & desired.any(axis=1)] == 10)  # blocked robots step aside
-
-
-def test_circle_robot_decides_as_the_swarm_rules_do(rng):
-    # The per-robot and swarm modes differ by design in timing (robots decide on their own
-    # timers; the swarm decides every step) and in what a robot knows of its neighbours'
-    # velocities, so their trajectories part. What they share is every decision rule: given the
-    # same pose, goal and counters, a CircleRobot asks HRVO for what the swarm rules give.
-    n = 6
-    layout = hrvo_circle.circle_layout(n)
-    goals = hrvo_circle.circle_goals(n)
-    poses = np.vstack((rng.uniform(-1.2, 1.2, (2, n)), rng.uniform(-np.pi, np.pi, n)))
-    sidestep = np.array([0, 3, 0, 1, 0, 2])
-    side = np.array([1.0, -1.0, 1.0, 1.0, -1.0, 1.0])
-    asked = np.zeros((n, 2))
-    for i in range(n):
-        robot = hrvo_circle.CircleRobot(i, f"r{i}", goals[i], n, semi_axes=layout.semi_axes, safety=layout.safety)
-        robot.update_odom(poses[:, i])
-        robot.sidestep, robot.side = int(sidestep[i]), float(side[i])
-        robot.HRVO = lambda detections, wanted, i=i: asked.__setitem__(i, wanted) or np.zeros(2)  # record the ask
-        robot.update(np.zeros((2, n)))
-    p = poses[:2].T
-    aim = rules.roundabout_aim(p, goals[:, 0], layout.semi_axes, hrvo_circle.ISLAND)
-    desired = rules.preferred_velocity(p, aim, goals[:, 0], 0.2, hrvo_circle.APPROACH_GAIN)
-    wanted, _ = rules.sidestep_preference(desired, sidestep, side)
-    np.testing.assert_allclose(asked, wanted, rtol=0, atol=1e-15)

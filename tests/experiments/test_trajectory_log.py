@@ -133,9 +133,22 @@ def test_log_counts_the_same_messages_robot_by_robot_and_as_a_swarm(tmp_path):
     assert logs[0]["heard"][-12:].sum() > 0
 
 
+class Handmade(dream.Experiment):
+    """A hand-written swarm mode: every robot's command from the poses, no radios."""
+
+    name = "handmade"
+    has_swarm_mode = True
+
+    def build_swarm(self, n):
+        pass
+
+    def swarm_step(self, step, x):
+        return np.tile([[0.05], [0.1]], (1, self.n))
+
+
 def test_log_of_a_hand_written_swarm_mode_has_no_message_columns(tmp_path):
     path = tmp_path / "run.parquet"
-    dream.run("hrvo-circle", n=5, backend="fast", steps=3, swarm=True, log=path)
+    dream.run(Handmade, n=5, backend="fast", steps=3, swarm=True, log=path)
     assert pq.read_schema(path).names == list(tl.BASE_COLUMNS)
     assert read_metadata(path)["swarm"] is True
 

@@ -6,11 +6,13 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from dream import Obstacle, ObstacleSensor, kernels, rules
+import dream
+from dream import Obstacle, ObstacleSensor, rules
 from dream._csr import offsets_of
 from dream.experiments import voronoi_coverage as vc
 from dream.obstacles import sensed
 from dream.specs import ROBOTARIUM, ArenaSpec
+from dream.swarm import Neighbourhood, View
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -32,36 +34,118 @@ def test_voronoi_coverage_with_moving_obstacles_keeps_clear_of_the_static_ones(s
 
 
 @pytest.mark.parametrize(("n", "seed", "moving"), [(15, 3, False), (20, 0, True)])
-def test_voronoi_coverage_swarm_mode_moves_as_the_robots_do(n, seed, moving):
-    # Swarm mode keeps every robot's timer rates, the in-step order of the per-robot timers (a
-    # radio hears the position a robot of lower id sent in the same step), what each robot's
-    # sensors read and when, and the cell each robot computes from what it knows alone: the
-    # trajectories agree to rounding, whole runs long. 15: the thesis's team in the Robotarium
-    # (coming to rest); 20: a grown arena with wandering obstacles.
+def test_voronoi_coverage_is_the_same_robot_by_robot_and_as_a_swarm(n, seed, moving):
+    # One CoverageRobot, run robot by robot and as one swarm: the same poses at every step, bit
+    # for bit, whole runs long. 15: the thesis's team in the Robotarium (coming to rest); 20: a
+    # grown arena with wandering obstacles.
     robots = vc.run(n=n, seed=seed, backend="fast", moving_obstacles=moving, trace=True)
     swarm = vc.run(n=n, seed=seed, backend="fast", moving_obstacles=moving, swarm=True, trace=True)
     assert robots.success and swarm.success and swarm.swarm
     assert swarm.completed_step == robots.completed_step
-    np.testing.assert_allclose(swarm.trace, robots.trace, rtol=0, atol=1e-9)
+    assert np.array_equal(swarm.trace, robots.trace)
     assert swarm.measures == robots.measures
 
 
-@pytest.mark.parametrize("heading", [-3.0, -2.5, -np.pi / 2 - 0.01, -np.pi / 2, -1.0, 0.5, 2.5, np.pi])
-def test_coverage_robot_on_its_centroid_gets_no_command(heading):
-    # A robot amid a regular hexagon of the robots it hears sits on its cell's centroid: it stays,
-    # whatever its heading. The unicycle conversion of a zero velocity alone spins a robot heading
-    # between -pi and -pi/2 at w_max (atan2(+0, -0) = pi): robots within their tolerance spun, and
-    # the rest counter saw them move. Both modes give no command (swarm mode: `halt`).
-    robot = vc.CoverageRobot(0, "robot_0")
-    robot.update_odom(np.array([0.0, 0.0, heading]))
+EVERY_FAULT = dream.Faults(
+    loss=0.2,
+    burst=(0.05, 0.3),
+    distance_loss=0.1,
+    latency=3,
+    jitter=2,
+    crash=0.1,
+    crash_at=100,
+    stuck=0.1,
+    stuck_at=150,
+    byzantine=2,
+    lie="random",
+    sensor_dropout=0.05,
+    sensor_noise=0.005,
+    drift=0.02,
+    clock_jitter=1,
+    actuator_noise=0.005,
+)
+
+
+def test_voronoi_coverage_is_the_same_both_ways_under_every_fault():
+    robots, swarm = (
+        vc.run(n=20, seed=1, backend="fast", steps=300, trace=True, swarm=way, faults=EVERY_FAULT)
+        for way in (False, True)
+    )
+    assert np.array_equal(swarm.trace, robots.trace) and robots.faults == swarm.faults
+    assert robots.faults["messages_lost"] > 0 and robots.faults["readings_dropped"] > 0
+    assert np.ptp(robots.trace[:, :2], axis=0).max() > 0.3  # the team did spread
+
+
+@pytest.mark.parametrize(
+    "fault",
+    [
+        "loss=0.3",
+        "burst=0.1:0.5",
+        "distance_loss=0.3",
+        "latency=5",
+        "jitter=3",
+        "crash=0.2@100",
+        "stuck=0.2@100",
+        "byzantine=3",
+        "byzantine=3:drift",
+        "sensor_dropout=0.2",
+        "sensor_noise=0.01",
+        "drift=0.05",
+        "clock_jitter=2",
+        "actuator_noise=0.01",
+    ],
+)
+def test_every_fault_kind_runs_in_swarm_mode(fault):
+    faults = dream.Faults.parse([fault])
+    result = vc.run(n=30, seed=0, backend="fast", steps=200, swarm=True, faults=faults)
+    assert result.steps == 200 and result.collisions == 0
+    assert result.measures["cost_end"] < result.measures["cost_start"]
+
+
+def view_of(pose, heard=None, moving=False, last=(np.nan, np.nan)):
+    """Robot 0's view: its ``pose`` (3,), the positions it ``heard`` (m, 2), nothing seen or sensed."""
+    nothing = np.zeros(0)
+    heard = np.zeros((0, 2)) if heard is None else heard
+    return View(
+        np.array([0]),
+        np.array([20.0]),
+        np.array([pose], dtype=np.float64),
+        Neighbourhood(np.array([0, 0]), dict.fromkeys(("distance", "bearing", "dx", "dy", "vx", "vy"), nothing)),
+        Neighbourhood(
+            np.array([0, len(heard)]), {"sender": np.arange(1, len(heard) + 1), "x": heard[:, 0], "y": heard[:, 1]}
+        ),
+        {
+            "moving": np.array([int(moving)]),
+            "last_x": np.array([last[0]]),
+            "last_y": np.array([last[1]]),
+            "goal_x": np.array([np.nan]),
+            "goal_y": np.array([np.nan]),
+        },
+        Neighbourhood(np.array([0, 0]), {"dx": nothing, "dy": nothing}),
+    )
+
+
+def test_coverage_robot_on_its_centroid_wishes_nothing_and_gets_no_command():
+    # A robot amid a regular hexagon of the robots it hears sits on its cell's centroid: it wishes
+    # no velocity, and gets no command whatever its heading (`halts`: the unicycle conversion of a
+    # zero velocity alone spins a robot heading between -pi and -pi/2; tests/swarm/test_sensing.py).
+    robot = vc.CoverageRobot([], ROBOTARIUM, vc.ARRIVAL, 0.12)
     angles = np.arange(6) * np.pi / 3
-    robot.update_radio([(k + 1, 0.5 * np.cos(a), 0.5 * np.sin(a)) for k, a in enumerate(angles)])
-    dxu = np.full((2, 1), np.nan)
-    robot.update(dxu)
-    assert robot.centroid is not None and np.hypot(*robot.centroid) < robot.arrival
-    np.testing.assert_array_equal(dxu, 0.0)
-    dxi = np.zeros((1, 2))
-    np.testing.assert_array_equal(vc.halt(kernels.dxi_to_dxu(dxi.T, np.array([[0.0], [0.0], [heading]])), dxi), 0.0)
+    view = view_of([0.0, 0.0, -2.5], 0.5 * np.column_stack((np.cos(angles), np.sin(angles))))
+    np.testing.assert_array_equal(robot.decide(view), 0.0)
+    assert np.hypot(view.memory["goal_x"][0], view.memory["goal_y"][0]) < vc.ARRIVAL and robot.halts
+
+
+@pytest.mark.parametrize("moving", [True, False])
+def test_coverage_robot_sends_where_it_is_going(moving):
+    # A moving robot sends where it will be at its next decision if it keeps its pace: its
+    # neighbours, deciding up to five steps after it spoke, then see it ahead, not behind.
+    robot = vc.CoverageRobot([], ROBOTARIUM, vc.ARRIVAL, 0.12)
+    view = view_of([1.0, 0.5, 0.0], moving=moving, last=(0.99, 0.52))
+    robot.decide(view)
+    assert view.said is not None
+    sent = [view.said["x"][0], view.said["y"][0]]
+    assert_allclose(sent, [1.01, 0.48] if moving else [1.0, 0.5], rtol=0, atol=1e-12)
 
 
 def test_voronoi_coverage_comes_to_rest_flowing_not_in_stop_and_go():
@@ -78,18 +162,6 @@ def test_voronoi_coverage_comes_to_rest_flowing_not_in_stop_and_go():
     moving = np.any(result.trace[1:] != result.trace[:-1], axis=1)  # (steps, n): the pose changed
     starts = np.count_nonzero(moving[1:] & ~moving[:-1], axis=0)
     assert starts.max() < 100 and starts.mean() < 40
-
-
-@pytest.mark.parametrize("moving", [True, False])
-def test_coverage_robot_sends_where_it_is_going(moving):
-    # A moving robot sends where it will be at its next decision if it keeps its pace: its
-    # neighbours, deciding up to five steps after it spoke, then see it ahead, not behind.
-    robot = vc.CoverageRobot(4, "robot_4")
-    robot.update_odom(np.array([1.0, 0.5, 0.0]))
-    robot.moving, robot.last = moving, np.array([0.99, 0.52])
-    sent = robot.update_radio([])
-    assert sent is not None and sent[0] == 4
-    assert_allclose(sent[1:], [1.01, 0.48] if moving else [1.0, 0.5], rtol=0, atol=1e-12)
 
 
 def test_voronoi_coverage_swarm_mode_frames_come_from_its_arrays():

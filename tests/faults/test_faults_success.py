@@ -98,21 +98,6 @@ def test_circle_runs_on_under_heavy_sensor_noise(monkeypatch, core):
     assert result.steps == 300
 
 
-def test_heartbeats_take_a_silent_robot_for_crashed_after_the_silence():
-    from dream.experiments.hrvo_circle import SILENCE, CircleRobot
-
-    robot = CircleRobot(0, "robot_0", np.zeros((3, 2)), 3)
-    robot.state, robot.change_state = 1, False  # it reached its first goal
-    # Robot 1 has reached its first goal too (its message: id, state, left, right, released, heartbeats).
-    robot.update_radio([(1, 1, 0, 0, 0, np.array([0, 1, 1]))])  # robot 2 is behind, robot 1's news is fresh
-    for beat in range(2, SILENCE + 2):  # robot 1 keeps beating, robot 2 falls silent at 1
-        assert not robot.suspects and robot.change_state is False
-        robot.update_radio([(1, 1, 0, 0, 0, np.array([0, beat, 1]))])
-    robot.update_radio([(1, 1, 0, 0, 0, np.array([0, SILENCE + 2, 1]))])
-    assert robot.suspects and robot.change_state  # robot 2 is taken for crashed: robot 0 moves on
-    assert robot.released == 1 and robot.left + robot.right + 1 == 3  # its arc grew over robot 2
-
-
 @pytest.mark.parametrize(
     ("seed", "crashed"),
     [(8, 6), (1, 0)],  # follower 6 stops 0.07 m from follower 4's place; leader 0 on the collinear line

@@ -51,6 +51,7 @@ def test_every_public_kernel_goes_through_the_dispatch(monkeypatch):
     kernels.threshold_velocities(commands)
     kernels.threshold_velocities(commands, RPS2)
     kernels.validate(poses, commands)
+    kernels.colliding(poses)
     kernels.dxi_to_dxu(commands, poses)
     kernels.actuator_limit(commands)
     kernels.neighbours(points, 1.0)

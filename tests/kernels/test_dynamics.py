@@ -3,6 +3,7 @@ hand-written formulas, through :mod:`dream.kernels` and through :mod:`dream._cor
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -205,7 +206,9 @@ def test_large_swarms_step_and_validate_on_every_core_as_the_reference(rng):
     assert_allclose(dxu, _reference.dxi_to_dxu(commands / 10, poses, 0.8, 3.0), **TOL)
     limits = dict(max_linear=0.2, max_angular=3.6, wheel_radius=0.016, base_length=0.105, max_wheel=12.5)
     assert_array_equal(_core.actuator_limit(dxu * 5, **limits), _reference.actuator_limit(dxu * 5, **limits))
-    assert_array_equal(_core.threshold_velocities(dxu * 5, 0.2, 3.6), _reference.threshold_velocities(dxu * 5, 0.2, 3.6))
+    assert_array_equal(
+        _core.threshold_velocities(dxu * 5, 0.2, 3.6), _reference.threshold_velocities(dxu * 5, 0.2, 3.6)
+    )
 
 
 @pytest.mark.parametrize("offset", [0.0, 0.025])
@@ -221,6 +224,25 @@ def test_validate_counts_a_large_swarm_spread_thin_as_the_reference(rng, offset)
     expected = _reference.validate(poses, commands, (-150.0, 210.0, -210.0, 210.0), **rules)
     assert expected[0] > 0 and expected[1] > 1000
     assert _core.validate(poses, commands, (-150.0, 210.0, -210.0, 210.0), **rules) == expected
+
+
+@pytest.mark.parametrize("n", [0, 1, 9, 500, 4500])
+@pytest.mark.parametrize("offset", [0.0, 0.025])
+def test_colliding_flags_the_robots_of_the_pairs_validate_counts(rng, n, offset):
+    # 4,500 robots: the Rust kernel's cells on every core; the reference compares every pair.
+    side = math.sqrt(n / 9) + 0.5  # 9 robots a square metre: about a third of them collide
+    poses = np.vstack((rng.uniform(0.0, side, (2, n)), rng.uniform(-3, 3, (1, n))))
+    got = _core.colliding(poses, diameter=0.11, collider_offset=offset)
+    assert_array_equal(got, _reference.colliding(poses, diameter=0.11, collider_offset=offset))
+    colliders = poses[:2] + offset * np.vstack((np.cos(poses[2]), np.sin(poses[2])))
+    gaps = np.hypot(*(colliders[:, :, None] - colliders[:, None, :])) if n <= 500 else None
+    if gaps is not None:  # by hand: a robot with another collider within the diameter
+        np.fill_diagonal(gaps, np.inf)
+        assert_array_equal(got, (gaps <= 0.11).any(axis=1))
+    spec = dataclasses.replace(RPS, collider_offset=offset, diameter=0.11)
+    assert_array_equal(kernels.colliding(poses, spec), got)
+    if n >= 500:
+        assert 0 < got.sum() < n  # some robots collide, not all
 
 
 @pytest.mark.parametrize("n", [2, 7, 30, 50])

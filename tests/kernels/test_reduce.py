@@ -82,6 +82,25 @@ def test_nearest_takes_the_first_of_equals():
     assert_array_equal(kernels.segment_nearest([2.0, 1.0, 1.0, np.inf], [0, 3, 4]), [1, 3])
 
 
+@pytest.mark.parametrize("rows", [0, 1, 9, 5000])
+@pytest.mark.parametrize("k", [0, 1, 3, 8])
+def test_segment_nearest_k_matches_the_reference_and_a_stable_sort(rng, rows, k):
+    counts = rng.integers(0, 20, rows)  # 5,000 rows: ~47,500 entries, picked on every core
+    offsets = np.concatenate(([0], np.cumsum(counts))).astype(np.int64)
+    keys = rng.integers(0, 5, offsets[-1]).astype(float)  # many ties: the first of equals comes first
+    keys[rng.random(len(keys)) < 0.2] = np.nan
+    got = _core.segment_nearest(keys, offsets, k)
+    assert got.shape == (rows, k)
+    assert_array_equal(got, _reference.segment_nearest(keys, offsets, k))
+    for r in range(rows):
+        row = keys[offsets[r] : offsets[r + 1]]
+        kept = np.flatnonzero(~np.isnan(row))
+        want = offsets[r] + kept[np.argsort(row[kept], kind="stable")][:k]
+        assert_array_equal(got[r], np.concatenate((want, np.full(k - len(want), -1))))
+    if k:
+        assert_array_equal(got[:, 0], _core.segment_nearest(keys, offsets))  # its first slot: the nearest
+
+
 @pytest.mark.parametrize(
     ("call", "message"),
     [
@@ -90,6 +109,8 @@ def test_nearest_takes_the_first_of_equals():
         (lambda: kernels.segment_reduce([1.0], [0, 1], "median"), "`op` must be one of sum, mean, min, max"),
         (lambda: kernels.segment_any([True], [0.0, 1.0]), "integer offsets"),
         (lambda: kernels.segment_nearest(np.zeros((2, 2)), [0, 2]), "`keys` must have shape (k,)"),
+        (lambda: kernels.segment_nearest([1.0, 2.0], [0, 2], -1), "`k` must be a whole number >= 0, got -1"),
+        (lambda: kernels.segment_nearest([1.0, 2.0], [0, 2], 1.5), "`k` must be a whole number >= 0, got 1.5"),
         (lambda: _core.segment_reduce(np.zeros((2, 1)), np.array([0, 3]), "sum"), "not a valid CSR"),
         (
             lambda: kernels.segment_reduce([1.0, 2.0], [0, 1], "sum", [2]),

@@ -10,7 +10,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 from pettingzoo.test import parallel_api_test
 
-from dream import Faults
+from dream import Experiment, Faults
 from dream.rl import batch_env, parallel_env, team_env
 from dream.rl.observation import Layout
 
@@ -135,10 +135,19 @@ def test_render_draws_through_dream_viz():
     assert image.dtype == np.uint8 and image.shape[2] == 3 and image.std() > 0
 
 
+class ObjectsOnly(Experiment):
+    """Robot objects and timers (``build``), no swarm robot: nothing a learner can take over."""
+
+    name = "objects-only"
+
+    def build(self, n):
+        pass
+
+
 @pytest.mark.parametrize(
     ("experiment", "options", "message"),
     [
-        ("voronoi-coverage", {}, r"voronoi-coverage has no swarm robot .* \(hrvo-circle, line-consensus\)"),
+        (ObjectsOnly, {}, r"objects-only has no swarm robot .* \(hrvo-circle, line-consensus\)"),
         ("hrvo-circle", {"action": "unicycle", "avoid": True}, "avoid .HRVO. works on wished velocities"),
         ("hrvo-circle", {"action": "wheels"}, "action must be one of velocity, unicycle"),
         ("hrvo-circle", {"k": -1}, r"k \(detections and messages observed\)"),

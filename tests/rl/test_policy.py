@@ -1,5 +1,6 @@
-"""A trained policy outside the environments: its weights file, the observation padding it reads,
-and robots driven by it in `dream.run`, robot by robot and as one swarm."""
+"""A trained policy outside the environments: its weights file, the observation rows it reads (each
+robot's k nearest detections and messages), and robots driven by it in `dream.run`, robot by
+robot and as one swarm."""
 
 from __future__ import annotations
 
@@ -9,10 +10,9 @@ import numpy as np
 import pytest
 
 import dream
-from dream.rl import LinearPolicy
+from dream import Faults
+from dream.rl import LinearPolicy, batch_env
 from dream.rl.learner import driven
-from dream.rl.observation import padded
-from dream.swarm import Neighbourhood
 
 ROOT = Path(__file__).parents[2]
 RENDEZVOUS = str(ROOT / "examples" / "rendezvous.py")
@@ -20,19 +20,38 @@ TRAINED = ROOT / "tests" / "data" / "rendezvous_policy.npz"
 
 
 @pytest.mark.parametrize("k", [0, 1, 3, 7])
-@pytest.mark.parametrize("counts", [[], [0], [5], [0, 3, 1, 0, 9, 2]])
-def test_padded_keeps_each_rows_k_nearest_in_order(k, counts):
-    rng = np.random.default_rng(len(counts) + k)
-    offsets = np.concatenate(([0], np.cumsum(counts))).astype(np.int64)
-    key = rng.integers(0, 4, offsets[-1]).astype(float)  # ties, to check that the first entry wins
-    values = rng.normal(size=(offsets[-1], 3))
-    out, mask = padded(Neighbourhood(offsets, {}), values, key, k)
-    assert out.shape == (len(counts), k, 3) and mask.shape == (len(counts), k)
-    for row, (start, stop) in enumerate(zip(offsets[:-1], offsets[1:])):
-        want = start + np.argsort(key[start:stop], kind="stable")[:k]
-        assert np.array_equal(mask[row], np.arange(k) < len(want))
-        assert np.array_equal(out[row, : len(want)], values[want])
-        assert not out[row, len(want) :].any()
+def test_observation_rows_hold_each_robots_k_nearest_detections_and_messages_in_order(k):
+    env = batch_env(RENDEZVOUS, n=30, k=k, max_steps=60, faults=Faults(loss=0.3))
+    env.reset(seed=4)
+    for _ in range(25):  # past the start-up delays: detections and messages to pick from
+        env.step(np.zeros((30, 2)))
+    view, layout = env.team.views[0], env.team.layout
+    rows = layout.rows(view, None)
+    seen, heard = view.seen, view.heard
+    assert seen.count.max() > k and heard.count.max() > k  # some robots have more than k to choose from
+    for r in range(len(view)):
+        part = layout.as_dict(rows[r])
+        assert np.array_equal(
+            part["pose"], np.float32([*view.pose[r, :2], np.cos(view.pose[r, 2]), np.sin(view.pose[r, 2])])
+        )
+        cut = slice(seen.offsets[r], seen.offsets[r + 1])
+        order = np.argsort(seen["distance"][cut], kind="stable")[:k]
+        want = np.column_stack([seen[c][cut] for c in ("dx", "dy", "vx", "vy")])[order]
+        assert np.array_equal(part["seen"][: len(order)], want.astype(np.float32))
+        assert np.array_equal(part["seen_mask"], np.arange(k) < len(order)) and not part["seen"][len(order) :].any()
+        cut = slice(heard.offsets[r], heard.offsets[r + 1])
+        offsets = np.column_stack((heard["x"][cut], heard["y"][cut])) - view.pose[r, :2]
+        order = np.argsort((offsets**2).sum(axis=1), kind="stable")[:k]
+        assert np.array_equal(part["heard"][: len(order)], offsets[order].astype(np.float32))
+        assert np.array_equal(part["heard_mask"], np.arange(k) < len(order)) and not part["heard"][len(order) :].any()
+
+
+def test_a_robots_action_does_not_depend_on_the_other_rows():
+    policy = LinearPolicy.load(TRAINED)
+    obs = np.random.default_rng(3).normal(0, 2, (500, policy.size)).astype(np.float32)
+    together = policy(obs)
+    assert np.array_equal(np.concatenate([policy(obs[i : i + 1]) for i in range(500)]), together)
+    assert np.array_equal(policy(obs[123:130]), together[123:130])
 
 
 def test_weights_file_round_trips_and_bad_files_are_refused(tmp_path):

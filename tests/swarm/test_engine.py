@@ -228,10 +228,14 @@ def test_the_decision_gets_rows_never_the_swarm():
         "seen",
         "heard",
         "memory",
+        "obstacles",
         "said",
         "saying",
         "straight",
         "heeded",
+        "safety",
+        "turn",
+        "board_cells",
     }
     assert all(len(ids) == 6 for _, ids, _ in robot.views)
 
@@ -433,3 +437,51 @@ def test_a_graph_radio_is_the_same_both_ways(faults):
 
     one, swarm = both_ways(Meet, n, faults, steps=150)
     assert np.array_equal(one.trace, swarm.trace) and one.collisions == 0
+
+
+class Apart(SwarmRobot):
+    """Robots that all wish the same velocity, each row with its own safety radius (``radii``, by
+    id) or the Avoid's, stepping aside to ``side``."""
+
+    period = 1
+    movement = Movement(range=1.0)
+
+    def __init__(self, safety, radii=None, side=None):
+        self.avoid, self.radii, self.side = Avoid(safety=safety), radii, side
+
+    def decide(self, view):
+        if self.radii is not None:
+            view.keep_apart(self.radii[view.ids])
+        if self.side is not None:
+            view.aside(self.side, stop=True)
+        return np.tile([0.1, 0.05], (len(view), 1))
+
+
+def test_each_row_keeps_its_own_safety_radius():
+    rng = np.random.default_rng(2)
+    n = 12
+    poses = np.vstack((rng.uniform(-0.4, 0.4, (2, n)), rng.uniform(-np.pi, np.pi, n)))
+    radii = np.where(np.arange(n) % 2, 0.12, 0.3)
+
+    def commands(robot, one_by_one=False):
+        engine = dream.swarm.Engine(robot, n, 0, dream.specs.ROBOTARIUM, one_by_one=one_by_one)
+        return engine.step(1, poses.copy(), np.zeros((2, n)))
+
+    mixed = commands(Apart(0.24, radii))
+    np.testing.assert_array_equal(mixed, commands(Apart(0.24, radii), one_by_one=True))
+    for radius in (0.12, 0.3):
+        rows = radii == radius
+        np.testing.assert_array_equal(mixed[:, rows], commands(Apart(radius))[:, rows])
+    assert not np.array_equal(commands(Apart(0.12)), commands(Apart(0.3)))  # the radius matters here
+    with pytest.raises(ValueError, match="safety radii must be finite and >= 0"):
+        commands(Apart(0.24, -radii))
+
+
+def test_a_row_chooses_its_side_and_stops_stepping_aside():
+    engine = dream.swarm.Engine(Apart(0.24, side=-1.0), 3, 0, dream.specs.ROBOTARIUM)
+    engine.sidestep[:] = 5
+    engine.step(1, np.array([[-1.0, 0.0, 1.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]), np.zeros((2, 3)))
+    np.testing.assert_array_equal(engine.sidestep, 0)
+    np.testing.assert_array_equal(engine.side, -1.0)
+    with pytest.raises(ValueError, match="Avoid horizon"):
+        Avoid(horizon=-1.0)

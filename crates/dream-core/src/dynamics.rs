@@ -209,27 +209,17 @@ pub fn validate_with(
         BoundaryCount::Iterations => u64::from(outside > 0),
     };
 
-    let offset = checks.collider_offset;
-    let grid = if offset == 0.0 {
-        Grid::new(xs, ys, checks.diameter)
-    } else {
-        let (cx, cy): (Vec<f64>, Vec<f64>) = (0..n)
-            .map(|i| (xs[i] + offset * p[2][i].cos(), ys[i] + offset * p[2][i].sin()))
-            .unzip();
-        Grid::new(&cx, &cy, checks.diameter)
-    };
+    let grid = colliders(&p, n, checks);
     let cells: Vec<Range<usize>> = grid.cell_runs().collect();
+    let count = |cell: &Range<usize>| {
+        let mut count = 0_u64;
+        pairs_in(&grid, cell, checks.diameter, |_, _| count += 1);
+        count
+    };
     let collision = if n >= PARALLEL_ROBOTS {
-        cells
-            .par_iter()
-            .with_min_len(PARALLEL_CELLS)
-            .map(|cell| collisions_in(&grid, cell, checks.diameter))
-            .sum()
+        cells.par_iter().with_min_len(PARALLEL_CELLS).map(count).sum()
     } else {
-        cells
-            .iter()
-            .map(|cell| collisions_in(&grid, cell, checks.diameter))
-            .sum()
+        cells.iter().map(count).sum()
     };
 
     let actuator = u64::from((0..n).any(|i| wheels.exceeded_by(u[0][i], u[1][i])));
@@ -244,12 +234,48 @@ pub fn validate_with(
 /// Occupied cells a task counts the collisions of (a few thousand robots).
 const PARALLEL_CELLS: usize = 1024;
 
-/// The pairs `i < j` within `diameter` whose point `i` lies in `cell` (a run of the grid's
-/// positions). The queries go through the grid in cell order, on the coordinates stored in that
-/// order, and the 3x3 block around a cell is looked up once for all its points: at a million
-/// robots in index order, the lookups and the reads of each neighbour's coordinates were cache
-/// misses that took 8 times as long.
-fn collisions_in(grid: &Grid, cell: &Range<usize>, diameter: f64) -> u64 {
+/// Which robots are in a collision by the criteria `checks`: the robots of the pairs
+/// [`validate_with`] counts (a reward's penalty, say), found the same way.
+///
+/// # Errors
+/// Length or finiteness problems of `poses` (`3 * n`).
+pub fn colliding(poses: &[f64], n: usize, checks: &Checks) -> Result<Vec<bool>> {
+    let p = rows("poses", poses, 3, n)?;
+    let grid = colliders(&p, n, checks);
+    let cells: Vec<Range<usize>> = grid.cell_runs().collect();
+    let pairs = |cell: &Range<usize>| {
+        let mut found = Vec::new();
+        pairs_in(&grid, cell, checks.diameter, |i, j| found.extend([i, j]));
+        found
+    };
+    let found: Vec<Vec<usize>> = if n >= PARALLEL_ROBOTS {
+        cells.par_iter().with_min_len(PARALLEL_CELLS).map(pairs).collect()
+    } else {
+        cells.iter().map(pairs).collect()
+    };
+    let mut flags = vec![false; n];
+    found.iter().flatten().for_each(|&i| flags[i] = true);
+    Ok(flags)
+}
+
+/// The grid of the robots' colliders, `checks.collider_offset` ahead of their centres.
+fn colliders(p: &[&[f64]], n: usize, checks: &Checks) -> Grid {
+    let (xs, ys, offset) = (p[0], p[1], checks.collider_offset);
+    if offset == 0.0 {
+        return Grid::new(xs, ys, checks.diameter);
+    }
+    let (cx, cy): (Vec<f64>, Vec<f64>) = (0..n)
+        .map(|i| (xs[i] + offset * p[2][i].cos(), ys[i] + offset * p[2][i].sin()))
+        .unzip();
+    Grid::new(&cx, &cy, checks.diameter)
+}
+
+/// Calls `pair(i, j)` for each pair `i < j` within `diameter` whose point `i` lies in `cell` (a
+/// run of the grid's positions). The queries go through the grid in cell order, on the
+/// coordinates stored in that order, and the 3x3 block around a cell is looked up once for all
+/// its points: at a million robots in index order, the lookups and the reads of each
+/// neighbour's coordinates were cache misses that took 8 times as long.
+fn pairs_in(grid: &Grid, cell: &Range<usize>, diameter: f64, mut pair: impl FnMut(usize, usize)) {
     let (xs, ys) = grid.sorted();
     let members = grid.members();
     let (mut runs, mut found) = ([(0_usize, 0_usize); 9], 0);
@@ -257,19 +283,18 @@ fn collisions_in(grid: &Grid, cell: &Range<usize>, diameter: f64) -> u64 {
         runs[found] = (run.start, run.end);
         found += 1;
     });
-    let mut count = 0_u64;
     for a in cell.clone() {
         let (i, x, y) = (members[a], xs[a], ys[a]);
         for &(first, last) in &runs[..found] {
             for b in first..last {
-                if members[b] > i {
-                    let (dx, dy) = (x - xs[b], y - ys[b]);
-                    count += u64::from((dx * dx + dy * dy).sqrt() <= diameter);
+                let j = members[b];
+                let (dx, dy) = (x - xs[b], y - ys[b]);
+                if j > i && (dx * dx + dy * dy).sqrt() <= diameter {
+                    pair(i, j);
                 }
             }
         }
     }
-    count
 }
 
 /// Advances every pose by one forward-Euler step of the unicycle model and wraps the heading

@@ -6,9 +6,15 @@
 //! or a maximum (nothing to take them of); NaN entries are skipped by the minimum, the maximum
 //! and the nearest, and carried by the sum and the mean.
 
+use rayon::prelude::*;
+
 use crate::csr::check_offsets;
 use crate::error::{GeomError, Result};
 use crate::parallel::map_range;
+
+/// Entries from which the nearest of each row are picked on every thread: the messages of a few
+/// thousand robots, a few dozen each (their rows alone stay under [`map_range`]'s threshold).
+const PARALLEL_ENTRIES: usize = 32_768;
 
 /// What a row's entries become.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -93,19 +99,49 @@ pub fn any(flags: &[bool], offsets: &[i64]) -> Result<Vec<bool>> {
 /// # Errors
 /// An invalid CSR.
 pub fn nearest(keys: &[f64], offsets: &[i64]) -> Result<Vec<i64>> {
+    nearest_k(keys, offsets, 1)
+}
+
+/// The `k` entries of each row with the smallest `key`, smallest first (of equals, the first
+/// entry first; NaN skipped), as indices into the entries, -1 in the slots a row cannot fill:
+/// `(m, k)` row-major. One pass per row, keeping the `k` best in order: for a few slots, cheaper
+/// than sorting the row.
+///
+/// # Errors
+/// An invalid CSR.
+pub fn nearest_k(keys: &[f64], offsets: &[i64], k: usize) -> Result<Vec<i64>> {
     check_offsets("offsets", offsets, keys.len(), "keys")?;
-    Ok(map_range(offsets.len() - 1, |r| {
-        let (start, end) = (offsets[r] as usize, offsets[r + 1] as usize);
-        let mut best = -1i64;
-        let mut least = f64::INFINITY;
-        for (e, &key) in keys[start..end].iter().enumerate() {
-            if !key.is_nan() && (best < 0 || key < least) {
-                least = key;
-                best = (start + e) as i64;
+    if k == 0 {
+        return Ok(Vec::new());
+    }
+    let row = |r: usize| {
+        let (mut best, mut least) = (vec![-1i64; k], vec![f64::INFINITY; k]);
+        let mut filled = 0;
+        let start = offsets[r] as usize;
+        for (e, &key) in keys[start..offsets[r + 1] as usize].iter().enumerate() {
+            let e = start + e;
+            // Not kept: NaN, or no nearer than the k kept (a tie keeps the earlier entry).
+            if key.is_nan() || (filled == k && key >= least[k - 1]) {
+                continue;
             }
+            // Insertion from the back, past the kept entries whose key is larger.
+            let mut slot = filled.min(k - 1);
+            while slot > 0 && least[slot - 1] > key {
+                (least[slot], best[slot]) = (least[slot - 1], best[slot - 1]);
+                slot -= 1;
+            }
+            (least[slot], best[slot]) = (key, e as i64);
+            filled = (filled + 1).min(k);
         }
         best
-    }))
+    };
+    let rows = offsets.len() - 1;
+    let picked: Vec<Vec<i64>> = if keys.len() >= PARALLEL_ENTRIES {
+        (0..rows).into_par_iter().with_min_len(64).map(row).collect()
+    } else {
+        map_range(rows, row)
+    };
+    Ok(picked.into_iter().flatten().collect())
 }
 
 #[cfg(test)]
@@ -125,9 +161,26 @@ mod tests {
         assert_eq!(mins[1], 1.0);
         assert_eq!(nearest(&values, &offsets).unwrap(), vec![-1, 0, 3]);
         assert_eq!(
+            nearest_k(&values, &offsets, 3).unwrap(),
+            vec![-1, -1, -1, 0, 1, -1, 3, -1, -1]
+        );
+        assert_eq!(
             any(&[false, true, false, false], &offsets).unwrap(),
             vec![false, true, false]
         );
+    }
+
+    #[test]
+    fn the_k_nearest_come_in_order_the_first_of_equals_first() {
+        let keys = [3.0, 1.0, 2.0, 1.0, f64::NAN, 0.5, 5.0];
+        let offsets = [0, 7];
+        assert_eq!(nearest_k(&keys, &offsets, 4).unwrap(), vec![5, 1, 3, 2]);
+        assert_eq!(nearest_k(&keys, &offsets, 0).unwrap(), Vec::<i64>::new());
+        assert_eq!(
+            nearest_k(&keys, &offsets, 9).unwrap(),
+            vec![5, 1, 3, 2, 0, 6, -1, -1, -1]
+        );
+        assert!(nearest_k(&keys, &[0, 8], 1).is_err());
     }
 
     #[test]

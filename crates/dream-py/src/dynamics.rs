@@ -2,7 +2,7 @@
 
 use dream_core::dynamics::{self, BoundaryCount, Checks, Wheels};
 use dream_core::geom::Arena;
-use numpy::{IntoPyArray, PyArray2, PyArrayMethods};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
 use crate::arrays::{rows_of, same_count};
@@ -89,6 +89,21 @@ pub fn validate(
     let checks = Checks::new(diameter, collider_offset, boundary)?;
     let counts = py.detach(|| dynamics::validate_with(&p, &u, n, &arena, &checks, &wheels))?;
     Ok((counts.boundary, counts.collision, counts.actuator))
+}
+
+/// `(n,)` bool: the robots in a collision by rps's criteria (the pairs `validate` counts: colliders
+/// `collider_offset` ahead of the centres, within `diameter`).
+#[pyfunction]
+#[pyo3(signature = (poses, *, diameter, collider_offset = 0.0))]
+pub fn colliding<'py>(
+    py: Python<'py>,
+    poses: Bound<'py, PyAny>,
+    diameter: f64,
+    collider_offset: f64,
+) -> PyDreamResult<Bound<'py, PyArray1<bool>>> {
+    let (p, n) = rows_of("poses", &poses, 3)?;
+    let checks = Checks::new(diameter, collider_offset, BoundaryCount::Robots)?;
+    Ok(py.detach(|| dynamics::colliding(&p, n, &checks))?.into_pyarray(py))
 }
 
 /// Unicycle commands `(2, n)` from single-integrator velocities `(2, n)` at poses `(3, n)`.

@@ -25,6 +25,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(dynamics::threshold_velocities, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::threshold_wheels, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::validate, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::colliding, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::dxi_to_dxu, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::actuator_limit, m)?)?;
     m.add_function(wrap_pyfunction!(neighbours::neighbours, m)?)?;

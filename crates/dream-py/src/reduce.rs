@@ -51,14 +51,25 @@ pub fn segment_any<'py>(
     Ok(py.detach(|| core::any(&flags, &offsets))?.into_pyarray(py))
 }
 
-/// The entry of each row with the smallest of `keys` `(k,)`, as an index into them; -1 for none.
+/// The entry of each row with the smallest of `keys` `(e,)`, as an index into them, -1 for none:
+/// `(m,)`; with `k`, each row's `k` smallest, smallest first, -1 in the slots left: `(m, k)`.
 #[pyfunction]
+#[pyo3(signature = (keys, offsets, k=None))]
 pub fn segment_nearest<'py>(
     py: Python<'py>,
     keys: Bound<'py, PyAny>,
     offsets: Bound<'py, PyAny>,
-) -> PyDreamResult<Bound<'py, PyArray1<i64>>> {
+    k: Option<usize>,
+) -> PyDreamResult<Bound<'py, PyAny>> {
     let keys = vector_of("keys", &keys, None)?;
     let offsets = indices_of("offsets", &offsets)?;
-    Ok(py.detach(|| core::nearest(&keys, &offsets))?.into_pyarray(py))
+    let Some(k) = k else {
+        return Ok(py
+            .detach(|| core::nearest(&keys, &offsets))?
+            .into_pyarray(py)
+            .into_any());
+    };
+    let out = py.detach(|| core::nearest_k(&keys, &offsets, k))?;
+    let rows = offsets.len().saturating_sub(1);
+    Ok(out.into_pyarray(py).reshape([rows, k])?.into_any())
 }

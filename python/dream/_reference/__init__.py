@@ -9,6 +9,7 @@ name and takes the same arguments, so that :mod:`dream.kernels` calls either one
 
 from dream._reference.dynamics import (
     actuator_limit,
+    colliding,
     dxi_to_dxu,
     threshold_velocities,
     threshold_wheels,
@@ -57,6 +58,7 @@ __all__ = [
     "unicycle_step",
     "unit_directions",
     "validate",
+    "colliding",
     "virtual_agents",
     "voronoi_cell",
     "heard_cells",

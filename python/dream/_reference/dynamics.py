@@ -60,15 +60,27 @@ def validate(
     boundary = int(np.count_nonzero((x < xmin) | (x > xmax) | (y < ymin) | (y > ymax)))
     if boundary_per_iteration:
         boundary = min(boundary, 1)
+    collision = int(np.count_nonzero(_pairs(poses, diameter, collider_offset)))
+    actuator = int(np.any(np.abs(wheel_speeds(velocities, wheel_radius, base_length)) > max_wheel))
+    return boundary, collision, actuator
+
+
+def colliding(poses: FloatArray, *, diameter: float, collider_offset: float = 0.0) -> np.ndarray:
+    """``(n,)`` bool: the robots of the pairs :func:`validate` counts as collisions."""
+    pairs = _pairs(poses, diameter, collider_offset)
+    return np.logical_or(pairs.any(axis=0), pairs.any(axis=1))
+
+
+def _pairs(poses: FloatArray, diameter: float, collider_offset: float) -> np.ndarray:
+    """``(n, n)`` bool: ``[i, j]`` for ``i < j`` whose colliders (``collider_offset`` ahead of the
+    centres along the heading) are within ``diameter`` (inclusive)."""
+    x, y = poses[0], poses[1]
     if collider_offset != 0.0:
         x = x + collider_offset * np.cos(poses[2])
         y = y + collider_offset * np.sin(poses[2])
     dx = x[:, None] - x[None, :]
     dy = y[:, None] - y[None, :]
-    close = np.sqrt(dx * dx + dy * dy) <= diameter
-    collision = int(np.count_nonzero(np.triu(close, k=1)))
-    actuator = int(np.any(np.abs(wheel_speeds(velocities, wheel_radius, base_length)) > max_wheel))
-    return boundary, collision, actuator
+    return np.triu(np.sqrt(dx * dx + dy * dy) <= diameter, k=1)
 
 
 def unicycle_step(poses: FloatArray, velocities: FloatArray, dt: float) -> FloatArray:

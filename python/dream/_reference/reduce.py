@@ -55,12 +55,15 @@ def segment_any(flags: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     return np.array([bool(flags[offsets[r] : offsets[r + 1]].any()) for r in range(len(offsets) - 1)], dtype=bool)
 
 
-def segment_nearest(keys: FloatArray, offsets: np.ndarray) -> np.ndarray:
-    """The entry of each row with the smallest of ``keys`` ``(k,)`` (the first of equals), as an
-    index into them; -1 for a row that is empty or all NaN."""
-    out = np.full(len(offsets) - 1, -1, dtype=np.int64)
+def segment_nearest(keys: FloatArray, offsets: np.ndarray, k: int | None = None) -> np.ndarray:
+    """The entry of each row with the smallest of ``keys`` ``(e,)`` (the first of equals), as an
+    index into them, -1 for a row that is empty or all NaN: ``(m,)``; with ``k``, each row's
+    ``k`` smallest, smallest first, -1 in the slots left: ``(m, k)``."""
+    slots = 1 if k is None else k
+    out = np.full((len(offsets) - 1, slots), -1, dtype=np.int64)
     for r in range(len(offsets) - 1):
         row = keys[offsets[r] : offsets[r + 1]]
-        if len(row) and not np.isnan(row).all():
-            out[r] = offsets[r] + int(np.nanargmin(row))
-    return out
+        kept = np.flatnonzero(~np.isnan(row))
+        best = kept[np.argsort(row[kept], kind="stable")][:slots]
+        out[r, : len(best)] = offsets[r] + best
+    return out[:, 0] if k is None else out

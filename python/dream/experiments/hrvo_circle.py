@@ -1,84 +1,12 @@
-"""HRVO circle (thesis 3.1): robots cross a circle three times without touching.
+"""HRVO circle (thesis 3.1): robots cross a ring three times without touching.
 
-N robots start at random poses. Each has a goal on a circle, then the antipodal point, then
-its first goal again. A robot that reaches its goal (within 0.05 m) raises its state; when it
-knows that every robot has reached at least its state, it heads for its next goal. Robots
-avoid each other with HRVO using a movement sensor. Success: every robot finishes the third
-circle with zero collisions.
-
-Barrier. Robot ids run around the ring (robot i's goals are neighbours of robot i+1's), and a
-range-radio message holds four integers whatever N (:func:`dream.rules.arc_merge`): the
-sender's state, the arc of ids ``i - left .. i + right`` it knows to have reached that state,
-and the highest state it knows every robot to have reached (``released``). Arcs that overlap
-or touch merge; an arc covering all N releases its state, and releases spread to all. Each
-message states facts that stay true (states only rise), so stale, late, repeated or lost
-messages and a split radio graph can delay a release but never make one early: a robot never
-moves on while a robot has not arrived. The price: a robot keeps one arc, not a set, so what
-it hears of robots beyond a gap in its arc is dropped and must be heard again once the gap
-closes. On the ring, whose neighbouring goals are within radio range, arcs grow as fast as
-the N-entry vectors of known states spread: once the last robot arrives, the release reaches
-every robot in the radio hops half-way round the ring. Robot by robot, the heartbeat failure
-detector still holds N entries a robot; an arc grows over a robot taken for crashed.
-
-Robots choose their preferred velocity, step aside and count arrivals with the shared rules
-of :mod:`dream.rules` (the per-robot :class:`CircleRobot` and the swarm mode,
-:meth:`HrvoCircle.swarm_step`, call the same functions):
-
-- Roundabout. HRVO alone leaves the robots that cross through the centre from every side
-  circling or frozen there: each meets a wall of robots head-on, and symmetric crowds have no
-  way out. The centre is therefore an island (half the ring's size) that every robot keeps on
-  its left: a robot whose straight way passes through it aims past the island's
-  counter-clockwise tangent point, so the robots merge into one stream turning the same way.
-- Side-step. A robot that HRVO stops while it wants to move keeps to its right for a few
-  decisions (:meth:`~dream.RobotHRVO.steer`), so blocked robots circulate around each other.
-- Settling. Near its goal a robot slows down in proportion to the distance left, so that it
-  settles on the goal rather than anywhere within the tolerance.
-- Squeezing (per robot). Robots parked on the ring form a wall that a robot outside it cannot
-  pass with the ring's safety radius. A robot that has come no :data:`PROGRESS` closer to its
-  goal for :data:`STALL` decisions while outside the ring takes the least safety radius its
-  rules allow (:func:`squeeze_radius`) until no robot it sees is within the ring's
-  (:meth:`CircleRobot.squeeze`).
-
-Up to 10 robots use the thesis's circle (radius 0.85 m) and safety radius (0.24 m). Beyond,
-the goals lie equally spaced along the ellipse that fills the arena. A Fast arena grows with
-the ring once goals would be closer than 0.34 m, keeping the thesis's safety radius (and
-then leaves a corridor around the ring); the real Robotarium's cannot, so there the goals
-close up and the safety radius shrinks with them. Robots within the arrival tolerance
-of neighbouring goals must not block each other, so the safety radius is at most the
-spacing less twice the tolerance.
-
-Packed ring. Up to 30 robots on the Robotarium keep a safety radius of a robot's diameter
-plus 4 cm (:data:`MIN_SAFETY`) with the 5 cm tolerance. Beyond, up to 50, the ring is packed:
-goals 0.155 m apart (at 50) for robots 0.11 m wide. Traces showed what HRVO alone does there:
-robots that park first wall in the others, robots meeting the ring beside their goal cannot
-slide along it, a robot that slips between the ring and a wall is shut out for good, and a
-robot a centimetre off its goal may not move towards it (HRVO forbids any velocity that would
-ever close on the parked neighbour beyond it). So on a packed ring:
-
-- the tolerance is 1.5 cm and the safety radius the spacing less twice that, at least the
-  robot's diameter plus 1 cm (:data:`PACKED_SAFETY`; rps 0.0.0 counts a collision at 0.11 m)
-  and at most what 50 robots leave (:data:`PACKED_SAFETY_CAP`): with more, the motion guard
-  (0.12 m) lets robots come within each other's safety radius, where HRVO forbids every way
-  but apart, and two robots in the ring's band each blocked the other's way out for good
-  (40 robots, 1 seed of 10, with 0.164 m);
-- robots start on grid points inside the ring, not in the corners outside it;
-- a robot reaches its goal only through its corridor from a dock 0.3 m inside
-  (:func:`dream.rules.dock`); in the ring's band it steps aside only inwards (stepping aside
-  to its right pushed robots out into the corners; not stepping aside at all left two robots
-  in the band blocking each other's way for good, 1 seed of 10 at 50 robots), and near its
-  goal not at all;
-- within 5 cm of its goal, a robot whose straight way there is clear drives it
-  (:func:`dream.rules.clear_way`);
-- a robot that has arrived stands still until it moves on, so that the others dock beside a
-  neighbour that keeps its place;
-- the motion guard looks twice as far ahead (:data:`PACKED_GUARD_HORIZON`): it takes the others
-  for standing, and two robots turning towards each other between their decisions closed the
-  1.5 cm between the safety radius and a collision (1 of 8 runs at 50 robots without it);
-- the movement sensor reaches 0.5 m (:data:`PACKED_SENSING`), not 1 m. HRVO's cones reach to
-  infinity: from the centre, the parked robots of a packed ring within 1 m closed every way
-  towards it (cones 15 degrees wide, neighbours 9 degrees apart), and the last robots to arrive
-  circled for thousands of steps (three crossings took 8,500-19,300 steps, one seed of 20 none;
-  with 0.5 m, 4,550-5,900).
+Each robot heads for its goal on a ring, then the antipode, then its goal again, avoiding the
+others with HRVO on its movement sensor; it moves on once it knows that every robot has got as
+far, from range-radio messages of nine integers whatever N (an arc barrier with a bounded
+failure detector, :mod:`dream.rules.ring`). One :class:`CircleRobot`, written on arrays, runs
+robot by robot and as one swarm (``swarm=True``) with the same poses at every step. The story
+(roundabout, side-step, settling, squeezing, the packed ring) is in docs/experiments/hrvo-circle.md.
+Success: every robot finishes the third circle with zero collisions.
 """
 
 from __future__ import annotations
@@ -93,12 +21,9 @@ from dream import kernels, rules
 from dream.backends import initial_poses
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
-from dream.heartbeats import Heartbeats
-from dream.radios import RangeRadio
-from dream.robot import GUARD_HORIZON, RobotHRVO, guard_distance, guard_swarm
-from dream.sensors import MovementSensor, OdometrySensor
+from dream.robot import GUARD_HORIZON, SIDESTEP_UPDATES, guard_distance
 from dream.specs import GRITSBOT, ROBOTARIUM, ArenaSpec, SimulatorSpec
-from dream.world import create_timer
+from dream.swarm import Avoid, Movement, Radio, SwarmRobot, View
 
 NAME = "hrvo-circle"
 CIRCLES = 3
@@ -110,7 +35,7 @@ GOAL_SPACING = SAFETY + 2 * ARRIVAL  #: goal spacing a grown arena keeps (m)
 EDGE = 0.08  #: distance from the ring's ends to the walls when the ring fills the arena (m)
 MIN_SAFETY = GRITSBOT.diameter + 0.04  #: the least safety radius: a robot's diameter plus a margin (m)
 PACKED_SAFETY = GRITSBOT.diameter + 0.01  #: the least safety radius of a packed ring (m)
-SQUEEZE_MARGIN = 0.01  #: what a squeezing robot keeps between the colliders (m; see CircleRobot.squeeze)
+SQUEEZE_MARGIN = 0.01  #: what a squeezing robot keeps between the colliders (m; see squeeze_radius)
 PACKED_SAFETY_CAP = 0.125  #: the most safety radius of a packed ring: what 50 robots leave (m)
 PACKED_ARRIVAL = 0.015  #: the arrival tolerance on a packed ring (m)
 DOCK_DEPTH = 0.3  #: on a packed ring, how far inside its goal a robot's dock lies (m)
@@ -124,11 +49,16 @@ PACKED_GUARD_HORIZON = 2 * GUARD_HORIZON  #: how far ahead a packed ring's motio
 CORRIDOR = 2 * SAFETY  #: free width between the ring and the walls of a grown arena (m)
 ISLAND = 0.5  #: the roundabout's island, as a fraction of the ring (see dream.rules.roundabout_aim)
 APPROACH_GAIN = 1.0  #: preferred speed per metre left to the goal near it (1/s)
-SIDESTEP_UPDATES = 10  #: decisions a blocked robot steps aside for
-SILENCE = 20  #: radio rounds without a heartbeat after which a robot is taken for crashed
+SILENCE = 20  #: radio rounds without news of a robot after which it is taken for crashed
 STILL = 1e-3  #: a detected robot slower than this (m/s) stands still
 STALL = 120  #: decisions without :data:`PROGRESS` towards its goal after which a robot is stalled
 PROGRESS = 0.1  #: what counts as progress towards a goal (m)
+CONTROL_GAP = 4  #: steps between two decisions of a robot
+START_DELAY = 20  #: robot i decides first after this plus i % 10 steps
+RADIO_RANGE = 1.0  #: the range radio's reach (m)
+#: A message: the sender's level, its arc, the level it knows complete, and the two robots it
+#: watches beyond its arc with their ages (:func:`dream.rules.watch_ends`), and whether it knows of a crash.
+MESSAGE = ("state", "left", "right", "released", "watch_left", "age_left", "watch_right", "age_right", "suspects")
 
 
 @dataclass(frozen=True)
@@ -225,7 +155,7 @@ def circle_capacity(packed: bool = True) -> int:
 
 
 def squeeze_radius(rules: SimulatorSpec) -> float:
-    """The least safety radius (m) of a robot squeezing through the ring (:meth:`CircleRobot.squeeze`)
+    """The least safety radius (m) of a robot squeezing through the ring (:func:`dream.rules.squeezes`)
     under ``rules``: two colliders ``collider_offset`` ahead of facing robots stay
     :data:`SQUEEZE_MARGIN` apart (0.12 m under rps 0.0.0's rules, 0.195 m under rps 2.1's)."""
     return rules.diameter + 2 * rules.collider_offset + SQUEEZE_MARGIN
@@ -273,203 +203,148 @@ def _ellipse_points(n: int, a: float, b: float) -> np.ndarray:
     return np.column_stack((a * np.cos(at), b * np.sin(at)))
 
 
-class CircleRobot(RobotHRVO):
-    """A robot of the circle experiment (see the module docs).
+class CircleRobot(SwarmRobot):
+    """The robots of the circle experiment (see the module docs), on arrays.
 
-    Callbacks: :meth:`update_odom` (odometry), :meth:`update_sensor` (movement sensor),
-    :meth:`update_radio` (range radio) and :meth:`update` (the controller, writes ``dxu``).
-
-    Parameters
-    ----------
-    goals : (3, 2) array_like
-        Its goals in order (m).
-    n : int
-        Number of robots (ids ``0 .. n - 1`` around the ring of goals: see :func:`dream.rules.arc_merge`).
-    semi_axes : (float, float), optional
-        The ring's semi-axes (m), which size the roundabout; default: :func:`circle_layout`'s.
-    island : float
-        The roundabout's island as a fraction of the ring (0: go straight).
-    arrival : float
-        The arrival tolerance (m).
-    packed : bool
-        Whether its goals lie on a packed ring (docks, parking and the clear final approach of
-        the module docs).
-    squeeze_to : float
-        The safety radius it takes while stalled outside the ring (m; :meth:`squeeze`): what
-        keeps two colliders :data:`SQUEEZE_MARGIN` apart (:func:`squeeze_radius`).
-    **kwargs
-        Passed to :class:`~dream.RobotHRVO` (e.g. ``safety``, ``arena``).
+    Every :data:`CONTROL_GAP` steps a robot counts its arrival (or takes a goal a standing robot
+    holds, once it suspects a crash: :func:`dream.rules.goal_taken`); at the first decision of
+    every ``radio_gap`` steps of its clock it merges the arcs heard (:func:`dream.rules.arc_merge`),
+    grows its arc over a robot silent for :data:`SILENCE` rounds (:func:`dream.rules.watch_ends`),
+    moves on once its level is released, and sends its :data:`MESSAGE`. Then it aims around the
+    roundabout, squeezing while stalled outside the ring (:func:`dream.rules.squeezes`); on a
+    packed ring it docks instead, stepping aside only inwards, and parks once arrived.
     """
 
-    def __init__(
-        self,
-        robot_id: int,
-        tag: str,
-        goals: np.ndarray,
-        n: int,
-        *,
-        semi_axes: tuple[float, float] | None = None,
-        island: float = ISLAND,
-        arrival: float = ARRIVAL,
-        packed: bool = False,
-        squeeze_to: float = PACKED_SAFETY,
-        **kwargs: Any,
-    ) -> None:
-        super().__init__(robot_id, tag, **kwargs)
-        self.goals = np.asarray(goals, dtype=np.float64)
-        self.current_goal = self.goals[0]
-        self.n = n
-        # The arrival barrier (dream.rules.arc_merge): robots robot_id - left .. robot_id + right have
-        # reached this robot's state, and every robot has reached `released`.
-        self.left, self.right, self.released = 0, 0, 0
-        self.heartbeats = Heartbeats(n, robot_id, SILENCE)
-        self.suspects = False  # whether it takes some robot for crashed, or was taken for crashed
-        self.state = 0  # goals reached so far
-        self.change_state = True  # the current goal has not been reached yet
-        self.desired_velocity = np.zeros(2)
-        self.semi_axes = circle_layout(n).semi_axes if semi_axes is None else semi_axes
-        self.island = island
-        self.arrival = arrival
-        self.packed = packed
-        if packed:
-            self.guard_horizon = PACKED_GUARD_HORIZON
-        self.ring_safety = self.safety  # the safety radius it squeezes from (see squeeze)
-        self.squeeze_to = min(squeeze_to, self.ring_safety)
-        self.closest = math.inf  # its distance to its current goal when it last made PROGRESS (m)
-        self.stalled = 0  # decisions since it last came PROGRESS closer
+    period = CONTROL_GAP
+    memory = {
+        "heading": 0,  # the goal it heads for: 0, 1 (the antipode) or 2
+        "unreached": 1,  # that goal is not reached yet
+        "state": 0,  # goals reached
+        "left": 0,  # the arc of robots known to have reached `state`...
+        "right": 0,
+        "released": 0,  # ...and the level every robot is known to have reached
+        "slot": -1,  # its last radio round
+        "watch_left": -1,  # the robots watched beyond its arc, and their ages (rounds)
+        "age_left": 0,
+        "watch_right": -1,
+        "age_right": 0,
+        "suspects": 0,  # it took a robot for crashed, or was taken for crashed
+        "closest": math.inf,  # its distance to its goal when it last made PROGRESS (m)
+        "stalled": 0,  # decisions since
+        "squeezing": 0,  # it plans with the least safety radius
+    }
 
-    def update_radio(self, messages: list[tuple[Any, ...]]) -> tuple[Any, ...]:
-        """Merge the arcs and released levels heard (:func:`dream.rules.arc_merge`) and the
-        heartbeats; move on once every robot not taken for crashed has reached at least this
-        robot's state. Sends ``(id, state, left, right, released, heartbeats)``.
+    def __init__(self, layout: CircleLayout, squeeze_to: float, radio_gap: int, sensing: float) -> None:
+        self.layout, self.n, self.radio_gap = layout, len(layout.goals), radio_gap
+        self.squeeze_to = min(squeeze_to, layout.safety)
+        self.movement = Movement(range=sensing)
+        self.radio = Radio(range=RADIO_RANGE, fields=dict.fromkeys(MESSAGE, int))
+        horizon = PACKED_GUARD_HORIZON if layout.packed else GUARD_HORIZON
+        self.avoid = Avoid(safety=layout.safety, sidestep=SIDESTEP_UPDATES, horizon=horizon)
 
-        A heartbeat failure detector (:class:`~dream.heartbeats.Heartbeats`, silent for
-        :data:`SILENCE` of this robot's rounds) lets the survivors stop waiting for crashed robots:
-        an arc grows over a robot taken for crashed as if it had arrived.
-        """
-        if messages:
-            ids = np.array([message[0] for message in messages])
-            heard = np.array([message[1:5] for message in messages])
-            self.left, self.right, self.released = (
-                int(v)
-                for v in rules.arc_merge(
-                    self.n,
-                    self.state,
-                    self.left,
-                    self.right,
-                    self.released,
-                    np.zeros(len(ids), dtype=np.intp),
-                    (ids - self.robot_id) % self.n,
-                    heard,
-                )
-            )
-        self.heartbeats.round([message[5] for message in messages])
-        alive = self.heartbeats.alive
-        self.skip_crashed(alive)
-        self.released = int(rules.arc_release(self.n, self.state, self.left, self.right, self.released))
-        # Released beyond its own level means this robot was taken for crashed and the others
-        # went on: a robot parked on its goal may then be one that has finished there (seen at
-        # N = 100 under 30 % loss: it waited beside its goal for good).
-        self.suspects = not alive.all() or self.released > self.state
-        # At least its own state, not equal to it: a robot taken for crashed while out of radio
-        # reach (a 100-robot ring is tens of hops across) lets the others go ahead, and a robot
-        # waiting for equal states would then wait for good (seen at N = 100, no fault).
-        if rules.moves_on(self.state, self.released >= self.state, self.change_state, len(self.goals)):
-            self.current_goal = self.goals[self.state]
-            self.change_state = True
-            self.closest, self.stalled = math.inf, 0
-        return self.robot_id, self.state, self.left, self.right, self.released, self.heartbeats.beats
+    def start(self, ids: np.ndarray) -> np.ndarray:
+        return START_DELAY + ids % 10
 
-    def skip_crashed(self, alive: np.ndarray) -> None:
-        """Grow the arc over the robots beyond either end that it takes for crashed (``alive``
-        ``(n,)`` bool): the survivors do not wait for them."""
-        while self.left + self.right + 1 < self.n and not alive[(self.robot_id - self.left - 1) % self.n]:
-            self.left += 1
-        while self.left + self.right + 1 < self.n and not alive[(self.robot_id + self.right + 1) % self.n]:
-            self.right += 1
+    def goals(self, ids: np.ndarray, heading: np.ndarray) -> np.ndarray:
+        """The goals ``(k, 2)`` robots ``ids`` head for (``heading``: 0, 1 or 2; see :func:`circle_goals`)."""
+        return self.layout.goals[ids] * np.where(heading == 1, -1.0, 1.0)[:, None]
 
-    def goal_taken(self, position: np.ndarray) -> bool:
-        """Whether a robot standing still (one taken for crashed stops where it is, one that has
-        finished stays) sits within the safety radius of this robot's goal while this robot is as
-        close as HRVO lets it come: the goal then counts as reached, else a crash on a goal would
-        stop the circles for good."""
-        rows = np.asarray(self.detections)
-        # As close as HRVO lets it come; a stalled robot may be held further off by others parked
-        # beside the goal (traced under a crash at N = 100: 0.39 m, walled off by a finished robot).
-        reach = (2 * self.ring_safety if self.stalled >= STALL else self.ring_safety) + self.arrival
-        if not len(rows) or math.dist(position, self.current_goal) > reach:
-            return False
-        others = rules.seen_positions(position, rows)
-        still = np.hypot(rows[:, 2], rows[:, 3]) < STILL
-        return bool(np.any(still & (np.hypot(*(others - self.current_goal).T) < self.ring_safety)))
+    def decide(self, view: View) -> np.ndarray:
+        ids, here, memory, seen, layout = view.ids, view.pose[:, :2], view.memory, view.seen, self.layout
+        unreached = memory["unreached"].astype(bool)
+        goal = self.goals(ids, memory["heading"])
+        _, reached = rules.arrival(here, goal, unreached, layout.arrival)
+        doubting = unreached & (memory["suspects"] > 0)  # it may take a goal a standing robot holds
+        if doubting.any():
+            still = np.hypot(seen["vx"], seen["vy"]) < STILL
+            reach = np.where(memory["stalled"] >= STALL, 2 * layout.safety, layout.safety) + layout.arrival
+            offsets = np.column_stack((seen["dx"], seen["dy"]))
+            reached |= doubting & rules.goal_taken(here, goal, seen.offsets, offsets, still, reach, layout.safety)
+        memory["state"] = memory["state"] + reached
+        memory["left"], memory["right"] = (np.where(reached, 0, memory[key]) for key in ("left", "right"))
+        memory["unreached"] = (unreached & ~reached).astype(np.int64)
+        slot = np.floor((view.clock - self.start(ids)) / self.radio_gap).astype(np.int64)
+        talking = slot > memory["slot"]
+        if talking.any():
+            self.talk(view, talking)
+            memory["slot"] = np.where(talking, slot, memory["slot"])
+        goal = self.goals(ids, memory["heading"])
+        if layout.packed:
+            return self.dock(view, here, goal)
+        closest, memory["stalled"] = rules.stall(
+            np.hypot(*(goal - here).T), memory["closest"], memory["stalled"], memory["unreached"], PROGRESS
+        )
+        memory["closest"] = closest
+        outside = rules.outside_ring(here, layout.semi_axes)
+        squeezing = rules.squeezes(
+            memory["squeezing"], memory["stalled"], STALL, outside, seen.min("distance"), layout.safety
+        )
+        memory["squeezing"] = squeezing.astype(np.int64)
+        if squeezing.any():
+            view.keep_apart(np.where(squeezing, self.squeeze_to, layout.safety))
+        aim = rules.roundabout_aim(here, goal, layout.semi_axes, ISLAND)
+        return rules.preferred_velocity(here, aim, goal, self.spec.v_max, APPROACH_GAIN)
 
-    def squeeze(self, position: np.ndarray) -> None:
-        """At ``position`` ``(2,)`` (m): take the least safety radius (:attr:`squeeze_to`, under
-        rps 0.0.0's rules the body plus 1 cm) while stalled outside the ring, and the ring's again
-        once no robot seen is within it.
+    def talk(self, view: View, talking: np.ndarray) -> None:
+        """One radio round of the robots flagged ``talking``: merge, watch, release, move on, send."""
+        n, ids, memory, heard = self.n, view.ids, view.memory, view.heard
+        rows = heard.owner
+        keep = talking[rows]
+        rows, senders = rows[keep], heard["sender"][keep]
+        fields = np.column_stack([heard[key][keep] for key in MESSAGE]).reshape(-1, len(MESSAGE))
+        state, unreached = memory["state"], memory["unreached"].astype(bool)
+        left, right, released = rules.arc_merge(
+            n,
+            state,
+            memory["left"],
+            memory["right"],
+            memory["released"],
+            rows,
+            (senders - ids[rows]) % n,
+            fields[:, :4],
+        )
+        watched = np.column_stack((memory["watch_left"], memory["watch_right"]))
+        ages = np.column_stack((memory["age_left"], memory["age_right"]))
+        ends, ages = rules.watch_ends(n, ids, left, right, watched, ages, rows, senders, fields[:, 4:8])
+        # A robot silent for SILENCE rounds is taken for crashed: the arc grows over it.
+        left, right, quiet = rules.grow_over(n, left, right, (ages > SILENCE) & talking[:, None])
+        released = rules.arc_release(n, state, left, right, released)
+        # At least its own level, not equal to it: the others may have gone ahead of a robot
+        # taken for crashed while out of radio reach.
+        go = talking & rules.moves_on(state, released >= state, unreached, CIRCLES)
+        # Whether some robot is taken for crashed (news of it spreads), or this one was.
+        told = np.zeros(len(ids), dtype=bool)
+        told[rows[fields[:, 8] > 0]] = True
+        suspects = (memory["suspects"] > 0) | told | quiet.any(axis=1) | (released > state)
+        for key, value in (("left", left), ("right", right), ("released", released), ("suspects", suspects)):
+            memory[key] = np.where(talking, value, memory[key]).astype(np.int64)
+        for at, side in enumerate(("left", "right")):
+            memory[f"watch_{side}"] = np.where(talking, ends[:, at], memory[f"watch_{side}"])
+            memory[f"age_{side}"] = np.where(talking, ages[:, at], memory[f"age_{side}"])
+        memory["heading"] = np.where(go, state, memory["heading"])
+        memory["unreached"] = (unreached | go).astype(np.int64)
+        memory["closest"] = np.where(go, math.inf, memory["closest"])
+        memory["stalled"] = np.where(go, 0, memory["stalled"])
+        view.send(where=talking, **{key: memory[key] for key in MESSAGE})
 
-        Robots parked on a ring (goals 0.34 m apart with a safety radius of 0.24 m) form a wall
-        that a robot outside cannot pass. Traces at N = 100 under latency and clock drift: a robot
-        still waiting on its goal when the robot whose last goal it is arrived (its news came
-        late) was pushed outwards, slid along the outside of the ring for 7,000 steps and missed
-        the cap.
-        """
-        distance = math.dist(position, self.current_goal)
-        if not self.change_state:  # waiting on a goal reached is not being stalled
-            self.stalled = 0
-        elif distance < self.closest - PROGRESS:
-            self.closest, self.stalled = distance, 0
-        else:
-            self.stalled += 1
-        if self.stalled >= STALL and rules.outside_ring(position, self.semi_axes):
-            self.safety = self.squeeze_to
-        elif self.safety != self.ring_safety:
-            rows = np.asarray(self.detections)
-            if not len(rows) or rows[:, 0].min() >= self.ring_safety:
-                self.safety = self.ring_safety
-
-    def update(self, dxu: np.ndarray) -> None:
-        if not self.has_pose:
-            self.steer(self.detections, self.desired_velocity, SIDESTEP_UPDATES)
-        else:
-            position = np.array([self.pos_x, self.pos_y])
-            _, reached = rules.arrival(position, self.current_goal, self.change_state, self.arrival)
-            if reached or (self.change_state and self.suspects and self.goal_taken(position)):
-                self.state += 1
-                self.change_state = False
-                self.left = self.right = 0  # a new level: it knows only itself there
-            if not self.packed:
-                self.squeeze(position)
-                aim = rules.roundabout_aim(position, self.current_goal, self.semi_axes, self.island)
-                self.desired_velocity = rules.preferred_velocity(
-                    position, aim, self.current_goal, self.v_max, APPROACH_GAIN
-                )
-                self.steer(self.detections, self.desired_velocity, SIDESTEP_UPDATES)
-            elif self.change_state:
-                self.dock(position, self.current_goal)
-            else:  # parked: neighbours dock beside a robot that keeps its place
-                self.desired_velocity, self.dxi = np.zeros(2), np.zeros(2)
-        self.command(dxu)
-
-    def dock(self, position: np.ndarray, goal: np.ndarray) -> None:
-        """Choose ``dxi`` on a packed ring: through the dock and corridor of :func:`dream.rules.dock`,
-        stepping aside only inwards in the ring's band and not at all near the goal, and straight
-        to the goal over the last :data:`FINAL_REACH` when the way is clear of the robots seen."""
-        target, band = rules.dock(position, goal, self.semi_axes, DOCK_DEPTH, DOCK_WIDTH, DOCK_LEAD)
-        aim = rules.roundabout_aim(position, target, self.semi_axes, self.island)
-        self.desired_velocity = rules.preferred_velocity(position, aim, goal, self.v_max, APPROACH_GAIN)
-        near = math.dist(position, goal) < FINAL_REACH
-        if near:  # a robot beside its goal has nowhere aside to go
-            self.sidestep = 0
-        elif band:  # aside, then, to whichever side points inwards: outwards a robot is shut out
-            outwards = position / np.square(self.semi_axes)
-            right = self.desired_velocity[1] * outwards[0] - self.desired_velocity[0] * outwards[1]
-            self.side = 1.0 if right <= 0.0 else -1.0
-        self.steer(self.detections, self.desired_velocity, SIDESTEP_UPDATES)
-        if near:
-            clearance = guard_distance(self.spec.diameter, self.safety)
-            if rules.clear_way(position, goal, rules.seen_positions(position, self.detections), clearance):
-                self.dxi = self.desired_velocity.copy()
+    def dock(self, view: View, here: np.ndarray, goal: np.ndarray) -> np.ndarray:
+        """The packed ring's wish: through the dock and corridor of :func:`dream.rules.dock`,
+        stepping aside only inwards in the ring's band and not at all near the goal, straight to
+        the goal over the last :data:`FINAL_REACH` when the way is clear; parked once arrived."""
+        layout, seen = self.layout, view.seen
+        target, band = rules.dock(here, goal, layout.semi_axes, DOCK_DEPTH, DOCK_WIDTH, DOCK_LEAD)
+        aim = rules.roundabout_aim(here, target, layout.semi_axes, ISLAND)
+        desired = rules.preferred_velocity(here, aim, goal, self.spec.v_max, APPROACH_GAIN)
+        near = np.hypot(*(goal - here).T) < FINAL_REACH
+        outwards = here / np.square(layout.semi_axes)
+        right = desired[:, 1] * outwards[:, 0] - desired[:, 0] * outwards[:, 1]
+        view.aside(np.where(band & ~near, np.where(right <= 0.0, 1.0, -1.0), 0.0), stop=near)
+        clearance = guard_distance(self.spec.diameter, layout.safety)
+        others = np.column_stack((seen["dx"], seen["dy"])) + here[seen.owner]
+        clear = near & rules.clear_way(here, goal, others, clearance, seen.offsets)
+        parked = view.memory["unreached"] == 0  # neighbours dock beside a robot that keeps its place
+        view.direct(clear | parked)
+        return np.where(parked[:, None], 0.0, desired)
 
 
 def circle_frame(
@@ -514,82 +389,14 @@ def default_steps(n: int) -> int:
     return 4000 + int(1500 * (a + b))
 
 
-@dataclass
-class CircleSwarm:
-    """Every robot's decision state in swarm mode, one row each (see :meth:`HrvoCircle.swarm_step`).
-
-    The barrier (see the module docs) is :class:`CircleRobot`'s, exchanged every ``radio_gap`` steps.
-
-    Attributes
-    ----------
-    goals : (n, 3, 2) ndarray
-        Each robot's goals in order (m).
-    state : (n,) int ndarray
-        Goals reached.
-    heading_for : (n,) int ndarray
-        Index of the goal being approached...
-    unreached : (n,) bool ndarray
-        ...which has not been reached yet.
-    left, right, released : (n,) int ndarrays
-        The arcs of robots known to have reached each robot's state, and the level known complete.
-    sidestep, side : (n,) ndarrays
-        Decisions left stepping aside, and to which side (1.0: right, -1.0: left).
-    dxi : (n, 2) ndarray
-        The velocities HRVO chose last (m/s): what the neighbours' velocities are taken to be.
-    """
-
-    goals: np.ndarray
-    state: np.ndarray
-    heading_for: np.ndarray
-    unreached: np.ndarray
-    left: np.ndarray
-    right: np.ndarray
-    released: np.ndarray
-    sidestep: np.ndarray
-    side: np.ndarray
-    dxi: np.ndarray
-
-    @classmethod
-    def start(cls, goals: np.ndarray) -> CircleSwarm:
-        """Robots that have reached nothing yet and know only themselves, heading for ``goals[:, 0]``."""
-        n = len(goals)
-        return cls(
-            goals=goals,
-            state=np.zeros(n, dtype=np.int64),
-            heading_for=np.zeros(n, dtype=np.int64),
-            unreached=np.ones(n, dtype=bool),
-            left=np.zeros(n, dtype=np.int64),
-            right=np.zeros(n, dtype=np.int64),
-            released=np.zeros(n, dtype=np.int64),
-            sidestep=np.zeros(n, dtype=np.int64),
-            side=np.ones(n),
-            dxi=np.zeros((n, 2)),
-        )
-
-    @property
-    def goal(self) -> np.ndarray:
-        """The goal each robot heads for ``(n, 2)`` (m)."""
-        return self.goals[np.arange(len(self.goals)), self.heading_for]
-
-
 class HrvoCircle(Experiment):
-    """The circle experiment (see the module docs).
-
-    Swarm mode (``swarm=True``) keeps the behaviour of the per-robot mode (the same layout and
-    HRVO parameters, and the decision rules of :mod:`dream.rules` that :class:`CircleRobot`
-    calls: arrival, roundabout, settling, stepping aside; progress spread by range radio every
-    ``radio_gap`` steps), but every robot decides every step through one
-    :func:`dream.kernels.hrvo` call, with its state in a :class:`CircleSwarm`. Not carried over:
-    the squeeze and the stalled robot's wider reach for a taken goal (:meth:`CircleRobot.squeeze`),
-    since one HRVO call takes one safety radius for all.
-    """
+    """The circle experiment (see the module docs): its robots are one :class:`CircleRobot`."""
 
     name = NAME
     default_n = 10
     success = "every robot finishes the third circle with zero collisions, boundary and actuator violations"
-    has_swarm_mode = True
 
-    radio_gap: int = param(30, "steps between two radio exchanges of progress (both modes)", ge=1)
+    radio_gap: int = param(30, "steps between two radio exchanges of progress", ge=1)
 
     def check(self, n: int, backend: str) -> None:
         # On the real Robotarium the arena cannot grow: the goals close up instead (circle_layout,
@@ -601,7 +408,7 @@ class HrvoCircle(Experiment):
     def arena_for(self, n: int) -> ArenaSpec:
         return self.layout.arena
 
-    def build(self, n: int) -> None:
+    def swarm_robot(self, n: int) -> CircleRobot:
         if self.layout.packed and (self.rules.collider_offset > 0 or self.rules.diameter >= self.layout.safety):
             raise ValueError(
                 f"n={n} robots pack the Robotarium's ring (goals {self.layout.spacing:.3f} m apart), which only "
@@ -609,73 +416,7 @@ class HrvoCircle(Experiment):
                 f"{self.rules.collider_offset} m ahead of the centre) would touch; at most "
                 f"{circle_capacity(packed=False)} robots run by them"
             )
-        goals = circle_goals(n, self.grow)
-        for i in range(n):
-            robot = CircleRobot(
-                i,
-                f"robot_{i}",
-                goals[i],
-                n,
-                semi_axes=self.layout.semi_axes,
-                arrival=self.layout.arrival,
-                packed=self.layout.packed,
-                squeeze_to=squeeze_radius(self.rules),
-                safety=self.layout.safety,
-                arena=self.arena,
-            )
-            odometry = OdometrySensor(i, f"odom_{i}", robot.update_odom)
-            movement = MovementSensor(i, f"movement_{i}", robot.update_sensor, range=self.sensing)
-            radio = RangeRadio(i, f"radio_{i}", robot.update_radio)
-            create_timer(
-                i,
-                20 + i % 10,
-                [
-                    {"delay": 2 + i % 2, "tag": "odom", "call": odometry.update},
-                    {"delay": 3 + i % 2, "tag": "movement", "call": movement.update},
-                    {"delay": self.radio_gap, "tag": "radio", "call": radio.update},
-                    {"delay": 4 + i % 2, "tag": "robot", "call": robot.update},
-                ],
-            )
-            self.robots.append(robot)
-
-    def build_swarm(self, n: int) -> None:
-        if self.layout.packed:
-            raise ValueError(
-                f"n={n} robots pack the Robotarium's ring: run them robot by robot (swarm mode is for rings that "
-                f"grow; the packed ring's docking and parking are per robot); at most "
-                f"{circle_capacity(packed=False)} robots run in swarm mode on the Robotarium"
-            )
-        self.team = CircleSwarm.start(circle_goals(n, self.grow))
-        self.bounds = self.arena.shrunk(GRITSBOT.radius)
-
-    def swarm_step(self, step: int, x: np.ndarray) -> np.ndarray:
-        """Every robot's decision: count arrivals, exchange progress by radio every
-        ``radio_gap`` steps (and move on), aim around the roundabout, step aside when blocked,
-        one HRVO call, then the unicycle commands within the wheel limits and the motion guard."""
-        team = self.team
-        p = x[:2].T
-        goal = team.goal
-        arrived, reached = rules.arrival(p, goal, team.unreached, self.layout.arrival)
-        team.state += reached
-        team.unreached &= ~arrived
-        team.left[reached] = team.right[reached] = 0  # a new level: it knows only itself there
-        if step % self.radio_gap == 0:
-            _radio_round(team, p)
-            moving_on = rules.moves_on(team.state, team.released >= team.state, team.unreached, CIRCLES)
-            team.heading_for[moving_on] = team.state[moving_on]
-            team.unreached |= moving_on
-            goal = team.goal
-        aim = rules.roundabout_aim(p, goal, self.layout.semi_axes, ISLAND)
-        desired = rules.preferred_velocity(p, aim, goal, GRITSBOT.v_max, APPROACH_GAIN)
-        wanted, team.sidestep = rules.sidestep_preference(desired, team.sidestep, team.side)
-        # One neighbour search for HRVO and the motion guard (whose reach, 0.17 m, is within it).
-        seen = kernels.neighbours(p, self.sensing)
-        team.dxi = kernels.hrvo(
-            p, team.dxi, wanted, seen[:2], radius=self.sensing, safety=self.layout.safety, bounds=self.bounds
-        )
-        team.sidestep, team.side = rules.sidestep_update(team.dxi, desired, team.sidestep, team.side, SIDESTEP_UPDATES)
-        dxu = kernels.actuator_limit(kernels.dxi_to_dxu(team.dxi.T, x), GRITSBOT.within(self.sim.spec))
-        return guard_swarm(dxu, x, guard_distance(GRITSBOT.diameter, self.layout.safety), seen)
+        return CircleRobot(self.layout, squeeze_radius(self.rules), self.radio_gap, self.sensing)
 
     def steps(self, n: int) -> int:
         return default_steps(n)
@@ -689,10 +430,9 @@ class HrvoCircle(Experiment):
         return initial_poses(n, rng, self.arena, where=lambda x, y: np.hypot(x / a, y / b) <= START_INSIDE)
 
     def states(self) -> np.ndarray:
-        """The goals each robot has reached ``(n,)``, in either mode."""
-        if self.swarm:
-            return self.team.state
-        return np.array([robot.state for robot in self.robots], dtype=np.int64)
+        """The goals each robot has reached ``(n,)``."""
+        assert self.engine is not None
+        return self.engine.memory["state"]
 
     def done(self, step: int, poses: np.ndarray) -> bool:
         return bool(np.all(self.states()[self.correct] >= CIRCLES))
@@ -704,23 +444,11 @@ class HrvoCircle(Experiment):
         return {"circles_completed": circles, "circle_radius": self.layout.semi_axes[0]}
 
     def frame(self, step: int, poses: np.ndarray) -> Frame:
-        if self.swarm:
-            return circle_frame(step, self.sim, self.team.goal, self.team.dxi, self.team.state)
-        goals = [robot.current_goal for robot in self.robots]
-        velocities = [robot.dxi for robot in self.robots]
-        return circle_frame(step, self.sim, goals, velocities, self.states(), sensing=self.sensing)
+        assert self.engine is not None
+        robot, memory = self.engine.robot, self.engine.memory
+        assert isinstance(robot, CircleRobot)
+        goals = robot.goals(np.arange(self.n), memory["heading"])
+        return circle_frame(step, self.sim, goals, self.engine.dxi, memory["state"], sensing=self.sensing)
 
 
 run = HrvoCircle.run
-
-
-def _radio_round(team: CircleSwarm, positions: np.ndarray, radio_range: float = 1.0) -> None:
-    """One radio exchange of the arrival barrier between the robots in range (at once: each
-    hears what the others held before the round)."""
-    n = len(team.state)
-    indptr, senders, _ = kernels.neighbours(positions, radio_range)
-    rows = np.repeat(np.arange(n), np.diff(indptr))
-    heard = np.column_stack((team.state[senders], team.left[senders], team.right[senders], team.released[senders]))
-    merged = rules.arc_merge(n, team.state, team.left, team.right, team.released, rows, (senders - rows) % n, heard)
-    team.left, team.right, released = merged
-    team.released = rules.arc_release(n, team.state, team.left, team.right, released)

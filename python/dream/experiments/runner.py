@@ -160,6 +160,8 @@ def run(
             stepper = Stepper(exp, n, world, rules_named(rules), swarm=swarm, startup=startup)
         except ValueError as err:  # from the layers below, in their terms: say which parameters the run set
             raise _naming_params(exp, err) from err
+        if exp.engine is not None:  # messages are counted for the outputs that show them
+            exp.engine.count_traffic = bool(watch)
         sim = make_simulator(
             n, backend, stepper.initial_conditions, arena=exp.arena, rules=exp.rules.rules, startup=startup
         )

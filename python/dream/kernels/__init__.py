@@ -20,6 +20,7 @@ from dream.kernels._dispatch import IMPLEMENTATION
 from dream.kernels._dynamics import (
     Violations,
     actuator_limit,
+    colliding,
     dxi_to_dxu,
     threshold_velocities,
     unicycle_step,
@@ -46,6 +47,7 @@ __all__ = [
     "threshold_velocities",
     "wheel_speeds",
     "validate",
+    "colliding",
     "dxi_to_dxu",
     "actuator_limit",
     "neighbours",

@@ -92,6 +92,13 @@ def validate(poses: Any, velocities: Any, arena: ArenaSpec = ROBOTARIUM, spec: S
     return Violations(*counts)
 
 
+def colliding(poses: Any, spec: SimulatorSpec = RPS) -> np.ndarray:
+    """``(n,)`` bool: the robots in a collision as a simulator following ``spec`` counts them
+    (:func:`validate`'s pairs: colliders within ``spec.diameter``), found the same way (O(n))."""
+    p = as_poses(poses)
+    return implementation("colliding")(p, diameter=spec.diameter, collider_offset=spec.collider_offset)
+
+
 def dxi_to_dxu(dxi: Any, poses: Any, vel_gain: float = 0.8, ang_gain: float = 3.0) -> FloatArray:
     """Unicycle commands ``(2, n)`` from single-integrator velocities ``(2, n)`` at ``poses`` ``(3, n)``.
 

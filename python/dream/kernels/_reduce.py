@@ -52,10 +52,20 @@ def segment_any(flags: Any, offsets: Any) -> np.ndarray:
     return implementation("segment_any")(array, as_offsets(offsets, "offsets", len(array)))
 
 
-def segment_nearest(keys: Any, offsets: Any) -> np.ndarray:
+def segment_nearest(keys: Any, offsets: Any, k: int | None = None) -> np.ndarray:
     """The entry of each row with the smallest key (the first of equals, NaN skipped), as an index
-    into ``keys`` ``(k,)``; -1 for a row that is empty or all NaN: ``(m,)`` int64."""
+    into ``keys`` ``(e,)``; -1 for a row that is empty or all NaN: ``(m,)`` int64.
+
+    With ``k``, each row's ``k`` entries of smallest key, smallest first (of equals, the first
+    entry first), -1 in the slots the row cannot fill: ``(m, k)`` int64 (the ``k`` nearest
+    detections of each robot, say).
+    """
     array = _values(keys, "keys")
     if array.ndim != 1:
         raise ValueError(f"`keys` must have shape (k,), got {array.shape}")
-    return implementation("segment_nearest")(array, as_offsets(offsets, "offsets", len(array)))
+    cuts = as_offsets(offsets, "offsets", len(array))
+    if k is None:
+        return implementation("segment_nearest")(array, cuts)
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 0:
+        raise ValueError(f"`k` must be a whole number >= 0, got {k!r}")
+    return implementation("segment_nearest")(array, cuts, int(k))

@@ -7,12 +7,14 @@ told it, acting on its own clock, in the experiment's world with its faults.
 - :func:`team_env`: the whole team as one Gymnasium ``Env`` (one ``(n, 2)`` action), for
   single-agent code;
 - :class:`LinearPolicy`: a NumPy policy (observation row to action) with a weights file, which
-  ``dream export --policy`` ships to the lab.
+  ``dream export --policy`` ships to the lab;
+- :class:`MlpPolicy`: a small torch network policy for gradient learners (needs torch).
 
 See :mod:`dream.rl.team` for what a step does, the default rewards and the endings,
 :mod:`dream.rl.observation` for what a robot observes and :mod:`dream.rl.learner` for which
 experiments a learner can take the world of. The environments need the ``rl`` extra
-(``pettingzoo``, ``gymnasium``), imported when first used: a lab bundle runs a policy without them.
+(``pettingzoo``, ``gymnasium``; ``torch`` for :class:`MlpPolicy`), imported when first used: a lab
+bundle runs a policy without them.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ _HOMES = {
     "DreamParallelEnv": "parallel",
     "parallel_env": "parallel",
     "LinearPolicy": "policy",
+    "MlpPolicy": "mlp",
     "Team": "team",
     "TeamEnv": "batch",
     "team_env": "batch",

@@ -15,8 +15,10 @@ part           shape       what
 =============  ==========  ====================================================================
 
 Nearest means by detected distance, and for messages by the distance between the position a
-message gives and the robot's odometry: all of it is what the robot knows, nothing the world
-alone knows.
+message gives and the robot's odometry (of equal distances, the first detection or message the
+robot got comes first): all of it is what the robot knows, nothing the world alone knows. The
+``k`` nearest of each robot are picked in one pass over its entries
+(:func:`dream.kernels.segment_nearest` with ``k``, in Rust).
 """
 
 from __future__ import annotations
@@ -25,7 +27,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from dream.swarm import Neighbourhood, View
+from dream import kernels
+from dream.swarm import View
 
 if TYPE_CHECKING:
     from gymnasium import spaces
@@ -88,38 +91,35 @@ class Layout:
 
     def rows(self, view: View, goals: np.ndarray | None) -> np.ndarray:
         """The observation rows ``(m, size)`` of the robots of ``view``; ``goals`` ``(n, 2)``."""
-        m, k = len(view), self.k
+        m, k, at = len(view), self.k, self.slices
         out = np.zeros((m, self.size), dtype=np.float32)
         pose = view.pose
-        out[:, self.slices["pose"]] = np.column_stack((pose[:, :2], np.cos(pose[:, 2]), np.sin(pose[:, 2])))
+        out[:, at["pose"]] = np.column_stack((pose[:, :2], np.cos(pose[:, 2]), np.sin(pose[:, 2])))
         if goals is not None:
-            out[:, self.slices["goal"]] = goals[view.ids] - pose[:, :2]
+            out[:, at["goal"]] = goals[view.ids] - pose[:, :2]
+        if not k:
+            return out
         seen = view.seen
-        found, mask = padded(seen, np.column_stack([seen[name] for name in SEEN]), seen["distance"], k)
-        out[:, self.slices["seen"]] = found.reshape(m, -1)
-        out[:, self.slices["seen_mask"]] = mask
+        self._fill(out, "seen", kernels.segment_nearest(seen["distance"], seen.offsets, k), [seen[c] for c in SEEN])
         heard = view.heard
-        if "x" in heard.names:
-            here = pose[heard.owner, :2]
-            offsets = np.column_stack((heard["x"], heard["y"])) - here
-            found, mask = padded(heard, offsets, np.hypot(offsets[:, 0], offsets[:, 1]), k)
-            out[:, self.slices["heard"]] = found.reshape(m, -1)
-            out[:, self.slices["heard_mask"]] = mask
+        if "x" in heard.names and heard.offsets[-1]:
+            # Each message's position less the robot's odometry, column by column (no (e, 2)
+            # copies), ranked by the squared distance: the distances' order, without a square
+            # root (a slow one, np.hypot) per message.
+            count = heard.count
+            dx = heard["x"] - np.repeat(pose[:, 0], count)
+            dy = heard["y"] - np.repeat(pose[:, 1], count)
+            self._fill(out, "heard", kernels.segment_nearest(dx * dx + dy * dy, heard.offsets, k), [dx, dy])
         return out
 
-
-def padded(rows: Neighbourhood, values: np.ndarray, key: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """Each row's ``k`` entries of smallest ``key`` (in that order; ties: the first entry), padded
-    with zeros: ``(m, k, c)`` values of ``values`` ``(e, c)`` and the ``(m, k)`` mask of filled
-    slots. Picks the nearest ``k`` times over (:meth:`Neighbourhood.nearest`, rows in parallel in
-    Rust): for a few slots, cheaper than sorting every row."""
-    m, c = len(rows), values.shape[1]
-    out, mask = np.zeros((m, k, c)), np.zeros((m, k))
-    left = np.array(key, dtype=np.float64)
-    for slot in range(min(k, int(rows.count.max(initial=0)))):
-        best = rows.nearest(left)
-        found = np.flatnonzero(best >= 0)
-        out[found, slot] = values[best[found]]
-        mask[found, slot] = 1.0
-        left[best[found]] = np.nan  # taken: the next pass skips it
-    return out, mask
+    def _fill(self, out: np.ndarray, part: str, entries: np.ndarray, columns: list[np.ndarray]) -> None:
+        """Write ``columns`` (each ``(e,)``) at ``entries`` ``(m, k)`` (-1: an empty slot, left zero)
+        into the slots of ``part`` of the rows ``out``, and the slots' mask."""
+        m, k = entries.shape
+        filled = entries >= 0
+        slots = np.zeros((m, k, len(columns)), dtype=np.float32)
+        for c, column in enumerate(columns):
+            if len(column):
+                slots[..., c] = np.where(filled, column[entries], 0.0)
+        out[:, self.slices[part]] = slots.reshape(m, -1)
+        out[:, self.slices[f"{part}_mask"]] = filled

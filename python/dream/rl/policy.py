@@ -57,9 +57,11 @@ class LinearPolicy:
         return LinearPolicy(flat[: 2 * size].reshape(size, 2), flat[2 * size :], k=self.k, avoid=self.avoid)
 
     def __call__(self, obs: np.ndarray) -> np.ndarray:
-        # NumPy's own loops, not a BLAS product, whose rounding depends on how many rows it
-        # multiplies: a robot acts alike whether it decides alone or with the swarm.
-        return np.tanh(np.einsum("ij,jk->ik", np.asarray(obs, dtype=np.float64), self.weights) + self.bias)
+        # A stack of one-row products, each (1, size) @ (size, 2) computed alike, not one matrix
+        # product, whose rounding depends on how many rows it multiplies: a robot acts alike
+        # whether it decides alone or with the swarm.
+        rows = np.asarray(obs, dtype=np.float64)[:, None, :]
+        return np.tanh(np.matmul(rows, self.weights)[:, 0] + self.bias)
 
     def save(self, path: str | os.PathLike[str]) -> None:
         """Write the weights file (``.npz``: ``weights``, ``bias``, ``k``, ``avoid``), whole or not at all."""

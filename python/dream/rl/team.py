@@ -220,12 +220,9 @@ class Team:
         return rewards
 
     def _colliding(self, poses: np.ndarray) -> np.ndarray:
-        """``(n,)`` bool: robots whose collider is within a diameter of another's (searched only in a
-        step where the simulator counted a collision)."""
-        spec = self.sim.spec
-        colliders = poses[:2].T + spec.collider_offset * np.column_stack((np.cos(poses[2]), np.sin(poses[2])))
-        indptr = kernels.neighbours(colliders, spec.diameter)[0]
-        return np.diff(indptr) > 0
+        """``(n,)`` bool: robots whose collider is within a diameter of another's, the pairs the
+        simulator counted (searched only in a step where it counted a collision)."""
+        return kernels.colliding(poses, self.sim.spec)
 
     def _outside(self, poses: np.ndarray) -> np.ndarray:
         xmin, xmax, ymin, ymax = self.exp.arena.bounds

@@ -4,8 +4,20 @@ See :mod:`dream.swarm.robot` for how a robot is declared and :mod:`dream.swarm.e
 what the world does to it every step.
 """
 
+from dream.swarm.cells import known_cells
 from dream.swarm.engine import Engine
 from dream.swarm.neighbourhood import Neighbourhood
-from dream.swarm.robot import Avoid, Movement, Radio, SwarmRobot, View
+from dream.swarm.robot import Avoid, Guard, Movement, Obstacles, Radio, SwarmRobot, View
 
-__all__ = ["Avoid", "Engine", "Movement", "Neighbourhood", "Radio", "SwarmRobot", "View"]
+__all__ = [
+    "Avoid",
+    "Engine",
+    "Guard",
+    "Movement",
+    "Neighbourhood",
+    "Obstacles",
+    "Radio",
+    "SwarmRobot",
+    "View",
+    "known_cells",
+]

@@ -16,7 +16,7 @@ _M1 = np.uint64(0xBF58476D1CE4E5B9)
 _M2 = np.uint64(0x94D049BB133111EB)
 
 #: Streams: one per kind of draw, so that two kinds never share a number.
-LOSS, BURST, DETECTION_NOISE, ODOMETRY_NOISE, DROPOUT, CLOCK_JITTER, LATENCY_JITTER, LIE = range(8)
+LOSS, BURST, DETECTION_NOISE, ODOMETRY_NOISE, DROPOUT, CLOCK_JITTER, LATENCY_JITTER, LIE, OBSTACLE_NOISE = range(9)
 
 
 def _mix(z: np.ndarray) -> np.ndarray:

@@ -23,6 +23,7 @@ messages leave the air.
 from __future__ import annotations
 
 import math
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -30,12 +31,14 @@ import numpy as np
 from dream import kernels, rules
 from dream._csr import spans
 from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
+from dream.kernels import VoronoiCells
 from dream.kernels._neighbours import Heard, Perceived
+from dream.obstacles import sensed
 from dream.robot import GUARD_HORIZON, guard_distance
 from dream.sensors import seen_velocity
 from dream.specs import ArenaSpec, SimulatorSpec
 from dream.swarm import draws
-from dream.swarm.neighbourhood import Neighbourhood
+from dream.swarm.neighbourhood import Deferred, Neighbourhood
 from dream.swarm.robot import SwarmRobot, View
 from dream.traffic import Traffic
 
@@ -91,6 +94,9 @@ class Engine:
         }
         self.lossy = np.zeros(0, dtype=np.int64)  #: links (receiver * n + sender) in a loss burst
         self.traffic = Traffic(n)  #: each robot's messages sent, heard and lost so far
+        #: whether to count them (the runner counts only for an output that reads them: the
+        #: trajectory log, a recording; without, a lossless inbox is found only when read)
+        self.count_traffic = True
         self.focus: int | None = None  #: a robot whose last readings and inbox to keep (for a recording)
         #: robot :attr:`focus`'s last decision: its ``step``, and the columns of what it ``seen`` and ``heard``
         self.focus_view: dict[str, Any] = {}
@@ -123,6 +129,8 @@ class Engine:
         rows = rows[self._odometry(t, rows, x, faults)]
         if self.robot.movement is not None:  # a robot whose sensor reading is lost holds its command
             rows = rows[self._kept(t, rows, np.full(len(rows), -2), faults)]
+        if self.robot.obstacles is not None:  # so does one whose obstacle reading is lost
+            rows = rows[self._kept(t, rows, np.full(len(rows), -3), faults)]
         if not len(rows):
             return []
         # What the sensors see of the others' motion: their commands before anyone decides now.
@@ -161,16 +169,30 @@ class Engine:
         """What the robots ``rows`` perceive and hear."""
         movement, radio = self.robot.movement, self.robot.radio
         by_range = radio is not None and radio.graph is None
+        lossless = by_range and self._lossless(faults)
+        # Without losses and counts to keep, the inbox is found only if the decision reads it
+        # (View.cells need not: a robot in a crowd hears hundreds of messages).
+        deferred = lossless and not self.count_traffic
         seen, heard = kernels.perceive(
             x[:2].T,
             x[2],
             rows,
             sight=None if movement is None else (movement.range, movement.fov, movement.direction),
-            radio_range=radio.range if radio is not None and by_range else None,
-            talking=talking if by_range else None,
+            radio_range=radio.range if radio is not None and by_range and not deferred else None,
+            talking=talking if by_range and not deferred else None,
         )
         if radio is not None and radio.graph is not None:
             heard = _linked(radio.graph, rows, x, talking)
+        inbox: Neighbourhood
+        if deferred:
+            assert radio is not None
+            inbox = Deferred(
+                lambda: self._hear(
+                    t, rows, kernels.perceive(x[:2].T, x[2], rows, radio_range=radio.range, talking=talking)[1], faults
+                ).frozen()
+            )
+        else:
+            inbox = self._hear(t, rows, heard, faults).frozen()
         ids = rows.copy()
         ids.flags.writeable = False
         view = View(
@@ -178,9 +200,12 @@ class Engine:
             clock.copy(),
             self.belief[rows],
             self._sense(t, rows, seen, velocities, faults).frozen(),
-            self._hear(t, rows, heard, faults).frozen(),
+            inbox,
             {key: values[rows] for key, values in self.memory.items()},
+            self._obstacles(t, rows, x, faults).frozen(),
         )
+        if lossless:
+            view.board_cells = partial(self._board_cells, rows, x[:2].T, talking)
         if self.focus is not None:
             self._keep_focus(t, rows, view, self.focus)
         return view
@@ -201,9 +226,18 @@ class Engine:
                 raise ValueError(f"{name} remembers {key!r}, which its memory does not declare: add it to `memory`")
             memory = self.memory[key]
             memory[rows] = _per_robot(values, len(rows), memory.dtype, f"{name} memory {key!r}", memory.shape[1:])
-        straight = None
+        straight = safety = None
         if view.straight is not None:
             straight = _per_robot(view.straight, len(rows), np.dtype(bool), f"{name}'s rows driven direct")
+        if view.safety is not None:
+            safety = _per_robot(view.safety, len(rows), np.dtype(np.float64), f"{name}'s safety radii")
+            if not (np.isfinite(safety).all() and (safety >= 0).all()):
+                raise ValueError(f"{name}'s safety radii must be finite and >= 0")
+        if view.turn is not None:
+            side = _per_robot(view.turn[0], len(rows), np.dtype(np.float64), f"{name}'s sides to step aside to")
+            stop = _per_robot(view.turn[1], len(rows), np.dtype(bool), f"{name}'s rows that stop stepping aside")
+            self.side[rows] = np.where(side != 0.0, np.sign(side), self.side[rows])
+            self.sidestep[rows[stop]] = 0
         seen = view.seen
         if view.heeded is not None:
             heeded = np.asarray(view.heeded)
@@ -213,7 +247,7 @@ class Engine:
                     f"got {heeded.dtype} of shape {heeded.shape}"
                 )
             seen = seen.where(heeded)
-        out[:, rows] = self._drive(rows, wished, self.belief[rows], seen, straight)
+        out[:, rows] = self._drive(rows, wished, self.belief[rows], seen, straight, safety)
         if view.said is None:
             return None
         message = self._message(view.said, len(rows))
@@ -223,14 +257,50 @@ class Engine:
         return rows[saying], {key: values[saying] for key, values in message.items()}
 
     def _drive(
-        self, rows: np.ndarray, wished: np.ndarray, pose: np.ndarray, seen: Neighbourhood, straight: np.ndarray | None
+        self,
+        rows: np.ndarray,
+        wished: np.ndarray,
+        pose: np.ndarray,
+        seen: Neighbourhood,
+        straight: np.ndarray | None,
+        safety: np.ndarray | None = None,
     ) -> np.ndarray:
         """The unicycle commands ``(2, k)`` that carry out ``wished`` ``(k, 2)``: through HRVO on the
         robots' own detections (if they avoid, and but for the rows ``straight`` flags), the
-        conversion, the limits and the motion guard."""
+        conversion, the limits and the motion guard; ``safety`` ``(k,)``: each row's safety radius
+        (m) instead of the Avoid's. Rows of one radius go through the kernels together (a row's
+        result never depends on the others')."""
+        avoid = self.robot.avoid
+        if avoid is None:
+            return self._drive_apart(rows, wished, pose, seen, straight, None)
+        if safety is None or not len(safety) or (safety == safety[0]).all():  # one radius for all the rows
+            radius = avoid.safety if safety is None or not len(safety) else float(safety[0])
+            return self._drive_apart(rows, wished, pose, seen, straight, radius)
+        out = np.empty((2, len(rows)))
+        for radius in np.unique(safety):
+            part = np.flatnonzero(safety == radius)
+            counts = np.diff(seen.offsets)[part]
+            hood = Neighbourhood(
+                np.concatenate(([0], np.cumsum(counts))),
+                {name: seen[name][spans(seen.offsets[:-1][part], counts)] for name in (*DETECTION, "dx", "dy")},
+            )
+            cut = None if straight is None else straight[part]
+            out[:, part] = self._drive_apart(rows[part], wished[part], pose[part], hood, cut, float(radius))
+        return out
+
+    def _drive_apart(
+        self,
+        rows: np.ndarray,
+        wished: np.ndarray,
+        pose: np.ndarray,
+        seen: Neighbourhood,
+        straight: np.ndarray | None,
+        safety: float | None,
+    ) -> np.ndarray:
+        """:meth:`_drive` for rows that keep one ``safety`` radius (m)."""
         robot, avoid = self.robot, self.robot.avoid
         chosen = wished
-        if avoid is not None:
+        if avoid is not None and safety is not None:
             chosen = wished.copy()
             steer: slice | np.ndarray = slice(None)  # the rows that go through HRVO
             entries: slice | np.ndarray = slice(None)  # and their detections
@@ -251,7 +321,7 @@ class Engine:
                 pose[steer, :2],
                 offsets,
                 detections,
-                safety=avoid.safety,
+                safety=safety,
                 v_max=robot.spec.v_max,
                 bounds=self.arena.shrunk(margin) if avoid.check_boundaries else None,
                 n_angles=avoid.n_angles,
@@ -265,11 +335,19 @@ class Engine:
                     steered, want, self.sidestep[ids], self.side[ids], avoid.sidestep
                 )
         self.dxi[rows] = chosen
-        out = kernels.actuator_limit(kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain), self.limits)
-        if avoid is not None and avoid.guard:
-            near = guard_distance(robot.spec.diameter, avoid.safety)
+        out = kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain)
+        if robot.halts:  # no wish, no command (the conversion alone turns some robots at full speed)
+            out[:, ~chosen.any(axis=1)] = 0.0
+        out = kernels.actuator_limit(out, self.limits)
+        near = None
+        if robot.guard is not None:
+            near = robot.guard.near
+        elif avoid is not None and safety is not None and avoid.guard:
+            near = guard_distance(robot.spec.diameter, safety)
+        if near is not None:
+            horizon = GUARD_HORIZON if avoid is None else avoid.horizon
             stop = kernels.motion_guard(
-                out[0], pose[:, 2], seen.offsets, seen["dx"], seen["dy"], near=near, horizon=GUARD_HORIZON
+                out[0], pose[:, 2], seen.offsets, seen["dx"], seen["dy"], near=near, horizon=horizon
             )
             out[0, stop] = 0.0
         return out
@@ -316,7 +394,8 @@ class Engine:
 
     def _kept(self, t: int, me: np.ndarray, others: np.ndarray, faults: FaultState | None) -> np.ndarray:
         """Which readings of robots ``me`` the dropout fault keeps (``others``: -1 for the odometry,
-        -2 for the movement sensor's reading, which is lost whole, as an object sensor's is)."""
+        -2 for the movement sensor's reading and -3 for the obstacle sensor's, each lost whole, as
+        an object sensor's is)."""
         if faults is None or not faults.faults.sensor_dropout:
             return np.ones(len(me), dtype=bool)
         kept = draws.uniform(self.seed, draws.DROPOUT, t, me, others) >= faults.faults.sensor_dropout
@@ -350,6 +429,24 @@ class Engine:
         columns["dx"], columns["dy"] = dx, dy
         return Neighbourhood(offsets, columns)
 
+    def _obstacles(self, t: int, rows: np.ndarray, x: np.ndarray, faults: FaultState | None) -> Neighbourhood:
+        """The obstacle sensor's reading of ``rows`` (:class:`~dream.swarm.robot.Obstacles`): the
+        obstacles sensed, with the sensor's noise and the world's."""
+        sensor = self.robot.obstacles
+        if sensor is None:
+            return Neighbourhood(np.zeros(len(rows) + 1, dtype=np.int64), {"dx": np.zeros(0), "dy": np.zeros(0)})
+        here = x[:2, rows].T
+        closest = sensed(sensor.obstacles, here, sensor.range)  # (k, obstacles, 2), NaN: not sensed
+        found = ~np.isnan(closest[..., 0])
+        owners, which = np.nonzero(found)
+        dx, dy = (closest[found] - here[owners]).T
+        sigma = math.hypot(sensor.noise, 0.0 if faults is None else faults.faults.sensor_noise)
+        if sigma > 0:
+            noise = draws.normal(self.seed, draws.OBSTACLE_NOISE, t, rows[owners, None], which[:, None], np.arange(2))
+            dx, dy = dx + sigma * noise[:, 0], dy + sigma * noise[:, 1]
+        offsets = np.concatenate(([0], np.cumsum(found.sum(axis=1))))
+        return Neighbourhood(offsets, {"dx": dx, "dy": dy, "distance": np.hypot(dx, dy)})
+
     # -- radio -------------------------------------------------------------------------------
     def _hear(self, t: int, rows: np.ndarray, heard: Heard, faults: FaultState | None) -> Neighbourhood:
         """The messages delivered to ``rows`` by the talking robots in range (what
@@ -365,7 +462,8 @@ class Engine:
             keep = keep * (1.0 - f.loss) * np.maximum(1.0 - f.distance_loss * gaps, 0.0)
         lossy = np.broadcast_to(keep < 1.0, senders.shape)
         if not lossy.any() and (f is None or f.burst is None):
-            self.traffic.received(rows, offsets)
+            if self.count_traffic:
+                self.traffic.received(rows, offsets)
             return inbox
         me = np.repeat(rows, np.diff(offsets))
         through = np.ones(len(senders), dtype=bool)
@@ -376,8 +474,41 @@ class Engine:
             through &= ~self._burst(t, me, senders, f.burst)
         if faults is not None:
             faults.messages_lost += int((~through).sum())
-        self.traffic.received(rows, offsets, through)
+        if self.count_traffic:
+            self.traffic.received(rows, offsets, through)
         return inbox.where(through)
+
+    def _lossless(self, faults: FaultState | None) -> bool:
+        """Whether every message in the radio's range gets through (no loss of any kind)."""
+        f = None if faults is None else faults.faults
+        radio_loss = 0.0 if self.robot.radio is None else self.robot.radio.loss
+        return radio_loss == 0 and (f is None or (f.loss == 0 and f.distance_loss == 0 and f.burst is None))
+
+    def _board_cells(
+        self,
+        rows: np.ndarray,
+        positions: np.ndarray,
+        talking: np.ndarray,
+        here: np.ndarray,
+        fields: tuple[str, str],
+        seen: tuple[Any, Any],
+        same: float,
+        virtual: tuple[Any, Any],
+        **shape: Any,
+    ) -> VoronoiCells:
+        """:meth:`View.cells` of ``rows`` when every message in range gets through: what each hears
+        is what the talking robots within range of it (``positions`` ``(n, 2)``) have on the board,
+        and :func:`dream.kernels.heard_cells` looks only at the messages near each cell."""
+        missing = [name for name in fields if name not in self.board]
+        if missing:
+            raise KeyError(f"no field {missing[0]!r} in the radio's messages (its fields: {', '.join(self.board)})")
+        board = np.column_stack([self.board[name] for name in fields]).astype(np.float64)
+        said = np.where(talking[:, None], board, np.nan)
+        assert self.robot.radio is not None  # a range radio
+        radio_range = self.robot.radio.range
+        return kernels.heard_cells(
+            here, rows, positions, said, range=radio_range, seen=seen, same=same, virtual=virtual, **shape
+        )
 
     def _burst(self, t: int, me: np.ndarray, others: np.ndarray, burst: tuple[float, float]) -> np.ndarray:
         """Each link's Gilbert-Elliott state after this message (True: in a loss burst)."""
@@ -408,7 +539,8 @@ class Engine:
         if not said:
             return
         senders = np.concatenate([rows for rows, _ in said])
-        np.add.at(self.traffic.sent, senders, 1)
+        if self.count_traffic:
+            np.add.at(self.traffic.sent, senders, 1)
         fields = {key: np.concatenate([message[key] for _, message in said]) for key in self.kinds}
         delay = np.full(len(senders), self.robot.radio.latency if self.robot.radio is not None else 0)
         if faults is not None:
@@ -472,9 +604,9 @@ def _per_robot(values: Any, k: int, kind: np.dtype, what: str, shape: tuple[int,
     """``values`` as ``(k, *shape)`` of ``kind``: one value (of ``shape``) per deciding robot, or one
     for all of them; anything else (a shape that would spread one robot's value over the others,
     a float for an int field) is refused, naming ``what``."""
+    if type(values) is np.ndarray and values.shape == (k, *shape) and values.dtype == kind:
+        return values  # already one value of its kind per robot (most memory): no copy to make
     array = np.asarray(values)
-    if array.shape == (k, *shape) and array.dtype == kind:  # as it should be: nothing to convert
-        return array
     if array.shape not in (shape, (k, *shape)):
         want = ", ".join(map(str, (k, *shape))) + ("," if not shape else "")
         raise ValueError(f"{what} must have one value per deciding robot, shape ({want}), got shape {array.shape}")

@@ -12,7 +12,7 @@ radio delivered (sender and the message's fields). Reductions run in the Rust ke
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -162,3 +162,18 @@ class Neighbourhood:
             array.flags.writeable = False
         self.read_only = True
         return self
+
+
+class Deferred(Neighbourhood):
+    """A neighbourhood found on first use: ``load()`` gives the one it stands for, the first time
+    any of its rows or columns is read (a robot's inbox that its decision may never read)."""
+
+    def __init__(self, load: Callable[[], Neighbourhood]) -> None:
+        self._load = load
+
+    def __getattr__(self, name: str) -> Any:
+        # Called only for what the instance lacks: every attribute of a neighbourhood, until loaded.
+        if name.startswith("__") or name == "_load":
+            raise AttributeError(name)
+        self.__dict__.update(vars(self._load()))
+        return getattr(self, name)

@@ -23,15 +23,23 @@ world's faults applied to the arrays, and both give the same poses at every step
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
 
-from dream._checks import as_offsets, check_nonnegative
+from dream import rules
+from dream._checks import Bounds, as_offsets, check_nonnegative
+from dream.kernels import VoronoiCells
+from dream.obstacles import Obstacle
+from dream.robot import GUARD_HORIZON
 from dream.specs import GRITSBOT, RobotSpec
+from dream.swarm.cells import known_cells
 from dream.swarm.neighbourhood import Neighbourhood
+
+#: CSR rows of points, one row per deciding robot: ``(offsets (k + 1,), points (m, 2))``.
+Rows = tuple[Any, Any]
 
 
 @dataclass(frozen=True)
@@ -103,7 +111,7 @@ class Avoid:
     ``safety`` (m, centre to centre), and that keeps the robot ``margin`` (m, default its radius)
     inside the arena when ``check_boundaries``; a robot HRVO stops while it wants to move steps
     aside for ``sidestep`` decisions; the motion guard (``guard``) stops a unicycle whose turn
-    would close in on a detected robot's body.
+    would close in on a detected robot's body within ``horizon`` (s).
     """
 
     safety: float = 0.24
@@ -111,18 +119,52 @@ class Avoid:
     margin: float | None = None
     sidestep: int = 10
     guard: bool = True
+    horizon: float = GUARD_HORIZON
     n_angles: int = 20
     n_speeds: int = 10
     include_preferred: bool = True
 
     def __post_init__(self) -> None:
         check_nonnegative(self.safety, "Avoid safety")
+        check_nonnegative(self.horizon, "Avoid horizon")
         if self.margin is not None:
             check_nonnegative(self.margin, "Avoid margin")
         for name in ("sidestep", "n_angles", "n_speeds"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < (name != "sidestep"):
                 raise ValueError(f"Avoid {name} must be a whole number >= {int(name != 'sidestep')}, got {value!r}")
+
+
+@dataclass(frozen=True)
+class Obstacles:
+    """An obstacle sensor: the closest point of each of ``obstacles`` (the world's
+    :class:`~dream.obstacles.Obstacle` list, read where they are now, moving ones too) within
+    ``range`` (m, inclusive), none for an obstacle the robot is inside of, with Gaussian ``noise``
+    on every coordinate."""
+
+    obstacles: Sequence[Obstacle] = field(default=(), compare=False)
+    range: float = 1.0
+    noise: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("range", "noise"):
+            check_nonnegative(getattr(self, name), f"Obstacles {name}")
+        if not all(isinstance(o, Obstacle) for o in self.obstacles):
+            raise ValueError("`Obstacles obstacles` must be a sequence of dream.Obstacle")
+
+
+@dataclass(frozen=True)
+class Guard:
+    """The motion guard with a distance of its own: a unicycle whose drive along its heading
+    would bring it within ``near`` (m, centre to centre) of a robot it sees in the next
+    :data:`~dream.robot.GUARD_HORIZON` seconds gets no linear speed (it still turns). Without
+    :class:`Avoid` it is the robot's only safety layer (no HRVO); with it, it replaces the
+    distance :class:`Avoid` derives from its safety radius."""
+
+    near: float
+
+    def __post_init__(self) -> None:
+        check_nonnegative(self.near, "Guard near")
 
 
 @dataclass
@@ -146,6 +188,10 @@ class View:
         The messages the radio delivered: ``sender`` and the declared fields.
     memory : dict of (k,) arrays
         The robots' memory (:attr:`SwarmRobot.memory`); change it in place or assign new arrays.
+    obstacles : Neighbourhood
+        (read-only) The obstacle sensor's reading (:class:`Obstacles`), one entry per obstacle
+        sensed, in the sensor's order: columns ``dx``, ``dy`` (the closest point less the
+        robot's position) and ``distance``; empty rows without an obstacle sensor.
     """
 
     ids: np.ndarray
@@ -154,10 +200,15 @@ class View:
     seen: Neighbourhood
     heard: Neighbourhood
     memory: dict[str, np.ndarray]
+    obstacles: Neighbourhood | None = None
     said: dict[str, np.ndarray] | None = field(default=None, repr=False)
     saying: Any = field(default=None, repr=False)  #: which rows send (``where`` of :meth:`send`)
     straight: Any = field(default=None, repr=False)  #: which rows skip HRVO (:meth:`direct`)
     heeded: Any = field(default=None, repr=False)  #: which detections the safety layer heeds (:meth:`heed`)
+    safety: Any = field(default=None, repr=False)  #: each row's safety radius (:meth:`keep_apart`)
+    turn: Any = field(default=None, repr=False)  #: each row's side and stop (:meth:`aside`)
+    #: The engine's way to :meth:`cells` when every message in range got through (None: the rows').
+    board_cells: Any = field(default=None, repr=False)
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -183,6 +234,55 @@ class View:
         followers). A later call replaces an earlier one."""
         self.heeded = detections
 
+    def keep_apart(self, safety: Any) -> None:
+        """Plan the rows' HRVO and motion guard with their own combined safety radii ``safety``
+        ``(k,)`` (m) instead of :attr:`Avoid.safety`: for a robot that squeezes through a gap, say.
+        A later call replaces an earlier one."""
+        self.safety = safety
+
+    def aside(self, side: Any = 0.0, stop: Any = False) -> None:
+        """Choose how the rows step aside when HRVO blocks them: ``side`` ``(k,)`` (1.0: to the
+        right, -1.0: to the left, 0.0: as before) and ``stop`` ``(k,)`` bool (stop stepping aside
+        now). A later call replaces an earlier one."""
+        self.turn = (side, stop)
+
+    def cells(
+        self,
+        x: str = "x",
+        y: str = "y",
+        *,
+        seen: Rows | None = None,
+        same: float = 0.0,
+        virtual: Rows | None = None,
+        radius: float,
+        bounds: Bounds,
+        resolution: int = 64,
+        polygons: bool = False,
+    ) -> VoronoiCells:
+        """Each deciding robot's Voronoi cell from what it alone knows (:func:`dream.swarm.known_cells`):
+        the disc of ``radius`` (m) around its odometry position within ``bounds``, clipped by the
+        positions its messages give (fields ``x`` and ``y``), then by the positions it sees,
+        ``seen`` (CSR rows ``(offsets (k + 1,), points (m, 2))``), that lie farther than ``same``
+        (m) from every one of those (a robot seen that no message accounts for, a crashed one
+        say), then by its ``virtual`` agents (CSR rows; :func:`dream.kernels.obstacle_agents`).
+
+        When every message in the radio's range got through (no loss of any kind), the engine
+        looks only at the messages near each cell (:func:`dream.kernels.heard_cells`): a robot in a
+        crowd hears hundreds, of which a dozen shape its cell. The cells are the same, to the bit.
+        """
+        empty: Rows = (np.zeros(len(self) + 1, dtype=np.int64), np.zeros((0, 2)))
+        seen, virtual = seen or empty, virtual or empty
+        here = self.pose[:, :2]
+        shape: dict[str, Any] = {"radius": radius, "bounds": bounds, "resolution": resolution, "polygons": polygons}
+        if self.board_cells is not None:
+            cells: VoronoiCells = self.board_cells(here, (x, y), seen, same, virtual, **shape)
+            return cells
+        heard = self.heard
+        messages = np.column_stack((heard[x], heard[y])).reshape(-1, 2)
+        far = rules.far_from(seen[1], messages, same, offsets=(seen[0], heard.offsets))
+        silent = (np.concatenate(([0], np.cumsum(far)))[np.asarray(seen[0])], np.asarray(seen[1])[far])
+        return known_cells(here, (heard.offsets, messages), silent, virtual, **shape)
+
 
 class SwarmRobot:
     """Base class of a robot written on arrays (see the module docs).
@@ -197,6 +297,14 @@ class SwarmRobot:
         The radio and its message fields.
     avoid : Avoid or None
         The HRVO safety layer on the wished velocities.
+    obstacles : Obstacles or None
+        The obstacle sensor.
+    guard : Guard or None
+        The motion guard at a distance of its own (with or without :attr:`avoid`).
+    halts : bool
+        A robot that wishes no velocity gets no command at all (default False: the unicycle
+        conversion's, which for a zero wish turns a robot heading between -pi and -pi/2 at full
+        speed, ``atan2(+0, -0) = pi``).
     memory : dict
         Each memory field's initial value (a float or an int, or an array of them: each robot then
         keeps one of that shape), kept per robot between decisions.
@@ -212,6 +320,9 @@ class SwarmRobot:
     movement: Movement | None = None
     radio: Radio | None = None
     avoid: Avoid | None = None
+    obstacles: Obstacles | None = None
+    guard: Guard | None = None
+    halts: bool = False
     memory: ClassVar[dict[str, Any]] = {}
     odometry_noise: float = 0.0
     vel_gain: float = 0.8

@@ -6,7 +6,8 @@ shape ``(2,)`` or ``(1, 2)``, scalars for its counters) and for a whole swarm (`
 with every robot's; so the two modes cannot drift apart. Every rule is distributed: it uses
 only what one robot knows (its position, its goal, its counters) and fixed, shared parameters.
 
-Units: metres, metres per second.
+The ring's rules (hrvo-circle's barrier, docking, squeezing) live in :mod:`dream.rules.ring`
+and are read from here too. Units: metres, metres per second.
 """
 
 from __future__ import annotations
@@ -18,6 +19,19 @@ import numpy as np
 
 from dream import kernels
 from dream._checks import Bounds, FloatArray
+from dream.rules.ring import (  # noqa: F401 (read from dream.rules too)
+    BAND_MARGIN,
+    arc_merge,
+    arc_release,
+    clear_way,
+    dock,
+    goal_taken,
+    grow_over,
+    outside_ring,
+    squeezes,
+    stall,
+    watch_ends,
+)
 
 #: Angle (rad) the roundabout aims ahead of the island's tangent point, so that a robot on
 #: the island's edge still has somewhere to go.
@@ -80,66 +94,6 @@ def moves_on(state: Any, everyone_level: Any, unreached: Any, n_goals: int) -> n
     return np.asarray(everyone_level, dtype=bool) & (state < n_goals) & ~np.asarray(unreached, dtype=bool)
 
 
-def arc_merge(
-    n: int, state: Any, left: Any, right: Any, released: Any, rows: Any, offsets: Any, heard: Any
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One radio round of the arrival barrier: robots merge the arcs of ids they know to have
-    arrived, and the highest level known to be complete.
-
-    Robot ``i`` of ``n`` (ids around a ring, cyclic) at level ``state`` (goals reached) knows
-    that robots ``i - left, ..., i + right`` (mod ``n``) have reached at least ``state`` goals,
-    and that every robot has reached at least ``released`` goals. A message from robot ``j``
-    at level ``state_j >= state`` whose arc overlaps or touches robot i's extends it (trying
-    ``j``'s arc shifted by ``-n, 0, n`` about the ring); any message raises ``released`` to
-    the sender's. Each message is compared with the arc the robot had before the round, so the
-    order of messages does not matter. Facts only ever become true (levels never fall), so a
-    stale, late or repeated message never makes an arc claim too much.
-
-    Parameters
-    ----------
-    n : int
-        Robots around the ring.
-    state, left, right, released : (m,) or () int array_like
-        The ``m`` receiving robots' levels, arcs and released levels.
-    rows : (k,) int array_like
-        Each message's receiving robot (index into the ``m``).
-    offsets : (k,) int array_like
-        The sender's id less the receiver's, mod ``n``.
-    heard : (k, 4) int array_like
-        Each message's ``[state, left, right, released]``.
-
-    Returns
-    -------
-    left, right, released : (m,) or () int64 ndarray
-        After the round; an arc covering every robot is capped at ``n - 1`` on either side.
-        Complete arcs release their level in :func:`arc_release`.
-    """
-    state, left, right, released = (np.asarray(v, dtype=np.int64) for v in (state, left, right, released))
-    rows = np.asarray(rows, dtype=np.intp)
-    heard = np.asarray(heard, dtype=np.int64).reshape(-1, 4)
-    offsets = np.asarray(offsets, dtype=np.int64)
-    own_left, own_right = left.reshape(-1)[rows], right.reshape(-1)[rows]
-    useful = heard[:, 0] >= state.reshape(-1)[rows]  # the sender's arc holds at its level, so at any lower one
-    new_left, new_right = own_left.copy(), own_right.copy()
-    for shift in (-n, 0, n):
-        low, high = offsets + shift - heard[:, 1], offsets + shift + heard[:, 2]
-        touch = useful & (low <= own_right + 1) & (high >= -own_left - 1)
-        new_left = np.where(touch, np.maximum(new_left, -low), new_left)
-        new_right = np.where(touch, np.maximum(new_right, high), new_right)
-    out = [left.reshape(-1).copy(), right.reshape(-1).copy(), released.reshape(-1).copy()]
-    for total, values in zip(out, (new_left, new_right, heard[:, 3])):
-        np.maximum.at(total, rows, values)
-    shape = state.shape
-    return np.minimum(out[0], n - 1).reshape(shape), np.minimum(out[1], n - 1).reshape(shape), out[2].reshape(shape)
-
-
-def arc_release(n: int, state: Any, left: Any, right: Any, released: Any) -> np.ndarray:
-    """The released level ``(m,)`` or ``()``: a robot whose arc (:func:`arc_merge`) covers all
-    ``n`` robots knows that every robot has reached its level, and releases it."""
-    full = np.asarray(left) + np.asarray(right) + 1 >= n
-    return np.maximum(np.asarray(released, dtype=np.int64), np.where(full, np.asarray(state, dtype=np.int64), -1))
-
-
 def roundabout_aim(positions: Any, goals: Any, semi_axes: tuple[float, float], island: float) -> FloatArray:
     """The point a robot aims at so that every robot turns the same way around the centre.
 
@@ -199,82 +153,6 @@ def roundabout_aim(positions: Any, goals: Any, semi_axes: tuple[float, float], i
     angles = np.arctan2(q[..., 1], q[..., 0]) + turns
     g[crosses] = island * np.stack((np.cos(angles), np.sin(angles)), axis=-1)
     return g * scale
-
-
-def outside_ring(positions: Any, semi_axes: tuple[float, float]) -> np.ndarray:
-    """Whether each position lies beyond the ring with ``semi_axes`` (m), centred on the origin."""
-    q = np.asarray(positions, dtype=np.float64) / np.asarray(semi_axes, dtype=np.float64)
-    return np.hypot(q[..., 0], q[..., 1]) > 1.0
-
-
-def dock(
-    positions: Any, goals: Any, semi_axes: tuple[float, float], depth: float, width: float, lead: float
-) -> tuple[FloatArray, np.ndarray]:
-    """Where a robot heads for its goal on a packed ring, reached only from the inside.
-
-    On a ring whose goals are barely a robot's width apart, robots parked at their goals form a
-    wall: a robot that meets the ring beside its goal cannot slide along it, and one that slips
-    outside is shut out. So each goal has a dock, ``depth`` inside it along the ring's inward
-    normal, and a corridor of half-width ``width`` from the dock to the goal. A robot in its
-    corridor heads for the goal; one in the ring's band (beyond the ring of docks, through
-    ``semi_axes``'s scaling) but out of its corridor first goes back in, towards the docks' ring
-    ``lead`` radians ahead counter-clockwise (with the roundabout's traffic); any other heads for
-    its dock (through :func:`roundabout_aim`).
-
-    Parameters
-    ----------
-    positions, goals : (n, 2) or (2,) array_like
-        Positions and goals on the ring (m), relative to the arena's centre.
-    semi_axes : (float, float)
-        Semi-axes of the ring (m).
-    depth, width : float
-        The dock's depth and the corridor's half-width (m).
-    lead : float
-        How far ahead (rad, about the centre) a robot in the band aims as it goes back in.
-
-    Returns
-    -------
-    targets : (n, 2) or (2,) ndarray
-        The goal, a point on the docks' ring, or the dock (m).
-    band : (n,) or () bool ndarray
-        Whether the robot is beyond its dock's ring, where stepping aside pushes it outwards.
-    """
-    scale = np.asarray(semi_axes, dtype=np.float64)
-    p = np.asarray(positions, dtype=np.float64)
-    g = np.asarray(goals, dtype=np.float64)
-    normal = g / scale**2  # the ring's outward normal at the goal
-    normal = normal / np.hypot(normal[..., 0], normal[..., 1])[..., None]
-    docks = g - depth * normal
-    along = np.sum((p - docks) * normal, axis=-1) / depth  # 0 at the dock, 1 at the goal
-    nearest = docks + depth * np.clip(along, 0.0, 1.0)[..., None] * normal
-    corridor = (np.hypot(*np.moveaxis(p - nearest, -1, 0)) < width) & (along > -0.5)
-    q = p / scale
-    radius, dock_radius = np.hypot(q[..., 0], q[..., 1]), np.hypot(*np.moveaxis(docks / scale, -1, 0))
-    angle = np.arctan2(q[..., 1], q[..., 0]) + lead
-    inwards = dock_radius[..., None] * np.stack((np.cos(angle), np.sin(angle)), axis=-1) * scale
-    going_in = ~corridor & (radius > dock_radius + BAND_MARGIN)
-    targets = np.where(corridor[..., None], g, np.where(going_in[..., None], inwards, docks))
-    return targets, radius > dock_radius
-
-
-#: How far (in the ring's scaled units) beyond its dock's ring a robot turns back in (:func:`dock`),
-#: so that one on that ring does not switch between its dock and the way in.
-BAND_MARGIN = 0.02
-
-
-def clear_way(position: Any, goal: Any, others: Any, clearance: float) -> bool:
-    """Whether the straight way from ``position`` to ``goal`` ``(2,)`` keeps ``clearance`` (m) from
-    every one of ``others`` ``(k, 2)`` (robots seen, taken as standing).
-
-    HRVO forbids every velocity that would ever bring a robot within its safety radius of a
-    neighbour, even past the goal: a robot a centimetre off its goal, with a parked neighbour
-    beyond it, may not move towards it at all. Over a short, clear way the goal is safe to take.
-    """
-    others = np.asarray(others, dtype=np.float64).reshape(-1, 2)
-    p = np.asarray(position, dtype=np.float64)
-    way = np.asarray(goal, dtype=np.float64) - p
-    along = np.clip((others - p) @ way / max(float(way @ way), 1e-300), 0.0, 1.0)
-    return bool(np.all(np.hypot(*(others - p - along[:, None] * way).T) >= clearance))
 
 
 def preferred_velocity(positions: Any, aims: Any, goals: Any, v_max: float, gain: float) -> FloatArray:
@@ -583,6 +461,16 @@ def approach(
     distance = length(way)
     scale = np.minimum(1.0, v_max / (gain * np.maximum(distance, 1e-300)))
     return np.where((distance >= arrival)[..., None], gain * way * scale[..., None], 0.0)
+
+
+def momentum(positions: Any, last: Any, moving: Any, share: float) -> FloatArray:
+    """``share`` of the step ``positions - last`` ``(n, 2)`` or ``(2,)`` (m) that the robots
+    ``moving`` ``(n,)`` or ``()`` (bool: their last decision moved them) took since their last
+    decision at ``last``; zero for the others. Coverage adds it to a robot's way to its centroid
+    (:func:`approach`'s ``carry``, heavy-ball), and a moving robot sends where it is plus it: where
+    it will be at its next decision if it keeps its pace."""
+    step = np.asarray(positions, dtype=np.float64) - np.asarray(last, dtype=np.float64)
+    return np.where(np.asarray(moving, dtype=bool)[..., None], share * step, 0.0)
 
 
 def morph(start: Any, goals: Any, done: Any, total: int) -> FloatArray:

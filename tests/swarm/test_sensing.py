@@ -1,0 +1,186 @@
+"""What a swarm robot may declare besides its movement sensor and radio: an obstacle sensor
+(``Obstacles``), a motion guard of its own (``Guard``), no command for no wish (``halts``), and
+each robot's Voronoi cell from what it alone knows (``known_cells``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import dream
+from dream import Faults, Obstacle, kernels
+from dream._csr import merged
+from dream.obstacles import sensed
+from dream.specs import ROBOTARIUM
+from dream.swarm import Engine, Guard, Movement, Obstacles, SwarmRobot, known_cells
+
+
+class Reader(SwarmRobot):
+    """Wishes ``wish`` and keeps every view it was given."""
+
+    period = 1
+
+    def __init__(self, wish=(0.0, 0.0), **declared):
+        self.wish = np.asarray(wish, dtype=np.float64)
+        self.views = []
+        for key, value in declared.items():
+            setattr(self, key, value)
+
+    def decide(self, view):
+        self.views.append(view)
+        return np.tile(self.wish, (len(view), 1))
+
+
+def step(robot, x, t=1, faults=None, one_by_one=False):
+    """Robot ``robot``'s commands ``(2, n)`` for poses ``x`` at step ``t`` (from still)."""
+    n = x.shape[1]
+    engine = Engine(robot, n, 0, ROBOTARIUM, one_by_one=one_by_one)
+    state = None if faults is None else dream.World(0).inject(faults, n)
+    if state is not None:
+        state.advance(t)
+    return engine.step(t, x, np.zeros((2, n)), state)
+
+
+def test_an_obstacle_sensor_reads_the_closest_points_in_range_where_the_obstacles_are_now():
+    boxes = [Obstacle((0.5, 0.0), (0.2, 0.2)), Obstacle((3.0, 0.0), (0.2, 0.2)), Obstacle((-2.0, 0.5), (0.4, 0.4))]
+    robot = Reader(obstacles=Obstacles(boxes, range=1.0))
+    x = np.array([[0.0, 2.5, -2.0], [0.0, 0.0, 0.5], [0.0, 0.0, 0.0]])  # robot 2 is inside the third box
+    step(robot, x)
+    view = robot.views[-1]
+    want = sensed(boxes, x[:2].T, 1.0) - x[:2].T[:, None]  # (3 robots, 3 boxes, 2), NaN: not sensed
+    for r in range(3):
+        row = slice(view.obstacles.offsets[r], view.obstacles.offsets[r + 1])
+        got = np.column_stack((view.obstacles["dx"][row], view.obstacles["dy"][row]))
+        np.testing.assert_array_equal(got, want[r][~np.isnan(want[r, :, 0])])
+    assert list(view.obstacles.count) == [1, 1, 0]
+    np.testing.assert_allclose(view.obstacles["distance"], [0.4, 0.4], atol=1e-12)
+    boxes[0].center[:] = (5.0, 5.0)  # moved away: the next reading has it no more
+    step(robot, x)
+    assert list(robot.views[-1].obstacles.count) == [0, 1, 0]
+    with pytest.raises(ValueError, match="Obstacles range"):
+        Obstacles(boxes, range=-1.0)
+    with pytest.raises(ValueError, match="sequence of dream.Obstacle"):
+        Obstacles([(0.0, 0.0)])
+
+
+def test_obstacle_readings_are_noisy_and_dropped_alike_both_ways():
+    boxes = [Obstacle((0.0, 0.0), (0.2, 0.2)), Obstacle((1.0, 0.0), (0.2, 0.2))]
+    x = np.vstack((np.linspace(-0.8, 1.8, 12), np.full(12, 0.3), np.zeros(12)))
+    faults = Faults(sensor_noise=0.01, sensor_dropout=0.3)
+    readings = []
+    for one_by_one in (False, True):
+        robot = Reader(obstacles=Obstacles(boxes, range=0.8, noise=0.02))
+        step(robot, x, t=3, faults=faults, one_by_one=one_by_one)
+        ids = np.concatenate([view.ids for view in robot.views])
+        dx = np.concatenate([view.obstacles["dx"] for view in robot.views])
+        readings.append((ids, dx))
+    assert np.array_equal(readings[0][0], readings[1][0]) and np.array_equal(readings[0][1], readings[1][1])
+    assert len(readings[0][0]) < 12  # some readings were lost: those robots did not decide
+    clean = Reader(obstacles=Obstacles(boxes, range=0.8))
+    step(clean, x, t=3)
+    kept = np.isin(clean.views[0].ids, readings[0][0])
+    exact = clean.views[0].obstacles.where(np.repeat(kept, clean.views[0].obstacles.count))["dx"]
+    assert exact.shape == readings[0][1].shape and 0 < np.abs(readings[0][1] - exact).max() < 0.2
+
+
+def test_without_an_obstacle_sensor_the_rows_are_empty():
+    robot = Reader()
+    step(robot, np.array([[0.0, 1.0], [0.0, 0.0], [0.0, 0.0]]))
+    assert list(robot.views[-1].obstacles.count) == [0, 0]
+
+
+@pytest.mark.parametrize("heading", [-3.0, -2.5, -np.pi / 2 - 0.01, -np.pi / 2, -1.0, 0.5, 2.5, np.pi])
+def test_a_robot_that_halts_gets_no_command_for_no_wish(heading):
+    # The unicycle conversion of a zero velocity turns a robot heading between -pi and -pi/2 at
+    # w_max (atan2(+0, -0) = pi): coverage robots on their centroids spun, and never came to rest.
+    x = np.array([[0.0], [0.0], [heading]])
+    np.testing.assert_array_equal(step(Reader(halts=True), x), 0.0)
+    spins = -np.pi < heading < -np.pi / 2
+    assert (step(Reader(), x)[1, 0] != 0.0) == spins
+    assert step(Reader(wish=(0.1, 0.0), halts=True), x)[0, 0] == step(Reader(wish=(0.1, 0.0)), x)[0, 0]
+
+
+def test_a_guard_of_its_own_stops_a_robot_driving_into_one_it_sees_without_hrvo():
+    x = np.array([[0.0, 0.15], [0.0, 0.0], [0.0, np.pi]])  # face to face, 0.15 m apart
+    driving = step(Reader(wish=(0.1, 0.0), movement=Movement(range=0.5)), x)
+    assert driving[0, 0] > 0  # no avoidance at all: it drives on
+    guarded = step(Reader(wish=(0.1, 0.0), movement=Movement(range=0.5), guard=Guard(near=0.14)), x)
+    assert guarded[0, 0] == 0.0 and guarded[1, 0] == driving[1, 0]
+    far = step(Reader(wish=(0.1, 0.0), movement=Movement(range=0.5), guard=Guard(near=0.01)), x)
+    assert far[0, 0] > 0  # 0.08 m/s for the guard's 0.25 s leaves it 0.13 m off: beyond 1 cm, within 14 cm
+    with pytest.raises(ValueError, match="Guard near"):
+        Guard(near=-0.1)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_known_cells_are_each_robots_own_voronoi_cell(seed):
+    rng = np.random.default_rng(seed)
+    k = 30
+    here = rng.uniform(-1.4, 1.4, (k, 2))
+    kinds = []
+    for most in (12, 4, 3):  # heard, seen, virtual agents
+        counts = rng.integers(0, most, k)
+        kinds.append((np.concatenate(([0], np.cumsum(counts))), rng.uniform(-1.5, 1.5, (counts.sum(), 2))))
+    cells = known_cells(here, *kinds, radius=0.6, bounds=ROBOTARIUM.bounds, polygons=True)
+    for r in range(k):
+        rows = [points[offsets[r] : offsets[r + 1]] for offsets, points in kinds]
+        centroid, area, polygon = kernels.voronoi_cell(
+            here[r], rows[0], radius=0.6, bounds=ROBOTARIUM.bounds, virtual=np.vstack(rows[1:])
+        )
+        np.testing.assert_array_equal(cells.centroids[r], centroid)
+        assert cells.areas[r] == area
+        np.testing.assert_array_equal(cells.vertices[cells.offsets[r] : cells.offsets[r + 1]], polygon)
+        alone = known_cells(
+            here[r : r + 1], *[(np.array([0, len(row)]), row) for row in rows], radius=0.6, bounds=ROBOTARIUM.bounds
+        )
+        np.testing.assert_array_equal(alone.centroids[0], centroid)  # a row alone: the same bits
+    with pytest.raises(ValueError, match=r"`known\[1\]` offsets must be offsets of shape \(31,\)"):
+        known_cells(here, kinds[0], (np.array([0, 1]), np.zeros((1, 2))), radius=0.6, bounds=ROBOTARIUM.bounds)
+
+
+def test_merged_rows_keep_each_kind_in_order():
+    a = (np.array([0, 2, 2, 3]), np.array([1.0, 2.0, 3.0]))
+    b = (np.array([0, 0, 1, 3]), np.array([10.0, 20.0, 30.0]))
+    offsets, values = merged(a, b)
+    assert offsets.tolist() == [0, 2, 3, 6] and values.tolist() == [1.0, 2.0, 10.0, 3.0, 20.0, 30.0]
+
+
+def test_cells_from_the_board_are_the_cells_from_the_rows(monkeypatch):
+    # Without losses the engine finds each cell's messages near it on the board (heard_cells);
+    # with them, View.cells goes through every message delivered. Forced through the rows, a
+    # whole coverage run (packed start: many ties between equidistant neighbours) is the same.
+    from dream.experiments import voronoi_coverage as vc
+
+    board = vc.run(n=40, seed=2, backend="fast", steps=200, swarm=True, trace=True)
+    monkeypatch.setattr(Engine, "_lossless", lambda self, faults: False)
+    rows = vc.run(n=40, seed=2, backend="fast", steps=200, swarm=True, trace=True)
+    assert np.array_equal(board.trace, rows.trace)
+    assert np.ptp(board.trace[:, :2], axis=0).max() > 0.3  # the team did spread
+
+
+def test_a_deferred_neighbourhood_is_found_once_and_only_when_read():
+    calls = []
+
+    def load():
+        calls.append(1)
+        return dream.swarm.Neighbourhood(np.array([0, 2, 3]), {"v": np.array([1.0, 2.0, 4.0])})
+
+    hood = dream.swarm.neighbourhood.Deferred(load)
+    assert calls == []
+    assert len(hood) == 2 and hood.sum("v").tolist() == [3.0, 4.0] and hood.count.tolist() == [2, 1]
+    assert calls == [1]
+
+
+@pytest.mark.parametrize("faults", [None, Faults(loss=0.2, latency=2)], ids=["lossless", "lossy"])
+def test_runs_are_the_same_whether_or_not_the_messages_are_counted(tmp_path, faults):
+    # Without an output that shows the message counts (a trajectory log, a recording) the runner
+    # does not count them, and a lossless inbox is found only when the decision reads it (a
+    # coverage robot's never is): the run is the same.
+    from dream.experiments import voronoi_coverage as vc
+
+    runs = [
+        vc.run(n=30, seed=1, steps=150, backend="fast", swarm=True, trace=True, faults=faults, log=log)
+        for log in (None, tmp_path / "run.parquet")
+    ]
+    assert np.array_equal(runs[0].trace, runs[1].trace)
+    assert np.ptp(runs[0].trace[:, :2], axis=0).max() > 0.3
