@@ -2,15 +2,11 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 import dream
 from dream.experiments import EXPERIMENTS, Experiment, ExperimentFileError, load_file, param
-
-DATA = Path(__file__).parent / "data"
 
 
 class Still(Experiment):
@@ -210,22 +206,6 @@ def test_arena_spec_is_a_public_name():
 def test_run_refuses_unknown_experiment_names():
     with pytest.raises(ValueError, match="unknown experiment 'nope': choose one of affine-formation"):
         dream.run("nope")
-
-
-#: line-consensus, hrvo-circle, voronoi-coverage and affine-formation left the hand-written loops'
-#: timers for the swarm engine (their robots read their sensors at each decision and hear a
-#: message from the step after it was sent): their pinned trajectories no longer apply; their
-#: tests compare their runs both ways.
-PINNED = sorted(set(EXPERIMENTS) - {"line-consensus", "hrvo-circle", "voronoi-coverage", "affine-formation"})
-
-
-@pytest.mark.parametrize("name", PINNED)
-@pytest.mark.parametrize("backend", ["robotarium", "fast"])
-def test_ported_experiments_keep_their_trajectories(name, backend):
-    """Poses every 50 steps of seed 3, recorded with the hand-written loops before the runner."""
-    expected = np.load(DATA / "trajectories_seed3.npz")[f"{name}/{backend}"]
-    result = dream.run(name, seed=3, backend=backend, steps=400, trace=True)
-    np.testing.assert_allclose(result.trace[::50], expected, rtol=0, atol=1e-9)
 
 
 def _write(tmp_path, text):
