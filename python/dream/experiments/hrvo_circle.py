@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from dream import kernels, rules
+from dream import kernels, rules, timers
 from dream.backends import initial_poses
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
@@ -243,7 +243,7 @@ class CircleRobot(SwarmRobot):
         self.avoid = Avoid(safety=layout.safety, sidestep=SIDESTEP_UPDATES, horizon=horizon)
 
     def start(self, ids: np.ndarray) -> np.ndarray:
-        return START_DELAY + ids % 10
+        return timers.staggered(ids, START_DELAY, 10)
 
     def goals(self, ids: np.ndarray, heading: np.ndarray) -> np.ndarray:
         """The goals ``(k, 2)`` robots ``ids`` head for (``heading``: 0, 1 or 2; see :func:`circle_goals`)."""

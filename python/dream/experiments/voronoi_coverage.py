@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from dream import kernels, rules
+from dream import kernels, rules, timers
 from dream.backends.startup import reachable_starts
 from dream.experiments.spec import Experiment, param
 from dream.frames import Frame
@@ -176,7 +176,7 @@ class CoverageRobot(SwarmRobot):
 
     def start(self, ids: np.ndarray) -> np.ndarray:
         """Staggered: a fifth of the team talks and decides at each of five neighbouring steps."""
-        return START_DELAY + ids % 5
+        return timers.staggered(ids, START_DELAY, 5)
 
     def decide(self, view: View) -> np.ndarray:
         here, memory, seen, sensed = view.pose[:, :2], view.memory, view.seen, view.obstacles

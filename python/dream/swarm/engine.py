@@ -4,8 +4,8 @@ Every step, for the robots whose clocks say they decide (``period`` steps on eac
 clock, after its start-up delay; crashed robots never), the engine reads their odometry, their
 movement sensor and the messages their radio delivers, with the world's faults, calls
 :meth:`~dream.swarm.robot.SwarmRobot.decide` and carries the wished velocities through the
-HRVO safety layer, the unicycle conversion, the actuator limits and the motion guard. The robots
-that do not decide keep their last command.
+HRVO safety layer, the unicycle conversion, the actuator limits and the motion guard
+(:mod:`dream.swarm.safety`). The robots that do not decide keep their last command.
 
 What the robots deciding now perceive comes from one pass over their neighbours in the true
 poses (:func:`dream.kernels.perceive`, parallel in Rust); every random draw (noise, dropout,
@@ -28,22 +28,19 @@ from typing import Any
 
 import numpy as np
 
-from dream import kernels, rules
+from dream import kernels
 from dream._csr import spans
 from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
 from dream.kernels import VoronoiCells
 from dream.kernels._neighbours import Heard, Perceived
 from dream.obstacles import sensed
-from dream.robot import GUARD_HORIZON, guard_distance
 from dream.sensors import seen_velocity
 from dream.specs import ArenaSpec, SimulatorSpec
 from dream.swarm import draws
 from dream.swarm.neighbourhood import Deferred, Neighbourhood
 from dream.swarm.robot import SwarmRobot, View
+from dream.swarm.safety import DETECTION, drive
 from dream.traffic import Traffic
-
-#: The columns of a detection, in the order of their noise keys.
-DETECTION = ("distance", "bearing", "vx", "vy")
 
 
 class Engine:
@@ -247,7 +244,7 @@ class Engine:
                     f"got {heeded.dtype} of shape {heeded.shape}"
                 )
             seen = seen.where(heeded)
-        out[:, rows] = self._drive(rows, wished, self.belief[rows], seen, straight, safety)
+        out[:, rows] = drive(self, rows, wished, self.belief[rows], seen, straight, safety)
         if view.said is None:
             return None
         message = self._message(view.said, len(rows))
@@ -255,102 +252,6 @@ class Engine:
             return rows, message
         saying = _per_robot(view.saying, len(rows), np.dtype(bool), f"{name}'s senders (`where`)")
         return rows[saying], {key: values[saying] for key, values in message.items()}
-
-    def _drive(
-        self,
-        rows: np.ndarray,
-        wished: np.ndarray,
-        pose: np.ndarray,
-        seen: Neighbourhood,
-        straight: np.ndarray | None,
-        safety: np.ndarray | None = None,
-    ) -> np.ndarray:
-        """The unicycle commands ``(2, k)`` that carry out ``wished`` ``(k, 2)``: through HRVO on the
-        robots' own detections (if they avoid, and but for the rows ``straight`` flags), the
-        conversion, the limits and the motion guard; ``safety`` ``(k,)``: each row's safety radius
-        (m) instead of the Avoid's. Rows of one radius go through the kernels together (a row's
-        result never depends on the others')."""
-        avoid = self.robot.avoid
-        if avoid is None:
-            return self._drive_apart(rows, wished, pose, seen, straight, None)
-        if safety is None or not len(safety) or (safety == safety[0]).all():  # one radius for all the rows
-            radius = avoid.safety if safety is None or not len(safety) else float(safety[0])
-            return self._drive_apart(rows, wished, pose, seen, straight, radius)
-        out = np.empty((2, len(rows)))
-        for radius in np.unique(safety):
-            part = np.flatnonzero(safety == radius)
-            counts = np.diff(seen.offsets)[part]
-            hood = Neighbourhood(
-                np.concatenate(([0], np.cumsum(counts))),
-                {name: seen[name][spans(seen.offsets[:-1][part], counts)] for name in (*DETECTION, "dx", "dy")},
-            )
-            cut = None if straight is None else straight[part]
-            out[:, part] = self._drive_apart(rows[part], wished[part], pose[part], hood, cut, float(radius))
-        return out
-
-    def _drive_apart(
-        self,
-        rows: np.ndarray,
-        wished: np.ndarray,
-        pose: np.ndarray,
-        seen: Neighbourhood,
-        straight: np.ndarray | None,
-        safety: float | None,
-    ) -> np.ndarray:
-        """:meth:`_drive` for rows that keep one ``safety`` radius (m)."""
-        robot, avoid = self.robot, self.robot.avoid
-        chosen = wished
-        if avoid is not None and safety is not None:
-            chosen = wished.copy()
-            steer: slice | np.ndarray = slice(None)  # the rows that go through HRVO
-            entries: slice | np.ndarray = slice(None)  # and their detections
-            offsets = seen.offsets
-            if straight is not None:
-                steer = np.flatnonzero(~straight)
-                counts = np.diff(offsets)[steer]
-                offsets, entries = np.concatenate(([0], np.cumsum(counts))), spans(offsets[:-1][steer], counts)
-            ids, want = rows[steer], wished[steer]
-            asked = want
-            if avoid.sidestep:
-                asked, self.sidestep[ids] = rules.sidestep_preference(want, self.sidestep[ids], self.side[ids])
-            detections = tuple(seen[name][entries] for name in ("distance", "bearing", "vx", "vy"))
-            margin = robot.spec.radius if avoid.margin is None else avoid.margin
-            steered = kernels.hrvo_rows(
-                self.dxi[ids],
-                asked,
-                pose[steer, :2],
-                offsets,
-                detections,
-                safety=safety,
-                v_max=robot.spec.v_max,
-                bounds=self.arena.shrunk(margin) if avoid.check_boundaries else None,
-                n_angles=avoid.n_angles,
-                n_speeds=avoid.n_speeds,
-                include_preferred=avoid.include_preferred,
-                towards=True,  # the sensor's bearings, towards the robots seen
-            )
-            chosen[steer] = steered
-            if avoid.sidestep:
-                self.sidestep[ids], self.side[ids] = rules.sidestep_update(
-                    steered, want, self.sidestep[ids], self.side[ids], avoid.sidestep
-                )
-        self.dxi[rows] = chosen
-        out = kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain)
-        if robot.halts:  # no wish, no command (the conversion alone turns some robots at full speed)
-            out[:, ~chosen.any(axis=1)] = 0.0
-        out = kernels.actuator_limit(out, self.limits)
-        near = None
-        if robot.guard is not None:
-            near = robot.guard.near
-        elif avoid is not None and safety is not None and avoid.guard:
-            near = guard_distance(robot.spec.diameter, safety)
-        if near is not None:
-            horizon = GUARD_HORIZON if avoid is None else avoid.horizon
-            stop = kernels.motion_guard(
-                out[0], pose[:, 2], seen.offsets, seen["dx"], seen["dy"], near=near, horizon=horizon
-            )
-            out[0, stop] = 0.0
-        return out
 
     def _keep_focus(self, t: int, rows: np.ndarray, view: View, focus: int) -> None:
         """Keep what robot ``focus`` reads and hears now, if it is among ``rows`` (increasing)."""

@@ -1,0 +1,123 @@
+"""The engine's safety layer: from the velocities the robots wish to the commands they get.
+
+HRVO on each robot's own detections (rows of one safety radius together, a row's result never
+depending on the others'), stepping aside, the single-integrator to unicycle conversion, the
+robot's limits and the motion guard. The engine (:class:`~dream.swarm.engine.Engine`) owns the
+state these read and write: the last velocities ``dxi`` and the side-step counters.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from dream import kernels, rules
+from dream._csr import spans
+from dream.robot import GUARD_HORIZON, guard_distance
+from dream.swarm.neighbourhood import Neighbourhood
+
+if TYPE_CHECKING:
+    from dream.swarm.engine import Engine
+
+#: The columns of a detection that HRVO reads, in the order of their noise keys (``dx`` and
+#: ``dy``, the offsets, come with them).
+DETECTION = ("distance", "bearing", "vx", "vy")
+
+
+def drive(
+    engine: Engine,
+    rows: np.ndarray,
+    wished: np.ndarray,
+    pose: np.ndarray,
+    seen: Neighbourhood,
+    straight: np.ndarray | None,
+    safety: np.ndarray | None = None,
+) -> np.ndarray:
+    """The unicycle commands ``(2, k)`` that carry out ``wished`` ``(k, 2)``: through HRVO on the
+    robots' own detections (if they avoid, and but for the rows ``straight`` flags), the
+    conversion, the limits and the motion guard; ``safety`` ``(k,)``: each row's safety radius
+    (m) instead of the Avoid's. Rows of one radius go through the kernels together (a row's
+    result never depends on the others')."""
+    avoid = engine.robot.avoid
+    if avoid is None:
+        return _drive_apart(engine, rows, wished, pose, seen, straight, None)
+    if safety is None or not len(safety) or (safety == safety[0]).all():  # one radius for all the rows
+        radius = avoid.safety if safety is None or not len(safety) else float(safety[0])
+        return _drive_apart(engine, rows, wished, pose, seen, straight, radius)
+    out = np.empty((2, len(rows)))
+    for radius in np.unique(safety):
+        part = np.flatnonzero(safety == radius)
+        counts = np.diff(seen.offsets)[part]
+        hood = Neighbourhood(
+            np.concatenate(([0], np.cumsum(counts))),
+            {name: seen[name][spans(seen.offsets[:-1][part], counts)] for name in (*DETECTION, "dx", "dy")},
+        )
+        cut = None if straight is None else straight[part]
+        out[:, part] = _drive_apart(engine, rows[part], wished[part], pose[part], hood, cut, float(radius))
+    return out
+
+
+def _drive_apart(
+    engine: Engine,
+    rows: np.ndarray,
+    wished: np.ndarray,
+    pose: np.ndarray,
+    seen: Neighbourhood,
+    straight: np.ndarray | None,
+    safety: float | None,
+) -> np.ndarray:
+    """:func:`drive` for rows that keep one ``safety`` radius (m)."""
+    robot, avoid = engine.robot, engine.robot.avoid
+    chosen = wished
+    if avoid is not None and safety is not None:
+        chosen = wished.copy()
+        steer: slice | np.ndarray = slice(None)  # the rows that go through HRVO
+        entries: slice | np.ndarray = slice(None)  # and their detections
+        offsets = seen.offsets
+        if straight is not None:
+            steer = np.flatnonzero(~straight)
+            counts = np.diff(offsets)[steer]
+            offsets, entries = np.concatenate(([0], np.cumsum(counts))), spans(offsets[:-1][steer], counts)
+        ids, want = rows[steer], wished[steer]
+        asked = want
+        if avoid.sidestep:
+            asked, engine.sidestep[ids] = rules.sidestep_preference(want, engine.sidestep[ids], engine.side[ids])
+        detections = tuple(seen[name][entries] for name in ("distance", "bearing", "vx", "vy"))
+        margin = robot.spec.radius if avoid.margin is None else avoid.margin
+        steered = kernels.hrvo_rows(
+            engine.dxi[ids],
+            asked,
+            pose[steer, :2],
+            offsets,
+            detections,
+            safety=safety,
+            v_max=robot.spec.v_max,
+            bounds=engine.arena.shrunk(margin) if avoid.check_boundaries else None,
+            n_angles=avoid.n_angles,
+            n_speeds=avoid.n_speeds,
+            include_preferred=avoid.include_preferred,
+            towards=True,  # the sensor's bearings, towards the robots seen
+        )
+        chosen[steer] = steered
+        if avoid.sidestep:
+            engine.sidestep[ids], engine.side[ids] = rules.sidestep_update(
+                steered, want, engine.sidestep[ids], engine.side[ids], avoid.sidestep
+            )
+    engine.dxi[rows] = chosen
+    out = kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain)
+    if robot.halts:  # no wish, no command (the conversion alone turns some robots at full speed)
+        out[:, ~chosen.any(axis=1)] = 0.0
+    out = kernels.actuator_limit(out, engine.limits)
+    near = None
+    if robot.guard is not None:
+        near = robot.guard.near
+    elif avoid is not None and safety is not None and avoid.guard:
+        near = guard_distance(robot.spec.diameter, safety)
+    if near is not None:
+        horizon = GUARD_HORIZON if avoid is None else avoid.horizon
+        stop = kernels.motion_guard(
+            out[0], pose[:, 2], seen.offsets, seen["dx"], seen["dy"], near=near, horizon=horizon
+        )
+        out[0, stop] = 0.0
+    return out
