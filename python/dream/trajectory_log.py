@@ -100,7 +100,7 @@ def step_columns(stepper: Stepper, sim: Backend, step: int, poses: np.ndarray) -
 
 def run_metadata(stepper: Stepper, sim: Backend, every: int) -> dict[str, Any]:
     """What the log's schema metadata says of the run (JSON-ready values)."""
-    from dream import __version__
+    from dream._version import version
 
     exp = stepper.exp
     return {
@@ -109,7 +109,7 @@ def run_metadata(stepper: Stepper, sim: Backend, every: int) -> dict[str, Any]:
         "seed": stepper.world.seed or 0,
         "params": exp.params,
         "faults": {} if stepper.state is None else stepper.state.faults.to_dict(),
-        "version": __version__,
+        "version": version(),
         "backend": sim.name,
         "swarm": stepper.swarm,
         "log_every": every,

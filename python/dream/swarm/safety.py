@@ -3,22 +3,34 @@
 HRVO on each robot's own detections (rows of one safety radius together, a row's result never
 depending on the others'), stepping aside, the single-integrator to unicycle conversion, the
 robot's limits and the motion guard. The engine (:class:`~dream.swarm.engine.Engine`) owns the
-state these read and write: the last velocities ``dxi`` and the side-step counters.
+state these read and write (:class:`Driver`): the last velocities ``dxi`` and the side-step
+counters.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
 from dream import kernels, rules
 from dream._csr import spans
 from dream.robot import GUARD_HORIZON, guard_distance
+from dream.specs import ArenaSpec, RobotSpec
 from dream.swarm.neighbourhood import Neighbourhood
+from dream.swarm.robot import SwarmRobot
 
-if TYPE_CHECKING:
-    from dream.swarm.engine import Engine
+
+class Driver(Protocol):
+    """What the safety layer reads and writes of the engine that runs it."""
+
+    robot: SwarmRobot
+    arena: ArenaSpec
+    limits: RobotSpec  #: the robot's limits within the simulator's
+    dxi: np.ndarray  #: (n, 2) each robot's last chosen velocity (m/s), HRVO's reciprocal term
+    sidestep: np.ndarray  #: (n,) int: decisions left stepping aside
+    side: np.ndarray  #: (n,) which side each robot steps aside to
+
 
 #: The columns of a detection that HRVO reads, in the order of their noise keys (``dx`` and
 #: ``dy``, the offsets, come with them).
@@ -26,7 +38,7 @@ DETECTION = ("distance", "bearing", "vx", "vy")
 
 
 def drive(
-    engine: Engine,
+    engine: Driver,
     rows: np.ndarray,
     wished: np.ndarray,
     pose: np.ndarray,
@@ -59,7 +71,7 @@ def drive(
 
 
 def _drive_apart(
-    engine: Engine,
+    engine: Driver,
     rows: np.ndarray,
     wished: np.ndarray,
     pose: np.ndarray,
