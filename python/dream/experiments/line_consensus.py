@@ -1,31 +1,11 @@
 """Line consensus (thesis 3.2): robots agree, over a communication graph, on a line.
 
-Each robot knows only the positions its graph neighbours send by radio. It heads for
-``x_i = mean_j (x_j + (id_j - id_i) d)`` and ``y_i = mean_j y_j`` over its neighbours j
-(spacing d), through HRVO so that the robots crossing each other's way do not collide. Where
-the graph is connected, the team converges to a horizontal line ordered by id, d apart.
-Six robots use the thesis's adjacency matrix; more robots use a ring plus random chords.
-
-Beyond the thesis's arena (more than seven robots, a line longer than 2 m) two things change.
-The robots start scattered over a strip as long as the line (about one robot per square metre:
-a block at the centre made every robot cross the crowd of those heading the other way, and 1000
-robots jammed in it, 700 still there after 12,000 steps), and a robot whose
-place is far away along the line travels *beside* it: it keeps its own row, or, near the
-line, a passing lane ``LANE`` above it (heading right) or below it (heading left), and only
-joins the line once it is within a spacing of its place. Without this, the line forms in y
-first and a robot that still has to pass others is stuck behind them on it; its neighbours'
-targets then depend on the straggler, and the whole team converges at its pace (N = 20 took
-over 4000 steps, N = 100 never got there). While travelling, a robot sends the y it heads for
-rather than its own, so that its detour does not pull the others' line. These robots also step
-aside when HRVO blocks them, and settle their last centimetres without HRVO, whose cones
-otherwise forbid the very direction of a neighbour 0.3 m away on the line and keep the line
-shaking sideways (:func:`dream.rules.settles`, :meth:`dream.swarm.View.direct`).
-
-The robot is one :class:`LineRobot`, written on arrays (:mod:`dream.swarm`): the runner runs it
-robot by robot, or as one swarm (``swarm=True``), with the same poses at every step, under
-every fault. With ``resilient`` = F it filters what it hears by W-MSR
-(:meth:`dream.swarm.Neighbourhood.wmsr_mean`).
-
+Each robot knows only the positions its graph neighbours send by radio and heads for
+``x_i = mean_j (x_j + (id_j - id_i) d)``, ``y_i = mean_j y_j`` through HRVO; where the graph is
+connected, the team converges to a horizontal line ordered by id, d apart. One :class:`LineRobot`,
+written on arrays, runs robot by robot and as one swarm (``swarm=True``) with the same poses at
+every step; with ``resilient`` = F it filters what it hears by W-MSR. How larger teams travel
+beside the line and settle on it: docs/experiments/line-consensus.md.
 Success: y spread and spacing error below 0.02 m, zero collisions.
 """
 
