@@ -23,6 +23,13 @@ def test_parallel_env_passes_pettingzoos_api_test(experiment):
     parallel_api_test(parallel_env(experiment, n=10), num_cycles=200)
 
 
+@pytest.mark.parametrize(("experiment", "n"), [("affine-formation", 7), ("voronoi-coverage", 10)])
+def test_every_built_in_is_a_learning_world(experiment, n):
+    # The learner takes the robots' place: the operator's orders to affine-formation's leaders
+    # and voronoi-coverage's own sensors stay out of its way.
+    parallel_api_test(parallel_env(experiment, n=n), num_cycles=60)
+
+
 @pytest.mark.filterwarnings("ignore:.*Box observation space m..imum value is .*infinity")
 def test_team_env_passes_gymnasiums_checker():
     check_env(team_env("hrvo-circle", n=5, max_steps=40), skip_render_check=True)

@@ -103,8 +103,8 @@ class AffineFormation(Experiment):
 
     def before_step(self, step: int) -> None:
         """The operator's orders to the leaders (the plan's shapes, on the world's time), and the bars."""
-        if step in self.orders:
-            assert self.engine is not None
+        assert self.engine is not None
+        if step in self.orders and "order" in self.engine.memory:  # a learner (dream.rl) takes none
             self.engine.memory["order"][self.leader] = self.orders[step]
         for _, enter, leave, _, gap in self.passes:
             if step == enter:
