@@ -132,6 +132,33 @@ class Faults:
                 raise ValueError(f"--fault {option!r}: {err} (kinds: {kinds})") from None
         return cls(**settings)
 
+    @classmethod
+    def every_kind(cls, **changes: Any) -> Faults:
+        """Every kind of fault at once, at rates a team can live through (any changed by name):
+        the stress under which a robot must still run the same robot by robot and as a swarm."""
+        return cls(**{**_EVERY_KIND, **changes})
+
+
+#: The rates of :meth:`Faults.every_kind`.
+_EVERY_KIND: dict[str, Any] = {
+    "loss": 0.2,
+    "burst": (0.05, 0.3),
+    "distance_loss": 0.2,
+    "latency": 3,
+    "jitter": 2,
+    "crash": 0.1,
+    "crash_at": 40,
+    "stuck": 0.1,
+    "stuck_at": 60,
+    "byzantine": 2,
+    "lie": "random",
+    "sensor_dropout": 0.05,
+    "sensor_noise": 0.01,
+    "drift": 0.05,
+    "clock_jitter": 1,
+    "actuator_noise": 0.01,
+}
+
 
 def _parse_one(kind: str, value: str) -> dict[str, Any]:
     if kind in ("crash", "stuck"):

@@ -106,24 +106,7 @@ def test_hrvo_circle_is_the_same_robot_by_robot_and_as_a_swarm(faults):
 
 
 def test_hrvo_circle_is_the_same_both_ways_under_every_fault_kind():
-    every = dream.Faults(
-        loss=0.2,
-        burst=(0.05, 0.3),
-        distance_loss=0.2,
-        latency=3,
-        jitter=2,
-        crash=0.1,
-        crash_at=40,
-        stuck=0.1,
-        stuck_at=60,
-        byzantine=2,
-        lie="random",
-        sensor_dropout=0.05,
-        sensor_noise=0.01,
-        drift=0.05,
-        clock_jitter=1,
-        actuator_noise=0.01,
-    )
+    every = dream.Faults.every_kind()
     robots, swarm = (
         hrvo_circle.run(n=20, seed=1, backend="fast", steps=500, trace=True, swarm=way, faults=every)
         for way in (False, True)

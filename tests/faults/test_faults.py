@@ -247,3 +247,11 @@ def test_success_must_hold_for_the_experiments_hold_steps():
 def test_hold_steps_must_be_a_whole_number():
     with pytest.raises(TypeError, match=r"Bad.hold_steps must be an integer >= 0, got -1"):
         type("Bad", (Parked,), {"hold_steps": -1})
+
+
+def test_every_kind_turns_on_every_fault_kind_and_takes_changes_by_name():
+    from dream.faults import KINDS
+
+    every = Faults.every_kind()
+    assert set(every.to_dict()) >= set(KINDS)  # each kind the CLI knows differs from no fault
+    assert Faults.every_kind(loss=0.5).loss == 0.5 and Faults.every_kind(loss=0.5).latency == every.latency

@@ -16,24 +16,7 @@ from dream.experiments.files import load_file
 from dream.swarm import Avoid, Movement, Radio, SwarmRobot, View, draws
 
 ROOT = Path(__file__).resolve().parents[2]
-EVERY_FAULT = Faults(
-    loss=0.2,
-    burst=(0.05, 0.3),
-    distance_loss=0.2,
-    latency=3,
-    jitter=2,
-    crash=0.1,
-    crash_at=40,
-    stuck=0.1,
-    stuck_at=60,
-    byzantine=2,
-    lie="random",
-    sensor_dropout=0.05,
-    sensor_noise=0.01,
-    drift=0.05,
-    clock_jitter=1,
-    actuator_noise=0.01,
-)
+EVERY_FAULT = Faults.every_kind()
 
 
 def rendezvous():
