@@ -37,7 +37,7 @@ import numpy as np
 from dream import kernels
 from dream.backends import make_robotarium, rules_named
 from dream.experiments import Experiment
-from dream.experiments.runner import Stepper
+from dream.experiments.stepper import Stepper
 from dream.faults import Faults
 from dream.rl.learner import goals_of, learning_class
 from dream.rl.observation import Layout

@@ -180,6 +180,3 @@ class AffineFormation(Experiment):
             roles=np.where(self.leader, "leader", "follower"),
             title=f"{NAME}: follower error {self.error:.3f} m, bar contacts {self.contacts}",
         )
-
-
-run = AffineFormation.run
