@@ -134,7 +134,7 @@ class Engine:
         velocities = seen_velocity(commands, x[2])
         talking = self.sent_at >= 0
         batches = np.split(rows, len(rows)) if self.one_by_one else [rows]
-        return [self._view(t, b, clock[b], x, velocities, talking, faults) for b in batches]
+        return [self._view(t, b, clock[b], x, commands, velocities, talking, faults) for b in batches]
 
     def act(
         self,
@@ -159,6 +159,7 @@ class Engine:
         rows: np.ndarray,
         clock: np.ndarray,
         x: np.ndarray,
+        commands: np.ndarray,
         velocities: tuple[np.ndarray, np.ndarray],
         talking: np.ndarray,
         faults: FaultState | None,
@@ -190,8 +191,8 @@ class Engine:
             )
         else:
             inbox = self._hear(t, rows, heard, faults).frozen()
-        ids = rows.copy()
-        ids.flags.writeable = False
+        ids, command = rows.copy(), commands[:, rows].T.copy()
+        ids.flags.writeable = command.flags.writeable = False
         view = View(
             ids,
             clock.copy(),
@@ -200,6 +201,7 @@ class Engine:
             inbox,
             {key: values[rows] for key, values in self.memory.items()},
             self._obstacles(t, rows, x, faults).frozen(),
+            command,
         )
         if lossless:
             view.board_cells = partial(self._board_cells, rows, x[:2].T, talking)
