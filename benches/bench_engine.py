@@ -125,9 +125,7 @@ def main() -> None:
         engine, x, commands = scene(n)
         whole, inside, rest, cpu_rest = timed_steps(stepper(engine, x, commands))
         own, cpu_own = rest / n * 1e6, cpu_rest / n * 1e6
-        print(
-            f"{n:>9,} {whole * 1e3:>10.1f} {inside * 1e3:>13.1f} {own:>22.2f} {cpu_own:>18.2f} {n / whole:>14,.0f}"
-        )
+        print(f"{n:>9,} {whole * 1e3:>10.1f} {inside * 1e3:>13.1f} {own:>22.2f} {cpu_own:>18.2f} {n / whole:>14,.0f}")
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     print(f"peak RSS {rss:,.0f} MiB; {when}; kernels: {dream.kernels.IMPLEMENTATION}")

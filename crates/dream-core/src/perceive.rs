@@ -222,8 +222,16 @@ mod tests {
         };
         let talking = [true, true, false, true];
         let speeds: &[f64] = &[0.5, 0.1, 0.2, 0.3];
-        let (seen, heard) =
-            perceive(&xs, &ys, &headings, &[0, 3], Some(sight), Some((1.0, &talking)), &[speeds]).unwrap();
+        let (seen, heard) = perceive(
+            &xs,
+            &ys,
+            &headings,
+            &[0, 3],
+            Some(sight),
+            Some((1.0, &talking)),
+            &[speeds],
+        )
+        .unwrap();
         assert_eq!(seen.offsets, vec![0, 1, 1]);
         assert_eq!(seen.ids, vec![1]); // robot 2 is behind robot 0
         assert_eq!(seen.carried, vec![vec![0.1]]); // robot 1's value

@@ -135,8 +135,8 @@ def perceive(
     ids, distances)``; row r's entries are ``offsets[r]:offsets[r + 1]``, ids increasing;
     bearings are world-frame directions from the perceiving robot towards the other, ``(dx, dy)``
     the other's position less the perceiving robot's; then one column per array of ``carried``
-    (each ``(n,)``, one value per robot: the velocities a movement sensor reports, say), its
-    values at the robots seen. A row does not depend on which other rows are asked.
+    (each ``(n,)``, one value per robot, NaN passed on: the velocities a movement sensor reports,
+    say), its values at the robots seen. A row does not depend on which other rows are asked.
     """
     p = as_array(positions, "positions", (None, 2))
     n = p.shape[0]
@@ -156,7 +156,19 @@ def perceive(
     if radio_range is not None:
         check_nonnegative(radio_range, "radio range")
         flags = as_flags(talking, "talking", n)
-    columns = [as_array(values, "carried", (n,)) for values in carried]
+    columns = [_carried(values, n) for values in carried]
     return implementation("perceive")(
         p, h, asked, sight=sight, radio_range=radio_range, talking=flags, carried=columns or None
     )
+
+
+def _carried(values: Any, n: int) -> FloatArray:
+    """``values`` as a C-contiguous ``(n,)`` float64 array: data carried to the robots seen, not
+    geometry, so NaN goes through as it is."""
+    try:
+        array = np.ascontiguousarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"`carried` must hold float arrays of shape ({n},): {err}") from None
+    if array.shape != (n,):
+        raise ValueError(f"`carried` must hold arrays of shape ({n},), one value per robot, got {array.shape}")
+    return array

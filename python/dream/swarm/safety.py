@@ -105,14 +105,14 @@ def _drive_apart(
         asked = want
         if avoid.sidestep:
             asked = _sidestep_preference(engine, ids, want)
-        detections = tuple(np.ascontiguousarray(seen[name][entries]) for name in DETECTION)
+        distance, bearing, vx, vy = (np.ascontiguousarray(seen[name][entries]) for name in DETECTION)
         margin = robot.spec.radius if avoid.margin is None else avoid.margin
         steered = hrvo_rows_trusted(  # the engine's own perception, and a decision checked in `Engine._apply`
             engine.dxi[at_rows(ids, n)],
             np.ascontiguousarray(asked),
             np.ascontiguousarray(pose[steer, :2]),
             offsets,
-            detections,  # type: ignore[arg-type]
+            (distance, bearing, vx, vy),
             safety=safety,
             v_max=robot.spec.v_max,
             bounds=engine.arena.shrunk(margin) if avoid.check_boundaries else None,
