@@ -4,7 +4,8 @@ A rendezvous-like rule (radio mean plus HRVO, every robot deciding every step, t
 on a swarm spread as rps spreads it, at each N: the median step, the median time spent in the
 step's kernel calls (timed as the step makes them, on its own inputs), and the median of the
 rest per robot (the engine's own Python and NumPy, the kernels' Python wrappers included: the
-figure the swarm-engine issue bounds at 0.5 us per robot). Also the peak RSS of the process.
+figure the swarm-engine issue bounds at 0.5 us per robot), also in CPU time (steadier when other
+jobs share the cores). Also the peak RSS of the process.
 Run: ``python benches/bench_engine.py [N ...]``.
 """
 
