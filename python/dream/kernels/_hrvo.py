@@ -22,7 +22,7 @@ PREFERRED_LIMIT = 1e6
 def _bounded(preferred: FloatArray) -> FloatArray:
     """``preferred`` ``(n, 2)`` with each row no longer than :data:`PREFERRED_LIMIT`."""
     if not preferred.size or max(preferred.max(), -preferred.min()) <= PREFERRED_LIMIT / 2:
-        return preferred  # no coordinate above half the limit: no row near it (a NaN goes on)
+        return preferred  # no coordinate above half the limit, so no row near it (NaN: checked below)
     norm = np.hypot(preferred[:, 0], preferred[:, 1])
     huge = norm > PREFERRED_LIMIT
     if not huge.any():
