@@ -59,8 +59,8 @@ def validate(
     max_wheel: float,
     collider_offset: float = 0.0,
     boundary_per_iteration: bool = False,
-) -> tuple[int, int, int]:
-    """(boundary, collision, actuator) counts of one iteration by rps's criteria (0.0.0 by default, 2.1's with the options)."""
+) -> tuple[int, int, int, NDArray[np.int64]]:
+    """(boundary, collision, actuator) counts of one iteration by rps's criteria (0.0.0 by default, 2.1's with the options), and the robots in a collision (ascending)."""
 
 def colliding(poses: NDArray[np.float64], *, diameter: float, collider_offset: float = 0.0) -> NDArray[np.bool_]:
     """(n,) bool: the robots of the pairs validate counts as collisions."""
