@@ -23,6 +23,7 @@ messages leave the air.
 from __future__ import annotations
 
 import math
+import operator
 from functools import partial
 from typing import Any
 
@@ -36,11 +37,14 @@ from dream.kernels._neighbours import Heard, Perceived
 from dream.obstacles import sensed
 from dream.sensors import seen_velocity
 from dream.specs import ArenaSpec, SimulatorSpec
-from dream.swarm import draws
+from dream.swarm import byrobot, draws
 from dream.swarm.neighbourhood import Deferred, Neighbourhood
 from dream.swarm.robot import SwarmRobot, View
 from dream.swarm.safety import DETECTION, drive
 from dream.traffic import Traffic
+
+#: What robots said: their ids ``(k,)`` and their message's fields (name to ``(k,)``).
+Said = tuple[np.ndarray, dict[str, np.ndarray]]
 
 
 class Engine:
@@ -97,6 +101,8 @@ class Engine:
         self.focus: int | None = None  #: a robot whose last readings and inbox to keep (for a recording)
         #: robot :attr:`focus`'s last decision: its ``step``, and the columns of what it ``seen`` and ``heard``
         self.focus_view: dict[str, Any] = {}
+        #: robot by robot, the view of every robot deciding now and the views cut from it
+        self._cut: tuple[View | None, list[View]] = (None, [])
 
     def attach(self, simulator: SimulatorSpec) -> None:
         """Keep to the limits of the simulator the robots run on."""
@@ -128,13 +134,16 @@ class Engine:
             rows = rows[self._kept(t, rows, np.full(len(rows), -2), faults)]
         if self.robot.obstacles is not None:  # so does one whose obstacle reading is lost
             rows = rows[self._kept(t, rows, np.full(len(rows), -3), faults)]
+        self._cut = (None, [])
         if not len(rows):
             return []
         # What the sensors see of the others' motion: their commands before anyone decides now.
         velocities = seen_velocity(commands, x[2])
-        talking = self.sent_at >= 0
-        batches = np.split(rows, len(rows)) if self.one_by_one else [rows]
-        return [self._view(t, b, clock[b], x, velocities, talking, faults) for b in batches]
+        whole = self._view(t, rows, clock[rows], x, velocities, talking=self.sent_at >= 0, faults=faults)
+        if not self.one_by_one:
+            return [whole]
+        self._cut = (whole, byrobot.cut(whole))  # perceived at once, decided one by one
+        return self._cut[1]
 
     def act(
         self,
@@ -148,7 +157,11 @@ class Engine:
         what the views remember and send: ``commands`` ``(2, n)`` with the deciding robots' columns
         replaced."""
         out = commands.copy()
-        said = [self._apply(view, wished, out) for view, wished in zip(views, wishes)]
+        whole, pieces = self._cut
+        if whole is not None and len(views) == len(pieces) and all(map(operator.is_, views, pieces)):
+            said = self._apply_pieces(whole, views, list(wishes), out)
+        else:
+            said = [self._apply(view, wished, out) for view, wished in zip(views, wishes)]
         if self.robot.radio is not None:
             self._publish(t, [s for s in said if s is not None], faults)
         return out
@@ -202,14 +215,38 @@ class Engine:
             self._obstacles(t, rows, x, faults).frozen(),
         )
         if lossless:
-            view.board_cells = partial(self._board_cells, rows, x[:2].T, talking)
+            view.board_cells = partial(self._board_cells, x[:2].T, talking)
         if self.focus is not None:
             self._keep_focus(t, rows, view, self.focus)
         return view
 
-    def _apply(self, view: View, wished: Any, out: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]] | None:
+    def _apply(self, view: View, wished: Any, out: np.ndarray) -> Said | None:
         """Check a view's decision, keep its memory and put its commands into ``out``. Returns what
         its robots said (their ids and fields), if anything."""
+        rows = np.asarray(view.ids)
+        wished, straight, safety, heeded, said = self._settle(view, wished)
+        seen = view.seen if heeded is None else view.seen.where(heeded)
+        out[:, rows] = drive(self, rows, wished, self.belief[rows], seen, straight, safety)
+        return said
+
+    def _apply_pieces(self, whole: View, views: list[View], wishes: list[Any], out: np.ndarray) -> list[Said | None]:
+        """:meth:`_apply` of the views :func:`~dream.swarm.byrobot.cut` made of ``whole``: each
+        decision checked and kept on its own, all of them driven at once."""
+        wished, straight, safety, heeded, said = zip(*map(self._settle, views, wishes))
+        avoid = self.robot.avoid
+        straight_rows, safety_rows, seen = byrobot.merged(
+            whole, straight, safety, heeded, 0.0 if avoid is None else avoid.safety
+        )
+        rows = np.asarray(whole.ids)
+        out[:, rows] = drive(self, rows, np.concatenate(wished), self.belief[rows], seen, straight_rows, safety_rows)
+        return list(said)
+
+    def _settle(
+        self, view: View, wished: Any
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, np.ndarray | None, Said | None]:
+        """Check a view's decision and keep its memory and its side to step aside to. Returns its
+        wished velocities, its rows driven direct, its safety radii, the detections it heeds (each
+        None if it did not choose) and what its robots said (their ids and fields), if anything."""
         rows = np.asarray(view.ids)
         wished = np.asarray(wished, dtype=np.float64)
         name = type(self.robot).__name__
@@ -235,23 +272,21 @@ class Engine:
             stop = _per_robot(view.turn[1], len(rows), np.dtype(bool), f"{name}'s rows that stop stepping aside")
             self.side[rows] = np.where(side != 0.0, np.sign(side), self.side[rows])
             self.sidestep[rows[stop]] = 0
-        seen = view.seen
+        heeded = None
         if view.heeded is not None:
-            heeded = np.asarray(view.heeded)
-            if heeded.shape != (seen.offsets[-1],) or heeded.dtype != bool:
+            heeded, detections = np.asarray(view.heeded), view.seen.offsets[-1]
+            if heeded.shape != (detections,) or heeded.dtype != bool:
                 raise ValueError(
-                    f"{name}'s heeded detections must be one bool per detection, shape ({seen.offsets[-1]},), "
+                    f"{name}'s heeded detections must be one bool per detection, shape ({detections},), "
                     f"got {heeded.dtype} of shape {heeded.shape}"
                 )
-            seen = seen.where(heeded)
-        out[:, rows] = drive(self, rows, wished, self.belief[rows], seen, straight, safety)
         if view.said is None:
-            return None
+            return wished, straight, safety, heeded, None
         message = self._message(view.said, len(rows))
         if view.saying is None:
-            return rows, message
+            return wished, straight, safety, heeded, (rows, message)
         saying = _per_robot(view.saying, len(rows), np.dtype(bool), f"{name}'s senders (`where`)")
-        return rows[saying], {key: values[saying] for key, values in message.items()}
+        return wished, straight, safety, heeded, (rows[saying], {key: values[saying] for key, values in message.items()})
 
     def _keep_focus(self, t: int, rows: np.ndarray, view: View, focus: int) -> None:
         """Keep what robot ``focus`` reads and hears now, if it is among ``rows`` (increasing)."""
@@ -387,9 +422,9 @@ class Engine:
 
     def _board_cells(
         self,
-        rows: np.ndarray,
         positions: np.ndarray,
         talking: np.ndarray,
+        rows: np.ndarray,
         here: np.ndarray,
         fields: tuple[str, str],
         seen: tuple[Any, Any],
@@ -434,7 +469,7 @@ class Engine:
             key: _per_robot(said[key], k, kind, f"{name} message field {key!r}") for key, kind in self.kinds.items()
         }
 
-    def _publish(self, t: int, said: list[tuple[np.ndarray, dict[str, np.ndarray]]], faults: FaultState | None) -> None:
+    def _publish(self, t: int, said: list[Said], faults: FaultState | None) -> None:
         """Put what the robots said this step in the air: lies from Byzantine senders, each
         message heard from ``t + 1 + latency`` on."""
         if not said:

@@ -1,0 +1,97 @@
+"""Robot by robot: the view of every robot deciding now, cut into one view per robot, and their
+decisions put back together.
+
+The engine perceives for all the deciding robots at once, as for the swarm, and carries out
+their wishes at once, with the same kernels: each kernel's rows are independent of one another,
+so one call over k rows gives the bits of k calls over one (the both-ways tests compare whole
+runs). Only :meth:`~dream.swarm.robot.SwarmRobot.decide` runs once per robot, on its own row: a
+decision sees no other robot's view. Messages sent now are heard from the next step on either
+way, so the order the robots decide in changes nothing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import partial
+
+import numpy as np
+
+from dream.swarm.neighbourhood import Deferred, Neighbourhood
+from dream.swarm.robot import View
+
+
+def cut(whole: View) -> list[View]:
+    """One view per row of ``whole`` (in its order), each a robot's own: slices of ``whole``'s
+    arrays (read-only where ``whole``'s are), its own memory rows, nothing said or chosen yet."""
+    seen, heard, obstacles = (_rows(hood, len(whole)) for hood in (whole.seen, whole.heard, whole.obstacles))
+    ids, clock, pose, memory = whole.ids, whole.clock, whole.pose, whole.memory
+    return [
+        View(
+            ids[r : r + 1],
+            clock[r : r + 1],
+            pose[r : r + 1],
+            seen[r],
+            heard[r],
+            {key: values[r : r + 1] for key, values in memory.items()},
+            obstacles[r],
+            board_cells=whole.board_cells,
+        )
+        for r in range(len(whole))
+    ]
+
+
+def _rows(hood: Neighbourhood | None, k: int) -> Sequence[Neighbourhood | None]:
+    """``hood``'s rows, each a neighbourhood of one row (an inbox found on first use stays so)."""
+    if hood is None:
+        return [None] * k
+    if isinstance(hood, Deferred):  # found on first use: each row when read, all of them at once
+        return [Deferred(partial(_row_of, hood, r)) for r in range(k)]
+    return [_row(hood, start, end) for start, end in _spans(hood.offsets)]
+
+
+def _row_of(hood: Neighbourhood, r: int) -> Neighbourhood:
+    return _row(hood, int(hood.offsets[r]), int(hood.offsets[r + 1]))
+
+
+def _row(hood: Neighbourhood, start: int, end: int) -> Neighbourhood:
+    """Entries ``start:end`` of ``hood`` as a neighbourhood of one row, read-only as ``hood``."""
+    part = Neighbourhood(
+        np.array([0, end - start]),
+        {name: values[start:end] for name, values in hood.columns.items()},
+        None if hood.index is None else (hood.index[start:end], hood.sources),
+    )
+    return part.frozen() if hood.read_only else part
+
+
+def _spans(offsets: np.ndarray) -> zip[tuple[int, int]]:
+    bounds = offsets.tolist()
+    return zip(bounds[:-1], bounds[1:])
+
+
+def merged(
+    whole: View,
+    straight: Sequence[np.ndarray | None],
+    safety: Sequence[np.ndarray | None],
+    heeded: Sequence[np.ndarray | None],
+    default_safety: float,
+) -> tuple[np.ndarray | None, np.ndarray | None, Neighbourhood]:
+    """The rows' choices (checked, one entry per piece of :func:`cut` or None where it chose
+    nothing) as ``whole``'s: the rows driven direct, the safety radii (``default_safety`` where a
+    robot kept the Avoid's) and the detections heeded (all of a robot's where it chose none)."""
+    seen = whole.seen
+    if any(h is not None for h in heeded):
+        counts = np.diff(seen.offsets).tolist()
+        seen = seen.where(
+            np.concatenate([np.ones(c, dtype=bool) if h is None else h for h, c in zip(heeded, counts, strict=True)])
+        )
+    return (
+        _joined(straight, np.zeros(1, dtype=bool)),
+        _joined(safety, np.full(1, float(default_safety))),
+        seen,
+    )
+
+
+def _joined(parts: Sequence[np.ndarray | None], missing: np.ndarray) -> np.ndarray | None:
+    if all(part is None for part in parts):
+        return None
+    return np.concatenate([missing if part is None else part for part in parts])
