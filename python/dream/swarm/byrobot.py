@@ -54,13 +54,17 @@ def _row_of(hood: Neighbourhood, r: int) -> Neighbourhood:
 
 
 def _row(hood: Neighbourhood, start: int, end: int) -> Neighbourhood:
-    """Entries ``start:end`` of ``hood`` as a neighbourhood of one row, read-only as ``hood``."""
+    """Entries ``start:end`` of ``hood`` as a neighbourhood of one row, read-only as ``hood`` (its
+    slices are, as views of read-only arrays)."""
+    offsets = np.array([0, end - start])
+    offsets.flags.writeable = not hood.read_only
     part = Neighbourhood(
-        np.array([0, end - start]),
+        offsets,
         {name: values[start:end] for name, values in hood.columns.items()},
         None if hood.index is None else (hood.index[start:end], hood.sources),
     )
-    return part.frozen() if hood.read_only else part
+    part.read_only = hood.read_only
+    return part
 
 
 def _spans(offsets: np.ndarray) -> zip[tuple[int, int]]:

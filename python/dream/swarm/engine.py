@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from dream import kernels
+from dream._checks import all_finite
 from dream._csr import spans
 from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
 from dream.kernels import VoronoiCells
@@ -250,7 +251,7 @@ class Engine:
         rows = np.asarray(view.ids)
         wished = np.asarray(wished, dtype=np.float64)
         name = type(self.robot).__name__
-        if wished.shape != (len(rows), 2) or not np.isfinite(wished).all():
+        if wished.shape != (len(rows), 2) or not all_finite(wished):
             raise ValueError(
                 f"{name}.decide must return finite velocities of shape (k, 2) = ({len(rows)}, 2), "
                 f"got shape {wished.shape}" + ("" if wished.shape != (len(rows), 2) else " with NaN or inf")
@@ -286,7 +287,8 @@ class Engine:
         if view.saying is None:
             return wished, straight, safety, heeded, (rows, message)
         saying = _per_robot(view.saying, len(rows), np.dtype(bool), f"{name}'s senders (`where`)")
-        return wished, straight, safety, heeded, (rows[saying], {key: values[saying] for key, values in message.items()})
+        said = rows[saying], {key: values[saying] for key, values in message.items()}
+        return wished, straight, safety, heeded, said
 
     def _keep_focus(self, t: int, rows: np.ndarray, view: View, focus: int) -> None:
         """Keep what robot ``focus`` reads and hears now, if it is among ``rows`` (increasing)."""
