@@ -42,7 +42,12 @@ class Choosy(SwarmRobot):
             view.send(where=~quiet, x=view.pose[:, 0], id=ids)
         view.memory["count"] += 1  # in place, on the robot's own row
         view.memory["last"] = view.clock
-        view.memory["heard"] = view.heard.sum("x")
+        forgets = ids % 6 == 5  # keeps what it heard before
+        if alone and forgets.all():
+            view.memory["heard"] += 100.0  # on its own row, then forgotten: the memory keeps the old value
+            del view.memory["heard"]
+        else:
+            view.memory["heard"] = np.where(forgets, view.memory["heard"], view.heard.sum("x"))
         return 0.1 * np.column_stack((np.cos(ids + view.clock), np.sin(ids - view.clock)))
 
 
@@ -67,7 +72,8 @@ def test_choices_some_robots_make_come_out_as_the_swarms(count_traffic):
         assert np.array_equal(getattr(one, name), getattr(swarm, name), equal_nan=True), name
     for key in swarm.memory:
         assert np.array_equal(one.memory[key], swarm.memory[key], equal_nan=True), key
-    assert one.memory["count"].tolist() == [11] * 12 and (one.memory["heard"] != 0).any()
+    assert one.memory["count"].tolist() == [11] * 12 and (one.memory["heard"][:5] != 0).all()
+    assert one.memory["heard"][[5, 11]].tolist() == [0.0, 0.0]  # forgotten each time
     for name in ("sent", "heard", "lost"):
         assert np.array_equal(getattr(one.traffic, name), getattr(swarm.traffic, name)), name
     assert (one.traffic.heard > 0).any() == count_traffic  # counted only when asked to

@@ -41,12 +41,15 @@ def cut(whole: View) -> list[View]:
 
 
 def _rows(hood: Neighbourhood | None, k: int) -> Sequence[Neighbourhood | None]:
-    """``hood``'s rows, each a neighbourhood of one row (an inbox found on first use stays so)."""
+    """``hood``'s rows, each a neighbourhood of one row. An inbox found on first use (found then,
+    for all the rows) and a neighbourhood without entries (a sensor the robot lacks, say) are cut
+    when a robot first reads its row: most decisions never read them."""
     if hood is None:
         return [None] * k
-    if isinstance(hood, Deferred):  # found on first use: each row when read, all of them at once
+    if isinstance(hood, Deferred) or not hood.offsets[-1]:
         return [Deferred(partial(_row_of, hood, r)) for r in range(k)]
-    return [_row(hood, start, end) for start, end in _spans(hood.offsets)]
+    bounds = hood.offsets.tolist()
+    return [_row(hood, start, end) for start, end in zip(bounds[:-1], bounds[1:])]
 
 
 def _row_of(hood: Neighbourhood, r: int) -> Neighbourhood:
@@ -65,11 +68,6 @@ def _row(hood: Neighbourhood, start: int, end: int) -> Neighbourhood:
     )
     part.read_only = hood.read_only
     return part
-
-
-def _spans(offsets: np.ndarray) -> zip[tuple[int, int]]:
-    bounds = offsets.tolist()
-    return zip(bounds[:-1], bounds[1:])
 
 
 def merged(

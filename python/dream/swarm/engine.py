@@ -104,6 +104,7 @@ class Engine:
         self.focus_view: dict[str, Any] = {}
         #: robot by robot, the view of every robot deciding now and the views cut from it
         self._cut: tuple[View | None, list[View]] = (None, [])
+        self._handed: list[dict[str, np.ndarray]] = []  #: the memory rows each of those views was handed
 
     def attach(self, simulator: SimulatorSpec) -> None:
         """Keep to the limits of the simulator the robots run on."""
@@ -140,10 +141,12 @@ class Engine:
             return []
         # What the sensors see of the others' motion: their commands before anyone decides now.
         velocities = seen_velocity(commands, x[2])
-        whole = self._view(t, rows, clock[rows], x, velocities, talking=self.sent_at >= 0, faults=faults)
+        talking = self.sent_at >= 0
+        whole = self._view(t, rows, clock[rows], x, velocities, talking, faults)
         if not self.one_by_one:
             return [whole]
         self._cut = (whole, byrobot.cut(whole))  # perceived at once, decided one by one
+        self._handed = [dict(view.memory) for view in self._cut[1]]
         return self._cut[1]
 
     def act(
@@ -233,21 +236,32 @@ class Engine:
     def _apply_pieces(self, whole: View, views: list[View], wishes: list[Any], out: np.ndarray) -> list[Said | None]:
         """:meth:`_apply` of the views :func:`~dream.swarm.byrobot.cut` made of ``whole``: each
         decision checked and kept on its own, all of them driven at once."""
-        wished, straight, safety, heeded, said = zip(*map(self._settle, views, wishes))
+        wished, straight, safety, heeded, said = zip(
+            *(
+                self._settle(view, wish, (whole.memory, r, handed))
+                for r, (view, wish, handed) in enumerate(zip(views, wishes, self._handed))
+            )
+        )
+        rows = np.asarray(whole.ids)
+        for key, values in whole.memory.items():  # every robot's memory row, changed or not
+            self.memory[key][rows] = values
         avoid = self.robot.avoid
         straight_rows, safety_rows, seen = byrobot.merged(
             whole, straight, safety, heeded, 0.0 if avoid is None else avoid.safety
         )
-        rows = np.asarray(whole.ids)
         out[:, rows] = drive(self, rows, np.concatenate(wished), self.belief[rows], seen, straight_rows, safety_rows)
         return list(said)
 
     def _settle(
-        self, view: View, wished: Any
+        self, view: View, wished: Any, piece: tuple[dict[str, np.ndarray], int, dict[str, np.ndarray]] | None = None
     ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, np.ndarray | None, Said | None]:
         """Check a view's decision and keep its memory and its side to step aside to. Returns its
         wished velocities, its rows driven direct, its safety radii, the detections it heeds (each
-        None if it did not choose) and what its robots said (their ids and fields), if anything."""
+        None if it did not choose) and what its robots said (their ids and fields), if anything.
+
+        A view cut from the view of all the robots deciding now (``piece``: that view's memory, the
+        view's row of it, and the memory rows it was handed) keeps its memory in that row instead:
+        a row it was handed holds its changes already."""
         rows = np.asarray(view.ids)
         wished = np.asarray(wished, dtype=np.float64)
         name = type(self.robot).__name__
@@ -257,10 +271,19 @@ class Engine:
                 f"got shape {wished.shape}" + ("" if wished.shape != (len(rows), 2) else " with NaN or inf")
             )
         for key, values in view.memory.items():
+            if piece is not None and values is piece[2].get(key):
+                continue
             if key not in self.memory:
                 raise ValueError(f"{name} remembers {key!r}, which its memory does not declare: add it to `memory`")
             memory = self.memory[key]
-            memory[rows] = _per_robot(values, len(rows), memory.dtype, f"{name} memory {key!r}", memory.shape[1:])
+            kept = _per_robot(values, len(rows), memory.dtype, f"{name} memory {key!r}", memory.shape[1:])
+            if piece is None:
+                memory[rows] = kept
+            else:
+                piece[0][key][piece[1]] = kept[0]
+        if piece is not None and len(view.memory) < len(piece[2]):  # a field forgotten: kept as it was
+            for key in piece[2].keys() - view.memory.keys():
+                piece[0][key][piece[1]] = self.memory[key][rows[0]]
         straight = safety = None
         if view.straight is not None:
             straight = _per_robot(view.straight, len(rows), np.dtype(bool), f"{name}'s rows driven direct")
