@@ -166,6 +166,7 @@ class Engine:
             said = self._apply_pieces(whole, views, list(wishes), out)
         else:
             said = [self._apply(view, wished, out) for view, wished in zip(views, wishes)]
+        self._cut, self._handed = (None, []), []  # the step's views are done with (a checkpoint keeps none)
         if self.robot.radio is not None:
             self._publish(t, [s for s in said if s is not None], faults)
         return out
