@@ -23,7 +23,9 @@ from dream.swarm.robot import View
 def cut(whole: View) -> list[View]:
     """One view per row of ``whole`` (in its order), each a robot's own: slices of ``whole``'s
     arrays (read-only where ``whole``'s are), its own memory rows, nothing said or chosen yet."""
-    seen, heard, obstacles = (_rows(hood, len(whole)) for hood in (whole.seen, whole.heard, whole.obstacles))
+    k = len(whole)
+    seen, heard = _rows(whole.seen, k), _rows(whole.heard, k)
+    obstacles: Sequence[Neighbourhood | None] = [None] * k if whole.obstacles is None else _rows(whole.obstacles, k)
     ids, clock, pose, memory = whole.ids, whole.clock, whole.pose, whole.memory
     return [
         View(
@@ -36,16 +38,14 @@ def cut(whole: View) -> list[View]:
             obstacles[r],
             board_cells=whole.board_cells,
         )
-        for r in range(len(whole))
+        for r in range(k)
     ]
 
 
-def _rows(hood: Neighbourhood | None, k: int) -> Sequence[Neighbourhood | None]:
+def _rows(hood: Neighbourhood, k: int) -> list[Neighbourhood]:
     """``hood``'s rows, each a neighbourhood of one row. An inbox found on first use (found then,
     for all the rows) and a neighbourhood without entries (a sensor the robot lacks, say) are cut
     when a robot first reads its row: most decisions never read them."""
-    if hood is None:
-        return [None] * k
     if isinstance(hood, Deferred) or not hood.offsets[-1]:
         return [Deferred(partial(_row_of, hood, r)) for r in range(k)]
     bounds = hood.offsets.tolist()
