@@ -170,3 +170,18 @@ class RobotCallback:
                 f"{getattr(callback, '__name__', 'callback')}: give a robot's sensors and radio its own id"
             )
         setattr(obj, self.slot, callback)
+
+
+def per_robot(values: Any, k: int, kind: np.dtype, what: str, shape: tuple[int, ...] = ()) -> np.ndarray:
+    """``values`` as ``(k, *shape)`` of ``kind``: one value (of ``shape``) per deciding robot, or one
+    for all of them; anything else (a shape that would spread one robot's value over the others,
+    a float for an int field) is refused, naming ``what``."""
+    if type(values) is np.ndarray and values.shape == (k, *shape) and values.dtype == kind:
+        return values  # already one value of its kind per robot (most memory): no copy to make
+    array = np.asarray(values)
+    if array.shape not in (shape, (k, *shape)):
+        want = ", ".join(map(str, (k, *shape))) + ("," if not shape else "")
+        raise ValueError(f"{what} must have one value per deciding robot, shape ({want}), got shape {array.shape}")
+    if not np.can_cast(array.dtype, kind, casting="same_kind"):
+        raise ValueError(f"{what} holds {kind} values, got {array.dtype}")
+    return np.broadcast_to(array, (k, *shape)).astype(kind)

@@ -13,11 +13,12 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from functools import partial
+from typing import Any
 
 import numpy as np
 
 from dream.swarm.neighbourhood import Deferred, Neighbourhood
-from dream.swarm.robot import View
+from dream.swarm.robot import Avoid, View
 
 
 def cut(whole: View) -> list[View]:
@@ -71,26 +72,21 @@ def _row(hood: Neighbourhood, start: int, end: int) -> Neighbourhood:
 
 
 def merged(
-    whole: View,
-    straight: Sequence[np.ndarray | None],
-    safety: Sequence[np.ndarray | None],
-    heeded: Sequence[np.ndarray | None],
-    default_safety: float,
-) -> tuple[np.ndarray | None, np.ndarray | None, Neighbourhood]:
-    """The rows' choices (checked, one entry per piece of :func:`cut` or None where it chose
-    nothing) as ``whole``'s: the rows driven direct, the safety radii (``default_safety`` where a
-    robot kept the Avoid's) and the detections heeded (all of a robot's where it chose none)."""
+    whole: View, settled: Sequence[tuple[Any, Any, Any, Any, Any]], avoid: Avoid | None
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, Neighbourhood]:
+    """The checked decisions of the pieces of :func:`cut` (``settled``: each one's wished
+    velocities, rows driven direct, safety radii and detections heeded, None where it chose
+    nothing) as ``whole``'s: the wishes, the rows driven direct, the safety radii (the Avoid's
+    where a robot kept them) and the detections heeded (all of a robot's where it chose none)."""
+    wished, straight, safety, heeded, _ = zip(*settled)
     seen = whole.seen
     if any(h is not None for h in heeded):
         counts = np.diff(seen.offsets).tolist()
         seen = seen.where(
             np.concatenate([np.ones(c, dtype=bool) if h is None else h for h, c in zip(heeded, counts, strict=True)])
         )
-    return (
-        _joined(straight, np.zeros(1, dtype=bool)),
-        _joined(safety, np.full(1, float(default_safety))),
-        seen,
-    )
+    default = np.full(1, 0.0 if avoid is None else float(avoid.safety))
+    return np.concatenate(wished), _joined(straight, np.zeros(1, dtype=bool)), _joined(safety, default), seen
 
 
 def _joined(parts: Sequence[np.ndarray | None], missing: np.ndarray) -> np.ndarray | None:

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from dream import kernels
-from dream._checks import all_finite
+from dream._checks import all_finite, per_robot
 from dream._csr import spans
 from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
 from dream.kernels import VoronoiCells
@@ -46,6 +46,9 @@ from dream.traffic import Traffic
 
 #: What robots said: their ids ``(k,)`` and their message's fields (name to ``(k,)``).
 Said = tuple[np.ndarray, dict[str, np.ndarray]]
+#: A checked decision: the wished velocities, the rows driven direct, the safety radii, the
+#: detections heeded (None where not chosen) and what was said.
+Settled = tuple[np.ndarray, np.ndarray | None, np.ndarray | None, np.ndarray | None, Said | None]
 
 
 class Engine:
@@ -237,32 +240,22 @@ class Engine:
     def _apply_pieces(self, whole: View, views: list[View], wishes: list[Any], out: np.ndarray) -> list[Said | None]:
         """:meth:`_apply` of the views :func:`~dream.swarm.byrobot.cut` made of ``whole``: each
         decision checked and kept on its own, all of them driven at once."""
-        wished, straight, safety, heeded, said = zip(
-            *(
-                self._settle(view, wish, (whole.memory, r, handed))
-                for r, (view, wish, handed) in enumerate(zip(views, wishes, self._handed))
-            )
-        )
+        pieces = enumerate(zip(views, wishes, self._handed))
+        settled = [self._settle(view, wish, (whole.memory, slice(r, r + 1), kept)) for r, (view, wish, kept) in pieces]
         rows = np.asarray(whole.ids)
         for key, values in whole.memory.items():  # every robot's memory row, changed or not
             self.memory[key][rows] = values
-        avoid = self.robot.avoid
-        straight_rows, safety_rows, seen = byrobot.merged(
-            whole, straight, safety, heeded, 0.0 if avoid is None else avoid.safety
-        )
-        out[:, rows] = drive(self, rows, np.concatenate(wished), self.belief[rows], seen, straight_rows, safety_rows)
-        return list(said)
+        wished, straight, safety, seen = byrobot.merged(whole, settled, self.robot.avoid)
+        out[:, rows] = drive(self, rows, wished, self.belief[rows], seen, straight, safety)
+        return [said for *_, said in settled]
 
     def _settle(
-        self, view: View, wished: Any, piece: tuple[dict[str, np.ndarray], int, dict[str, np.ndarray]] | None = None
-    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None, np.ndarray | None, Said | None]:
-        """Check a view's decision and keep its memory and its side to step aside to. Returns its
-        wished velocities, its rows driven direct, its safety radii, the detections it heeds (each
-        None if it did not choose) and what its robots said (their ids and fields), if anything.
-
-        A view cut from the view of all the robots deciding now (``piece``: that view's memory, the
-        view's row of it, and the memory rows it was handed) keeps its memory in that row instead:
-        a row it was handed holds its changes already."""
+        self, view: View, wished: Any, piece: tuple[dict[str, np.ndarray], slice, dict[str, np.ndarray]] | None = None
+    ) -> Settled:
+        """Check a view's decision and keep its memory and its side to step aside to. A view
+        :func:`~dream.swarm.byrobot.cut` from all the robots' (``piece``: that one's memory, this
+        view's row of it, the memory it was handed) keeps its memory in that row (a row handed
+        holds its changes already)."""
         rows = np.asarray(view.ids)
         wished = np.asarray(wished, dtype=np.float64)
         name = type(self.robot).__name__
@@ -271,30 +264,26 @@ class Engine:
                 f"{name}.decide must return finite velocities of shape (k, 2) = ({len(rows)}, 2), "
                 f"got shape {wished.shape}" + ("" if wished.shape != (len(rows), 2) else " with NaN or inf")
             )
+        into, at, handed = (self.memory, rows, {}) if piece is None else piece
         for key, values in view.memory.items():
-            if piece is not None and values is piece[2].get(key):
+            if key in handed and values is handed[key]:
                 continue
             if key not in self.memory:
                 raise ValueError(f"{name} remembers {key!r}, which its memory does not declare: add it to `memory`")
             memory = self.memory[key]
-            kept = _per_robot(values, len(rows), memory.dtype, f"{name} memory {key!r}", memory.shape[1:])
-            if piece is None:
-                memory[rows] = kept
-            else:
-                piece[0][key][piece[1]] = kept[0]
-        if piece is not None and len(view.memory) < len(piece[2]):  # a field forgotten: kept as it was
-            for key in piece[2].keys() - view.memory.keys():
-                piece[0][key][piece[1]] = self.memory[key][rows[0]]
+            into[key][at] = per_robot(values, len(rows), memory.dtype, f"{name} memory {key!r}", memory.shape[1:])
+        for key in handed.keys() - view.memory.keys():  # a field forgotten: kept as it was
+            into[key][at] = self.memory[key][rows]
         straight = safety = None
         if view.straight is not None:
-            straight = _per_robot(view.straight, len(rows), np.dtype(bool), f"{name}'s rows driven direct")
+            straight = per_robot(view.straight, len(rows), np.dtype(bool), f"{name}'s rows driven direct")
         if view.safety is not None:
-            safety = _per_robot(view.safety, len(rows), np.dtype(np.float64), f"{name}'s safety radii")
+            safety = per_robot(view.safety, len(rows), np.dtype(np.float64), f"{name}'s safety radii")
             if not (np.isfinite(safety).all() and (safety >= 0).all()):
                 raise ValueError(f"{name}'s safety radii must be finite and >= 0")
         if view.turn is not None:
-            side = _per_robot(view.turn[0], len(rows), np.dtype(np.float64), f"{name}'s sides to step aside to")
-            stop = _per_robot(view.turn[1], len(rows), np.dtype(bool), f"{name}'s rows that stop stepping aside")
+            side = per_robot(view.turn[0], len(rows), np.dtype(np.float64), f"{name}'s sides to step aside to")
+            stop = per_robot(view.turn[1], len(rows), np.dtype(bool), f"{name}'s rows that stop stepping aside")
             self.side[rows] = np.where(side != 0.0, np.sign(side), self.side[rows])
             self.sidestep[rows[stop]] = 0
         heeded = None
@@ -310,7 +299,7 @@ class Engine:
         message = self._message(view.said, len(rows))
         if view.saying is None:
             return wished, straight, safety, heeded, (rows, message)
-        saying = _per_robot(view.saying, len(rows), np.dtype(bool), f"{name}'s senders (`where`)")
+        saying = per_robot(view.saying, len(rows), np.dtype(bool), f"{name}'s senders (`where`)")
         said = rows[saying], {key: values[saying] for key, values in message.items()}
         return wished, straight, safety, heeded, said
 
@@ -491,9 +480,7 @@ class Engine:
             raise ValueError(
                 f"{name} sent fields {sorted(said)}, but its radio declares {sorted(self.kinds)}: send every field"
             )
-        return {
-            key: _per_robot(said[key], k, kind, f"{name} message field {key!r}") for key, kind in self.kinds.items()
-        }
+        return {key: per_robot(said[key], k, kind, f"{name} message field {key!r}") for key, kind in self.kinds.items()}
 
     def _publish(self, t: int, said: list[Said], faults: FaultState | None) -> None:
         """Put what the robots said this step in the air: lies from Byzantine senders, each
@@ -560,21 +547,6 @@ class Engine:
         gone = crashed[self.air["sender"]]
         if gone.any():
             self.air = {key: values[~gone] for key, values in self.air.items()}
-
-
-def _per_robot(values: Any, k: int, kind: np.dtype, what: str, shape: tuple[int, ...] = ()) -> np.ndarray:
-    """``values`` as ``(k, *shape)`` of ``kind``: one value (of ``shape``) per deciding robot, or one
-    for all of them; anything else (a shape that would spread one robot's value over the others,
-    a float for an int field) is refused, naming ``what``."""
-    if type(values) is np.ndarray and values.shape == (k, *shape) and values.dtype == kind:
-        return values  # already one value of its kind per robot (most memory): no copy to make
-    array = np.asarray(values)
-    if array.shape not in (shape, (k, *shape)):
-        want = ", ".join(map(str, (k, *shape))) + ("," if not shape else "")
-        raise ValueError(f"{what} must have one value per deciding robot, shape ({want}), got shape {array.shape}")
-    if not np.can_cast(array.dtype, kind, casting="same_kind"):
-        raise ValueError(f"{what} holds {kind} values, got {array.dtype}")
-    return np.broadcast_to(array, (k, *shape)).astype(kind)
 
 
 def _linked(graph: tuple[np.ndarray, np.ndarray], rows: np.ndarray, x: np.ndarray, talking: np.ndarray) -> Heard:
