@@ -22,7 +22,7 @@ import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
-from dream.experiments import hrvo_circle
+import dream
 from harness import REPEAT, machine, show, table
 
 #: rps's methods that the backend calls once per step.
@@ -67,7 +67,7 @@ def one_run(n: int, steps: int, seed: int) -> dict[str, float]:
     time), and ``dream_cpu``: the thread's CPU time outside rps, building the robots included."""
     with timed_rps() as spent:
         cpu = time.thread_time()
-        result = hrvo_circle.run(n=n, seed=seed, backend="robotarium", steps=steps)
+        result = dream.run("hrvo-circle", n=n, seed=seed, backend="robotarium", steps=steps)
         cpu = time.thread_time() - cpu
     count = result.steps
     whole = result.wall_time / count

@@ -68,7 +68,6 @@ def parts(n: int, steps: int = 60) -> None:
 
     timed(team.engine, "perceive", "engine: perception (kernels.perceive, noise, radio)")
     timed(team.layout, "rows", "observation rows (k nearest, masks)")
-    timed(team, "_colliding", "reward: who collides (kernels.colliding)")
     timed(team.sim, "step", "simulator: validation and motion")
     timed(team.engine, "act", "engine: drive (conversion, limits)")
     timed(team, "_rewards", "reward: potential hook, arena")

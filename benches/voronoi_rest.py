@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+import dream
 from dream.experiments import voronoi_coverage as vc
 from dream.swarm import View
 from harness import machine, table
@@ -80,7 +81,7 @@ def run(n: int, seed: int) -> list[Any]:
             return super().swarm_robot(n)
 
     began = time.perf_counter()
-    result = Kept.run(n=n, seed=seed, backend="fast", swarm=True, moving_obstacles=False)
+    result = dream.run(Kept, n=n, seed=seed, backend="fast", swarm=True, moving_obstacles=False)
     wall = time.perf_counter() - began
     team = seen[0]
     cap = team.steps(n)

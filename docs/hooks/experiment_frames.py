@@ -13,6 +13,7 @@ import logging
 from mkdocs.config.defaults import MkDocsConfig
 from mkdocs.structure.files import File, Files
 
+import dream
 from dream.experiments import EXPERIMENTS
 from dream.frames import Frame
 from dream.viz import Renderer
@@ -31,7 +32,7 @@ def frame_png(name: str) -> bytes:
     def keep(frame: Frame) -> None:
         last[:] = [frame]
 
-    EXPERIMENTS[name].run(seed=0, backend="fast", steps=STEPS.get(name, DEFAULT_STEPS), record=keep)
+    dream.run(EXPERIMENTS[name], seed=0, backend="fast", steps=STEPS.get(name, DEFAULT_STEPS), record=keep)
     renderer = Renderer(last[0].arena)
     renderer.draw(last[0])
     image = io.BytesIO()

@@ -1,6 +1,7 @@
 """Types of the compiled kernels (dream-py). Poses are (3, n), commands (2, n), float64."""
 
-from typing import final
+from collections.abc import Sequence
+from typing import Any, final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -58,8 +59,8 @@ def validate(
     max_wheel: float,
     collider_offset: float = 0.0,
     boundary_per_iteration: bool = False,
-) -> tuple[int, int, int]:
-    """(boundary, collision, actuator) counts of one iteration by rps's criteria (0.0.0 by default, 2.1's with the options)."""
+) -> tuple[int, int, int, NDArray[np.int64]]:
+    """(boundary, collision, actuator) counts of one iteration by rps's criteria (0.0.0 by default, 2.1's with the options), and the robots in a collision (ascending)."""
 
 def colliding(poses: NDArray[np.float64], *, diameter: float, collider_offset: float = 0.0) -> NDArray[np.bool_]:
     """(n,) bool: the robots of the pairs validate counts as collisions."""
@@ -141,8 +142,10 @@ def perceive(
     sight: tuple[float, float, float] | None = None,
     radio_range: float | None = None,
     talking: NDArray[np.bool_] | None = None,
-) -> tuple[tuple[_Ints, _Ints, _Floats, _Floats, _Floats, _Floats], tuple[_Ints, _Ints, _Floats]]:
-    """(seen (offsets, ids, distances, bearings, dx, dy), heard (offsets, ids, distances)) of the robots `rows`."""
+    carried: Sequence[_Floats] | None = None,
+) -> tuple[tuple[NDArray[Any], ...], tuple[_Ints, _Ints, _Floats]]:
+    """(seen (offsets, ids, distances, bearings, dx, dy, *carried), heard (offsets, ids, distances)) of
+    the robots `rows`; each of `carried` (n,) is read at the robots seen."""
 
 def segment_reduce(values: _Floats, offsets: _Ints, op: str, index: _Ints | None = None) -> _Floats:
     """op (sum, mean, min, max) of each row's entries of values (k, w): (m, w)."""

@@ -6,7 +6,7 @@ matplotlib, cvxopt), without DREAM's compiled extension. :func:`export` writes a
 - ``main.py``: the lab's explicit loop. It builds ``rps.robotarium.Robotarium`` with keyword
   arguments, calls ``get_poses``, ``set_velocities`` and ``step`` every iteration and ends with
   ``debug()`` (rps 2.x) or ``call_at_scripts_end()`` (rps 0.0.0); DREAM's part of each step is
-  one call to :class:`LabRun`, which goes through the same :class:`~dream.experiments.runner.Stepper`
+  one call to :class:`LabRun`, which goes through the same :class:`~dream.experiments.stepper.Stepper`
   as :func:`dream.run`;
 - ``dream/``: the pure-Python part of DREAM (its kernels fall back to the NumPy reference);
 - the experiment's own file, when it is one.
@@ -38,7 +38,7 @@ from dream.backends.base import Backend
 from dream.backends.robotarium import rps_generation
 from dream.backends.startup import START_SPACING
 from dream.experiments import EXPERIMENTS, ExperimentResult, find, load_file
-from dream.experiments.runner import Stepper
+from dream.experiments.stepper import Stepper
 from dream.lab_libraries import lab_modules, version_note
 from dream.specs import ROBOTARIUM, RULES, SimulatorSpec
 from dream.world import World, reset_default_world

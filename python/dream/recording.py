@@ -53,7 +53,7 @@ from dream.trajectory_log import MESSAGE_COLUMNS, step_columns, traffic_of
 
 if TYPE_CHECKING:
     from dream.backends.base import Backend
-    from dream.experiments.runner import Stepper
+    from dream.experiments.stepper import Stepper
 
 #: Robot positions kept before the robots' columns are sent (also sent every :data:`BATCH_SECONDS`).
 BATCH_POINTS = 1 << 20

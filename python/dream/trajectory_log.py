@@ -39,7 +39,7 @@ if TYPE_CHECKING:
     import pyarrow as pa
 
     from dream.backends.base import Backend
-    from dream.experiments.runner import Stepper
+    from dream.experiments.stepper import Stepper
     from dream.traffic import Traffic
 
 #: Rows gathered before a row group is written (a step with more robots makes a group alone).

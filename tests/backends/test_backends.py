@@ -105,12 +105,15 @@ def test_make_robotarium_seeded_poses_are_reproducible_inside_and_spaced(n, aren
         assert not np.array_equal(first, make_robotarium(n, arena=arena, seed=43).get_poses())
 
 
-def test_make_robotarium_without_seed_draws_from_the_world(world):
-    # The autouse fixture gives a fresh World(seed=7): the same draws as a fresh World(seed=7).
-    drawn = make_robotarium(8, backend="fast").get_poses()
-    with dream.World(seed=7):
-        again = make_robotarium(8, backend="fast").get_poses()
-    assert_array_equal(drawn, again)
+def test_make_robotarium_reads_no_world_generator(world):
+    # Its starts come from its own arguments: the current world's generator is left untouched,
+    # so a script's world draws the same whether or not it made a simulator first.
+    before = world.rng.bit_generator.state
+    seeded = make_robotarium(8, backend="fast", seed=3).get_poses()
+    unseeded = make_robotarium(8, backend="fast").get_poses()
+    assert world.rng.bit_generator.state == before
+    assert_array_equal(seeded, make_robotarium(8, backend="fast", rng=np.random.default_rng(3)).get_poses())
+    assert not np.array_equal(seeded, unseeded)  # no seed: drawn afresh
 
 
 def test_make_robotarium_too_many_robots_for_the_arena():

@@ -50,7 +50,7 @@ def test_deformed_shapes_fit_their_gaps():
 
 @pytest.mark.parametrize("seed", range(2))
 def test_affine_formation_converges_then_passes_both_gaps_without_contact(seed):
-    result = af.run(seed=seed, backend="robotarium")
+    result = dream.run("affine-formation", seed=seed, backend="robotarium")
     assert result.measures["error_before_bars"] < 0.05
     assert result.measures["bar_contacts"] == 0
     assert result.collisions == 0 and result.boundary == 0
@@ -64,7 +64,7 @@ def test_affine_formation_succeeds_under_rps2_rules(seed):
     0.185 m, not 0.11 m. Seed 0 had 252 collision pair-iterations and a tangled follower, seed 1
     28, before the leaders gathered off-centre, changed shapes at a steady pace and spaced the
     collinear line evenly."""
-    result = af.run(seed=seed, backend="fast", rules="rps2")
+    result = dream.run("affine-formation", seed=seed, backend="fast", rules="rps2")
     assert result.rules == "rps2"
     assert result.success, result.summary()
     assert result.collisions == 0 and result.boundary == 0 and result.actuator == 0
@@ -100,13 +100,13 @@ def test_the_leaders_plan_its_shapes_in_order():
 
 def test_affine_formation_has_seven_robots():
     with pytest.raises(ValueError, match="7 robots"):
-        af.run(n=8)
+        dream.run("affine-formation", n=8)
 
 
 @pytest.fixture(scope="module")
 def two_formations():
     """Two tiled formations robot by robot (Fast, seed 0), shared by the tests that need the run."""
-    return af.run(n=14, seed=0, backend="fast", trace=True)
+    return dream.run("affine-formation", n=14, seed=0, backend="fast", trace=True)
 
 
 def test_affine_formation_tiles_several_formations(two_formations):
@@ -119,7 +119,7 @@ def test_affine_formation_tiles_several_formations(two_formations):
 def test_affine_formation_swarm_mode_moves_as_the_robots_do(two_formations):
     # One FormationRobot, run robot by robot and as one swarm: the same poses at every step,
     # bit for bit, whole runs long.
-    swarm = af.run(n=14, seed=0, backend="fast", trace=True, swarm=True)
+    swarm = dream.run("affine-formation", n=14, seed=0, backend="fast", trace=True, swarm=True)
     assert two_formations.success and swarm.success and swarm.swarm
     assert swarm.collisions == 0 and swarm.boundary == 0 and swarm.actuator == 0
     assert swarm.completed_step == two_formations.completed_step
@@ -144,13 +144,15 @@ FAULTS = {
 @pytest.fixture(scope="module")
 def unfaulted():
     """The poses of the fault tests' run without faults."""
-    return af.run(n=14, seed=1, backend="fast", steps=500, trace=True, swarm=True).trace
+    return dream.run("affine-formation", n=14, seed=1, backend="fast", steps=500, trace=True, swarm=True).trace
 
 
 @pytest.mark.parametrize("case", FAULTS)
 def test_affine_formation_is_the_same_both_ways_under_each_fault(case, unfaulted):
     robots, swarm = (
-        af.run(n=14, seed=1, backend="fast", steps=500, trace=True, faults=FAULTS[case], swarm=way)
+        dream.run(
+            "affine-formation", n=14, seed=1, backend="fast", steps=500, trace=True, faults=FAULTS[case], swarm=way
+        )
         for way in (False, True)
     )
     assert np.array_equal(swarm.trace, robots.trace) and swarm.faults == robots.faults
@@ -159,7 +161,9 @@ def test_affine_formation_is_the_same_both_ways_under_each_fault(case, unfaulted
 
 
 def test_affine_formation_thousand_robots_on_fast_do_not_collide():
-    result = af.run(n=1001, seed=0, backend="fast", steps=100, swarm=True)  # robot by robot: the same run
+    result = dream.run(
+        "affine-formation", n=1001, seed=0, backend="fast", steps=100, swarm=True
+    )  # robot by robot: the same run
     assert result.n == 1001 and result.collisions == 0 and result.boundary == 0
 
 
@@ -176,7 +180,7 @@ def test_affine_formation_tiles_are_robotarium_sized():
 def test_affine_formation_swarm_mode_frames_come_from_its_arrays():
     frames: dict[bool, list] = {False: [], True: []}
     for swarm in frames:
-        af.run(n=14, seed=0, backend="fast", steps=40, swarm=swarm, record=frames[swarm].append)
+        dream.run("affine-formation", n=14, seed=0, backend="fast", steps=40, swarm=swarm, record=frames[swarm].append)
     robots, swarm = frames[False][-1], frames[True][-1]
     assert np.isfinite(swarm.goals).all() and np.any(swarm.velocities != 0)
     np.testing.assert_array_equal(swarm.goals, robots.goals)

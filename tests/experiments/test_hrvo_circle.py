@@ -12,7 +12,7 @@ from dream.experiments import hrvo_circle
 
 @pytest.mark.parametrize("seed", range(10))
 def test_hrvo_circle_completes_three_circles_without_collision_on_rps(seed):
-    result = hrvo_circle.run(n=10, seed=seed, backend="robotarium")
+    result = dream.run("hrvo-circle", n=10, seed=seed, backend="robotarium")
     assert result.backend == "robotarium"
     assert result.measures["circles_completed"] == 3
     assert result.completed_step is not None and result.completed_step < hrvo_circle.default_steps(10)
@@ -24,8 +24,8 @@ def test_hrvo_circle_completes_three_circles_without_collision_on_rps(seed):
 def test_hrvo_circle_fast_backend_follows_rps_trajectories():
     # Same algorithm, same semantics: identical poses until float rounding eventually tips a
     # discrete decision (the conversion's atan2 branch cut), which takes well over 500 steps.
-    real = hrvo_circle.run(n=10, seed=3, backend="robotarium", steps=500, trace=True)
-    fast = hrvo_circle.run(n=10, seed=3, backend="fast", steps=500, trace=True)
+    real = dream.run("hrvo-circle", n=10, seed=3, backend="robotarium", steps=500, trace=True)
+    fast = dream.run("hrvo-circle", n=10, seed=3, backend="fast", steps=500, trace=True)
     assert real.trace.shape == fast.trace.shape == (501, 3, 10)
     np.testing.assert_allclose(fast.trace, real.trace, rtol=0, atol=1e-9)
     assert np.abs(real.trace[-1] - real.trace[0]).max() > 0.5  # the robots did move
@@ -34,7 +34,7 @@ def test_hrvo_circle_fast_backend_follows_rps_trajectories():
 def test_hrvo_circle_robots_wait_for_their_first_pose():
     # Robot i's timer starts after 20 + i % 10 steps: until then it has no pose and must not move
     # (only the heading's re-wrapping may change its last bit).
-    result = hrvo_circle.run(n=10, seed=1, backend="fast", steps=60, trace=True)
+    result = dream.run("hrvo-circle", n=10, seed=1, backend="fast", steps=60, trace=True)
     for i in range(10):
         still = result.trace[: 22 + i, :, i]
         np.testing.assert_allclose(still, np.repeat(result.trace[:1, :, i], 22 + i, axis=0), rtol=0, atol=1e-12)
@@ -43,8 +43,8 @@ def test_hrvo_circle_robots_wait_for_their_first_pose():
 
 
 def test_hrvo_circle_is_reproducible():
-    first = hrvo_circle.run(n=6, seed=11, backend="fast", steps=400, trace=True)
-    second = hrvo_circle.run(n=6, seed=11, backend="fast", steps=400, trace=True)
+    first = dream.run("hrvo-circle", n=6, seed=11, backend="fast", steps=400, trace=True)
+    second = dream.run("hrvo-circle", n=6, seed=11, backend="fast", steps=400, trace=True)
     np.testing.assert_array_equal(first.trace, second.trace)
 
 
@@ -59,27 +59,29 @@ def test_hrvo_circle_goals_stay_apart_for_many_robots():
 
 def test_hrvo_circle_scales_beyond_ten_robots_on_fast():
     # The original state vector was hard-coded for 10 robots and crashed beyond.
-    result = hrvo_circle.run(n=24, seed=0, backend="fast", steps=300)
+    result = dream.run("hrvo-circle", n=24, seed=0, backend="fast", steps=300)
     assert result.n == 24 and result.backend == "fast"
     assert result.collisions == 0
 
 
 def test_hrvo_circle_thousand_robots_on_fast_do_not_collide():
-    result = hrvo_circle.run(n=1000, seed=0, backend="fast", steps=200, swarm=True)  # robot by robot: the same run
+    result = dream.run(
+        "hrvo-circle", n=1000, seed=0, backend="fast", steps=200, swarm=True
+    )  # robot by robot: the same run
     assert result.n == 1000 and result.steps == 200
     assert result.collisions == 0 and result.boundary == 0
 
 
 @pytest.mark.parametrize("seed", range(3))
 def test_hrvo_circle_swarm_mode_completes_three_circles(seed):
-    result = hrvo_circle.run(n=10, seed=seed, backend="fast", swarm=True)
+    result = dream.run("hrvo-circle", n=10, seed=seed, backend="fast", swarm=True)
     assert result.swarm and result.experiment == "hrvo-circle"
     assert result.measures["circles_completed"] == 3
     assert result.completed_step is not None and result.collisions == 0 and result.boundary == 0
 
 
 def test_hrvo_circle_swarm_mode_runs_large_swarms_without_collision():
-    result = hrvo_circle.run(n=3000, seed=0, steps=60, backend="fast", swarm=True)
+    result = dream.run("hrvo-circle", n=3000, seed=0, steps=60, backend="fast", swarm=True)
     assert result.n == 3000 and result.steps == 60
     assert result.collisions == 0
 
@@ -94,7 +96,7 @@ def test_hrvo_circle_is_the_same_robot_by_robot_and_as_a_swarm(faults):
     # bit (without faults the whole run, three circles long).
     steps = None if faults is None else 1500
     robots, swarm = (
-        hrvo_circle.run(n=10, seed=1, backend="fast", steps=steps, trace=True, swarm=way, faults=faults)
+        dream.run("hrvo-circle", n=10, seed=1, backend="fast", steps=steps, trace=True, swarm=way, faults=faults)
         for way in (False, True)
     )
     assert swarm.swarm and not robots.swarm and robots.faults == swarm.faults
@@ -108,7 +110,7 @@ def test_hrvo_circle_is_the_same_robot_by_robot_and_as_a_swarm(faults):
 def test_hrvo_circle_is_the_same_both_ways_under_every_fault_kind():
     every = dream.Faults.every_kind()
     robots, swarm = (
-        hrvo_circle.run(n=20, seed=1, backend="fast", steps=500, trace=True, swarm=way, faults=every)
+        dream.run("hrvo-circle", n=20, seed=1, backend="fast", steps=500, trace=True, swarm=way, faults=every)
         for way in (False, True)
     )
     assert np.array_equal(swarm.trace, robots.trace) and robots.faults == swarm.faults
@@ -120,7 +122,7 @@ def test_hrvo_circle_full_ring_on_rps_does_not_collide():
     # rps's arena cannot grow: as many robots as its ring holds with the 5 cm tolerance, goals on
     # the ellipse filling it (the packed ring beyond: test_hrvo_circle_packed.py).
     n = hrvo_circle.circle_capacity(packed=False)
-    result = hrvo_circle.run(n=n, seed=0, backend="robotarium", steps=600)
+    result = dream.run("hrvo-circle", n=n, seed=0, backend="robotarium", steps=600)
     assert result.backend == "robotarium" and result.n == n
     assert result.measures["circle_radius"] == hrvo_circle.ROBOTARIUM.width / 2 - hrvo_circle.EDGE
     assert result.collisions == 0 and result.boundary == 0

@@ -96,7 +96,8 @@ def test_packed_ring_is_the_same_robot_by_robot_and_as_a_swarm():
     # Its docks, inward side-steps, parking and clear final approach run both ways alike (the
     # hand-written swarm mode refused the packed ring).
     robots, swarm = (
-        hrvo_circle.run(n=40, seed=1, backend="robotarium", steps=400, trace=True, swarm=way) for way in (False, True)
+        dream.run("hrvo-circle", n=40, seed=1, backend="robotarium", steps=400, trace=True, swarm=way)
+        for way in (False, True)
     )
     assert np.array_equal(swarm.trace, robots.trace) and swarm.swarm
     assert np.abs(robots.trace[-1] - robots.trace[0]).max() > 0.5 and robots.collisions == 0
@@ -120,7 +121,7 @@ def test_a_robot_that_changes_its_safety_radius_plans_with_the_new_one():
 
 @pytest.mark.parametrize("seed", [0])
 def test_fifty_robots_complete_three_circles_on_rps(seed):
-    result = hrvo_circle.run(n=50, seed=seed, backend="robotarium")
+    result = dream.run("hrvo-circle", n=50, seed=seed, backend="robotarium")
     assert result.backend == "robotarium" and result.n == 50
     assert result.measures["circles_completed"] == hrvo_circle.CIRCLES
     assert result.completed_step is not None and result.completed_step == result.steps

@@ -23,14 +23,14 @@ def assert_clean_completion(result):
 
 @pytest.mark.parametrize("seed", range(3))
 def test_hrvo_circle_twenty_robots_complete_on_rps(seed):
-    result = hrvo_circle.run(n=20, seed=seed, backend="robotarium", swarm=True)  # robot by robot: the same run
+    result = dream.run("hrvo-circle", n=20, seed=seed, backend="robotarium", swarm=True)  # robot by robot: the same run
     assert result.backend == "robotarium"
     assert_clean_completion(result)
 
 
 @pytest.mark.skipif(os.environ.get("DREAM_PURE_PYTHON") == "1", reason="the largest case: too slow with NumPy HRVO")
 def test_hrvo_circle_hundred_robots_complete_on_fast():
-    result = hrvo_circle.run(n=100, seed=0, backend="fast", swarm=True)  # robot by robot: the same run
+    result = dream.run("hrvo-circle", n=100, seed=0, backend="fast", swarm=True)  # robot by robot: the same run
     assert result.backend == "fast"
     assert_clean_completion(result)
 
@@ -70,7 +70,7 @@ def test_hrvo_circle_swarm_mode_frames_and_measures_come_from_its_arrays():
 
 def test_hrvo_circle_refuses_a_radio_gap_below_one_step():
     with pytest.raises(ValueError, match="parameter .radio_gap. of hrvo-circle must be >= 1, got 0"):
-        hrvo_circle.run(n=4, backend="fast", swarm=True, radio_gap=0)
+        dream.run("hrvo-circle", n=4, backend="fast", swarm=True, radio_gap=0)
 
 
 def test_hrvo_circle_refuses_more_robots_than_the_robotarium_ring_holds():
@@ -78,7 +78,7 @@ def test_hrvo_circle_refuses_more_robots_than_the_robotarium_ring_holds():
     assert most >= 50  # rps's own limit is 50 robots: every size it simulates has a ring
     assert hrvo_circle.circle_layout(most, grow=False).safety >= hrvo_circle.PACKED_SAFETY  # the limit is accepted
     with pytest.raises(ValueError, match=rf"n={most + 1} robots do not fit .* at most {most} robots"):
-        hrvo_circle.run(n=most + 1, backend="robotarium")
+        dream.run("hrvo-circle", n=most + 1, backend="robotarium")
     assert hrvo_circle.circle_layout(most + 1, grow=True).arena.width > 3.2  # Fast grows instead
     with pytest.raises(ValueError, match="`n` must be an integer >= 0"):
         hrvo_circle.circle_layout(-1)

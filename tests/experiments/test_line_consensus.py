@@ -12,7 +12,7 @@ from dream.experiments import line_consensus as lc
 
 @pytest.mark.parametrize("seed", range(5))
 def test_line_consensus_forms_the_line_without_collision_on_rps(seed):
-    result = lc.run(n=6, seed=seed, backend="robotarium")
+    result = dream.run("line-consensus", n=6, seed=seed, backend="robotarium")
     assert result.completed_step is not None
     assert result.measures["y_spread"] < lc.TOLERANCE
     assert result.measures["spacing_error"] < lc.TOLERANCE
@@ -20,7 +20,7 @@ def test_line_consensus_forms_the_line_without_collision_on_rps(seed):
 
 
 def test_line_consensus_orders_robots_by_id_along_x():
-    result = lc.run(n=6, seed=2, backend="fast", trace=True)
+    result = dream.run("line-consensus", n=6, seed=2, backend="fast", trace=True)
     x = result.trace[-1, 0]
     np.testing.assert_allclose(x[:-1] - x[1:], lc.SPACING, atol=lc.TOLERANCE)
 
@@ -30,8 +30,8 @@ def test_line_consensus_is_the_same_robot_by_robot_and_as_a_swarm(n, seed):
     # One LineRobot, run robot by robot and as one swarm: the same poses at every step, bit for
     # bit, whole runs long. Six robots: the thesis's (Robotarium arena, plain HRVO); ten: the
     # large team's code paths (lanes, stepping aside, settling without HRVO).
-    robots = lc.run(n=n, seed=seed, backend="fast", trace=True)
-    swarm = lc.run(n=n, seed=seed, backend="fast", swarm=True, trace=True)
+    robots = dream.run("line-consensus", n=n, seed=seed, backend="fast", trace=True)
+    swarm = dream.run("line-consensus", n=n, seed=seed, backend="fast", swarm=True, trace=True)
     assert robots.success and swarm.success and swarm.swarm
     assert swarm.completed_step == robots.completed_step
     assert np.array_equal(swarm.trace, robots.trace)
@@ -47,7 +47,9 @@ FAULTS = {
 def test_line_consensus_is_the_same_both_ways_under_faults(case):
     faults, params = FAULTS[case]
     robots, swarm = (
-        lc.run(n=12, seed=2, backend="fast", steps=400, trace=True, swarm=way, faults=faults, **params)
+        dream.run(
+            "line-consensus", n=12, seed=2, backend="fast", steps=400, trace=True, swarm=way, faults=faults, **params
+        )
         for way in (False, True)
     )
     assert np.array_equal(swarm.trace, robots.trace) and robots.faults == swarm.faults
@@ -56,7 +58,7 @@ def test_line_consensus_is_the_same_both_ways_under_faults(case):
 
 def test_line_consensus_frames_come_from_its_robots():
     frames = []
-    lc.run(n=10, seed=0, backend="fast", swarm=True, steps=40, record=frames.append)
+    dream.run("line-consensus", n=10, seed=0, backend="fast", swarm=True, steps=40, record=frames.append)
     last = frames[-1]
     assert last.goals.shape == (10, 2) and np.isfinite(last.goals).all()
     assert last.velocities.shape == (10, 2) and np.any(last.velocities != 0)
@@ -94,13 +96,15 @@ def test_line_errors_measure_spread_and_spacing():
 
 
 def test_line_consensus_scales_on_the_fast_backend():
-    result = lc.run(n=12, seed=1, backend="fast")
+    result = dream.run("line-consensus", n=12, seed=1, backend="fast")
     assert result.backend == "fast" and result.n == 12
     assert result.completed_step is not None and result.collisions == 0
 
 
 def test_line_consensus_thousand_robots_on_fast_do_not_collide():
-    result = lc.run(n=1000, seed=0, backend="fast", steps=150, swarm=True)  # robot by robot: the same run
+    result = dream.run(
+        "line-consensus", n=1000, seed=0, backend="fast", steps=150, swarm=True
+    )  # robot by robot: the same run
     assert result.n == 1000 and result.collisions == 0
 
 

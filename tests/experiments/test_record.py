@@ -6,13 +6,14 @@ import numpy as np
 import pytest
 from numpy.testing import assert_array_equal
 
+import dream
 from dream.experiments import EXPERIMENTS
 
 
 @pytest.mark.parametrize("name", sorted(EXPERIMENTS))
 def test_record_receives_one_frame_per_step(name):
     frames = []
-    result = EXPERIMENTS[name].run(steps=40, backend="fast", record=frames.append, trace=True)
+    result = dream.run(name, steps=40, backend="fast", record=frames.append, trace=True)
     assert [f.step for f in frames] == list(range(1, result.steps + 1))
     assert_array_equal(frames[-1].poses, result.trace[-1])
     assert frames[-1].poses is not frames[-2].poses  # frames own their arrays
@@ -26,8 +27,8 @@ def test_record_receives_one_frame_per_step(name):
 
 @pytest.mark.parametrize("name", sorted(EXPERIMENTS))
 def test_same_seed_same_trajectories(name):
-    first = EXPERIMENTS[name].run(steps=150, backend="fast", seed=5, trace=True)
-    second = EXPERIMENTS[name].run(steps=150, backend="fast", seed=5, trace=True)
+    first = dream.run(name, steps=150, backend="fast", seed=5, trace=True)
+    second = dream.run(name, steps=150, backend="fast", seed=5, trace=True)
     assert_array_equal(first.trace, second.trace)
-    other = EXPERIMENTS[name].run(steps=150, backend="fast", seed=6, trace=True)
+    other = dream.run(name, steps=150, backend="fast", seed=6, trace=True)
     assert not np.array_equal(first.trace, other.trace)

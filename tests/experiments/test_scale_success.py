@@ -9,6 +9,7 @@ Robotarium's arena, so the large-team code paths run).
 
 from __future__ import annotations
 
+import dream
 from dream import kernels
 from dream.experiments import affine_formation as af
 from dream.experiments import line_consensus as lc
@@ -26,7 +27,7 @@ def size(experiment: str, rust: int) -> int:
 def test_line_consensus_forms_the_line_at_scale():
     # Swarm mode: the per-robot mode's trajectories (test_line_consensus), several times faster.
     n = size("line", 100)
-    result = lc.run(n=n, seed=0, backend="fast", swarm=True)
+    result = dream.run("line-consensus", n=n, seed=0, backend="fast", swarm=True)
     assert result.success, result.summary()
     assert result.measures["y_spread"] < lc.TOLERANCE
     assert result.measures["spacing_error"] < lc.TOLERANCE
@@ -34,7 +35,7 @@ def test_line_consensus_forms_the_line_at_scale():
 
 
 def test_voronoi_coverage_with_moving_obstacles_covers_at_scale():
-    result = vc.run(n=size("coverage", 100), seed=0, backend="fast")
+    result = dream.run("voronoi-coverage", n=size("coverage", 100), seed=0, backend="fast")
     assert result.success, result.summary()
     assert result.measures["static_contacts"] == 0
     assert result.measures["cost_end"] < vc.COVERED * result.measures["cost_start"]
@@ -42,7 +43,7 @@ def test_voronoi_coverage_with_moving_obstacles_covers_at_scale():
 
 
 def test_voronoi_coverage_without_moving_obstacles_comes_to_rest_at_scale():
-    result = vc.run(n=size("coverage", 100), seed=0, backend="fast", moving_obstacles=False)
+    result = dream.run("voronoi-coverage", n=size("coverage", 100), seed=0, backend="fast", moving_obstacles=False)
     assert result.success, result.summary()
     assert result.measures["static_contacts"] == 0
     assert result.measures["moving_at_end"] == 0
@@ -53,7 +54,7 @@ def test_voronoi_coverage_without_moving_obstacles_comes_to_rest_at_scale():
 def test_affine_formation_converges_and_passes_the_bars_at_scale():
     """98 robots: 14 formations of seven (the experiment's unit), each on its own tile. Swarm
     mode: the per-robot mode's trajectories (test_affine_formation), several times faster."""
-    result = af.run(n=size("affine", 98), seed=0, backend="fast", swarm=True)
+    result = dream.run("affine-formation", n=size("affine", 98), seed=0, backend="fast", swarm=True)
     assert result.success, result.summary()
     assert result.measures["error_before_bars"] < af.TOLERANCE
     assert result.measures["bar_contacts"] == 0

@@ -17,7 +17,7 @@ from dream.swarm import Neighbourhood, View
 
 @pytest.mark.parametrize("seed", range(3))
 def test_voronoi_coverage_spreads_without_contact_and_comes_to_rest(seed):
-    result = vc.run(seed=seed, backend="robotarium", moving_obstacles=False)
+    result = dream.run("voronoi-coverage", seed=seed, backend="robotarium", moving_obstacles=False)
     assert result.collisions == 0 and result.boundary == 0
     assert result.measures["static_contacts"] == 0
     assert result.measures["cost_end"] < 0.3 * result.measures["cost_start"]
@@ -27,7 +27,7 @@ def test_voronoi_coverage_spreads_without_contact_and_comes_to_rest(seed):
 
 @pytest.mark.parametrize("seed", range(2))
 def test_voronoi_coverage_with_moving_obstacles_keeps_clear_of_the_static_ones(seed):
-    result = vc.run(seed=seed, backend="fast", moving_obstacles=True, steps=900)
+    result = dream.run("voronoi-coverage", seed=seed, backend="fast", moving_obstacles=True, steps=900)
     assert result.collisions == 0
     assert result.measures["static_contacts"] == 0
     assert result.measures["cost_end"] < result.measures["cost_start"]
@@ -38,8 +38,10 @@ def test_voronoi_coverage_is_the_same_robot_by_robot_and_as_a_swarm(n, seed, mov
     # One CoverageRobot, run robot by robot and as one swarm: the same poses at every step, bit
     # for bit, whole runs long. 15: the thesis's team in the Robotarium (coming to rest); 20: a
     # grown arena with wandering obstacles.
-    robots = vc.run(n=n, seed=seed, backend="fast", moving_obstacles=moving, trace=True)
-    swarm = vc.run(n=n, seed=seed, backend="fast", moving_obstacles=moving, swarm=True, trace=True)
+    robots = dream.run("voronoi-coverage", n=n, seed=seed, backend="fast", moving_obstacles=moving, trace=True)
+    swarm = dream.run(
+        "voronoi-coverage", n=n, seed=seed, backend="fast", moving_obstacles=moving, swarm=True, trace=True
+    )
     assert robots.success and swarm.success and swarm.swarm
     assert swarm.completed_step == robots.completed_step
     assert np.array_equal(swarm.trace, robots.trace)
@@ -53,7 +55,9 @@ EVERY_FAULT = dream.Faults.every_kind(
 
 def test_voronoi_coverage_is_the_same_both_ways_under_every_fault():
     robots, swarm = (
-        vc.run(n=20, seed=1, backend="fast", steps=300, trace=True, swarm=way, faults=EVERY_FAULT)
+        dream.run(
+            "voronoi-coverage", n=20, seed=1, backend="fast", steps=300, trace=True, swarm=way, faults=EVERY_FAULT
+        )
         for way in (False, True)
     )
     assert np.array_equal(swarm.trace, robots.trace) and robots.faults == swarm.faults
@@ -82,7 +86,7 @@ def test_voronoi_coverage_is_the_same_both_ways_under_every_fault():
 )
 def test_every_fault_kind_runs_in_swarm_mode(fault):
     faults = dream.Faults.parse([fault])
-    result = vc.run(n=30, seed=0, backend="fast", steps=200, swarm=True, faults=faults)
+    result = dream.run("voronoi-coverage", n=30, seed=0, backend="fast", steps=200, swarm=True, faults=faults)
     assert result.steps == 200 and result.collisions == 0
     assert result.measures["cost_end"] < result.measures["cost_start"]
 
@@ -141,7 +145,9 @@ def test_voronoi_coverage_comes_to_rest_flowing_not_in_stop_and_go():
     # 310 times, and rest came after 4,577 to 6,871 steps of a 13,417 cap (seeds 0-2). Carrying
     # its last step (`MOMENTUM`) and saying where it is going (`LEAD`), a robot in a slow flow
     # keeps moving: about 19 starts each, 41 at most, rest after 2,646 to 3,120 steps.
-    result = vc.run(n=300, seed=0, backend="fast", swarm=True, moving_obstacles=False, trace=True)
+    result = dream.run(
+        "voronoi-coverage", n=300, seed=0, backend="fast", swarm=True, moving_obstacles=False, trace=True
+    )
     assert result.success and result.measures["moving_at_end"] == 0
     assert result.completed_step < 0.3 * vc.VoronoiCoverage().steps(300)
     moving = np.any(result.trace[1:] != result.trace[:-1], axis=1)  # (steps, n): the pose changed
@@ -151,7 +157,7 @@ def test_voronoi_coverage_comes_to_rest_flowing_not_in_stop_and_go():
 
 def test_voronoi_coverage_swarm_mode_frames_come_from_its_arrays():
     frames = []
-    vc.run(n=15, seed=0, backend="fast", swarm=True, steps=40, record=frames.append)
+    dream.run("voronoi-coverage", n=15, seed=0, backend="fast", swarm=True, steps=40, record=frames.append)
     last = frames[-1]
     assert last.goals.shape == (15, 2) and np.isfinite(last.goals).all()
     assert len(last.cells) == 15 and all(len(cell) >= 3 for cell in last.cells)
@@ -234,7 +240,7 @@ def test_obstacle_sensor_reports_closest_points_in_range():
 
 
 def test_voronoi_coverage_thousand_robots_spread_without_collision():
-    result = vc.run(n=1000, seed=0, backend="fast", steps=60)
+    result = dream.run("voronoi-coverage", n=1000, seed=0, backend="fast", steps=60)
     assert result.n == 1000 and result.collisions == 0
     assert result.measures["static_contacts"] == 0
     assert result.measures["cost_end"] < result.measures["cost_start"]

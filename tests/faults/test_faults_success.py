@@ -110,6 +110,19 @@ def test_affine_survivors_hold_their_formation_around_the_crashed(seed, crashed)
     assert result.measures["error_before_bars"] < 0.05 and result.measures["bar_contacts"] == 0
 
 
+def test_affine_formation_takes_a_leader_with_stuck_wheels_for_crashed():
+    # Seed 1: leader 0 sticks at step 100. It sees its odometry stand still while its wheels are
+    # told to drive, stops driving them and says so; its formation takes it for crashed and plans
+    # round it. Before, it talked on (so it passed for alive and its formation was the affine
+    # image of a leader left behind: follower error 0.91 m) and drove its stuck wheels (so it was
+    # seen moving): 253 collision-steps and 68 steps of bar contact.
+    result = dream.run("affine-formation", backend="fast", seed=1, faults=dream.Faults(stuck=0.15, stuck_at=100))
+    assert [(e["kind"], e["robot"]) for e in result.faults["events"]] == [("stuck", 0)]
+    assert result.success, result.summary()
+    assert (result.collisions, result.boundary, result.actuator) == (0, 0, 0)
+    assert result.measures["bar_contacts"] == 0
+
+
 @pytest.mark.parametrize(("seed", "liar"), [(1, 0), (3, 4)])
 def test_affine_formation_ignores_a_liar_it_sees_through(seed, liar):
     result = dream.run("affine-formation", backend="fast", seed=seed, faults=dream.Faults(byzantine=1))

@@ -177,6 +177,14 @@ def test_threshold_velocities_property_clips_and_keeps_signs(v, w):
 
 
 # -- validate -------------------------------------------------------------------------------------
+def assert_same_validation(got, counts, poses, bounds=BOUNDS, rules=WHEELS):
+    """The kernel's ``(boundary, collision, actuator, robots)``: ``counts`` and the reference's."""
+    reference = _reference.validate(poses, np.zeros((2, poses.shape[1])), bounds, **rules)
+    assert got[:3] == tuple(counts)
+    assert got[3].dtype == np.int64 and np.all(np.diff(got[3]) > 0)
+    assert_array_equal(got[3], reference[3])
+
+
 @pytest.mark.parametrize("n", SIZES)
 def test_validate_matches_reference_and_brute_force(rng, n):
     # 2 x 1.2 m around the arena's corner: some robots outside, plenty of close pairs at n = 500.
@@ -184,8 +192,7 @@ def test_validate_matches_reference_and_brute_force(rng, n):
     commands = np.vstack((rng.uniform(-0.2, 0.2, n), rng.uniform(-0.6, 0.6, n)))
     expected = validate_by_hand(poses, commands)
     assert tuple(kernels.validate(poses, commands)) == expected
-    assert _core.validate(poses, commands, BOUNDS, **WHEELS) == expected
-    assert _reference.validate(poses, commands, BOUNDS, **WHEELS) == expected
+    assert_same_validation(_core.validate(poses, commands, BOUNDS, **WHEELS), expected, poses)
     if n == 500:
         assert all(count > 0 for count in expected[:2])  # the test exercises both counts
 
@@ -201,7 +208,7 @@ def test_large_swarms_step_and_validate_on_every_core_as_the_reference(rng):
     bounds = (-3.5, 3.5, -3.5, 3.5)
     expected = _reference.validate(poses, commands, bounds, **WHEELS)
     assert expected[0] > 0 and expected[1] > 100
-    assert _core.validate(poses, commands, bounds, **WHEELS) == expected
+    assert_same_validation(_core.validate(poses, commands, bounds, **WHEELS), expected[:3], poses, bounds)
     dxu = _core.dxi_to_dxu(commands / 10, poses, 0.8, 3.0)
     assert_allclose(dxu, _reference.dxi_to_dxu(commands / 10, poses, 0.8, 3.0), **TOL)
     limits = dict(max_linear=0.2, max_angular=3.6, wheel_radius=0.016, base_length=0.105, max_wheel=12.5)
@@ -221,9 +228,10 @@ def test_validate_counts_a_large_swarm_spread_thin_as_the_reference(rng, offset)
     poses = np.vstack((radius * np.cos(angle), radius * np.sin(angle), rng.uniform(-3, 3, n)))
     commands = random_commands(rng, n)
     rules = dict(WHEELS, collider_offset=offset, boundary_per_iteration=False)
-    expected = _reference.validate(poses, commands, (-150.0, 210.0, -210.0, 210.0), **rules)
+    bounds = (-150.0, 210.0, -210.0, 210.0)
+    expected = _reference.validate(poses, commands, bounds, **rules)
     assert expected[0] > 0 and expected[1] > 1000
-    assert _core.validate(poses, commands, (-150.0, 210.0, -210.0, 210.0), **rules) == expected
+    assert_same_validation(_core.validate(poses, commands, bounds, **rules), expected[:3], poses, bounds, rules)
 
 
 @pytest.mark.parametrize("n", [0, 1, 9, 500, 4500])
@@ -241,6 +249,10 @@ def test_colliding_flags_the_robots_of_the_pairs_validate_counts(rng, n, offset)
         assert_array_equal(got, (gaps <= 0.11).any(axis=1))
     spec = dataclasses.replace(RPS, collider_offset=offset, diameter=0.11)
     assert_array_equal(kernels.colliding(poses, spec), got)
+    # the simulator's own count lists the same robots, from the same search
+    counts, robots = kernels.validate_each(poses, np.zeros((2, n)), spec=spec)
+    assert_array_equal(robots, np.flatnonzero(got))
+    assert counts.collision >= (len(robots) + 1) // 2
     if n >= 500:
         assert 0 < got.sum() < n  # some robots collide, not all
 
@@ -281,8 +293,8 @@ def test_validate_finds_pairs_among_far_flung_robots():
     ys = np.array([0.0, 1e12, 0.0, 1e12, 0.0, 0.11, 1e6])
     poses = np.vstack((xs, ys, np.zeros(7)))
     got = _core.validate(poses, np.zeros((2, 7)), BOUNDS, **WHEELS)
-    assert got == validate_by_hand(poses, np.zeros((2, 7)))
-    assert got[1] == 3
+    assert got[:3] == validate_by_hand(poses, np.zeros((2, 7)))
+    assert got[1] == 3 and got[3].tolist() == [0, 1, 2, 3, 4, 5]
 
 
 @given(
@@ -497,7 +509,7 @@ def test_core_kernels_accept_any_memory_layout(rng, layout):
     assert_allclose(_core.unicycle_step(p, u, 0.033), step_by_hand(poses, commands, 0.033), **TOL)
     assert_array_equal(_core.unicycle_step(p, u, 0.033), _core.unicycle_step(poses, commands, 0.033))
     assert_array_equal(_core.threshold_velocities(u, 0.2, 3.0), threshold_by_hand(commands, 0.2, 3.0))
-    assert _core.validate(p, u, BOUNDS, **WHEELS) == validate_by_hand(poses, commands)
+    assert _core.validate(p, u, BOUNDS, **WHEELS)[:3] == validate_by_hand(poses, commands)
     assert_array_equal(_core.dxi_to_dxu(d, p, 0.8, 3.0), _core.dxi_to_dxu(dxi, poses, 0.8, 3.0))
     assert_array_equal(_core.actuator_limit(u, **LIMITS), _core.actuator_limit(commands, **LIMITS))
 

@@ -521,3 +521,21 @@ def test_hrvo_accepts_empty_swarm_and_valid_csr():
     got = kernels.hrvo(**GOOD, neighbours=(np.array([0, 1, 2, 3]), np.array([1, 0, 0])))
     assert_array_equal(got, np.zeros((3, 2)))
     assert _reference.hrvo is hrvo
+
+
+def test_preferred_velocities_are_bounded_row_by_row_whatever_the_others():
+    """The bound on huge preferred velocities (kept from overflowing the ranking) scales only the
+    rows beyond :data:`PREFERRED_LIMIT`, each as alone, and leaves the array as it is when no
+    coordinate comes near it (the shortcut must agree with the norm's verdict at its edge)."""
+    from dream.kernels._hrvo import PREFERRED_LIMIT, _bounded
+
+    edge = PREFERRED_LIMIT / 2
+    modest = np.array([[edge, -edge], [-edge, 0.0], [0.1, 0.2]])
+    assert _bounded(modest) is modest  # within: the same array, not a copy
+    rows = np.array([[PREFERRED_LIMIT, 1.0], [0.8e6, -0.7e6], [3e300, -4e300], [np.nextafter(edge, 1e9), 0.0]])
+    got = _bounded(rows)
+    for row, bounded in zip(rows, got, strict=True):
+        norm = math.hypot(*row)
+        want = row * (PREFERRED_LIMIT / norm) if norm > PREFERRED_LIMIT else row
+        assert_array_equal(bounded, want)
+        assert_array_equal(_bounded(row[None, :])[0], want)  # alone or among others

@@ -225,21 +225,37 @@ def test_perceive_matches_the_reference(rng, n, fov, everyone):
     positions, headings, talking = perceive_scene(rng, n)
     talking |= everyone  # all talking over the longest range: the query's rows are what is heard
     rows = np.sort(rng.choice(n, size=max(n // 2, 1), replace=False))
-    options = dict(sight=(0.4, fov, 0.3), radio_range=0.7, talking=talking)
+    carried = [rng.normal(size=n), rng.normal(size=n)]  # the velocities a sensor reports, say
+    options = dict(sight=(0.4, fov, 0.3), radio_range=0.7, talking=talking, carried=carried)
     got = _core.perceive(positions, headings, rows, **options)
     want = _reference.perceive(positions, headings, rows, **options)
-    for mine, theirs in zip(got, want):
+    for mine, theirs in zip(got, want, strict=True):
         assert len(mine) == len(theirs)
         for k, (a, b) in enumerate(zip(mine, theirs)):
             if k == 3:  # bearings: Rust's atan2 and NumPy's, to an ulp
                 assert_allclose(a, b, rtol=0, atol=1e-15)
-            else:  # offsets, ids, distances, dx, dy: the same arithmetic
+            else:  # offsets, ids, distances, dx, dy, the carried values: the same arithmetic
                 assert_array_equal(a, b)
-    (offsets, seen, distances, bearings, dx, dy), (h_offsets, heard, h_distances) = got
+    (offsets, seen, distances, bearings, dx, dy, vx, vy), (h_offsets, heard, h_distances) = got
+    assert_array_equal(vx, carried[0][seen])  # each robot seen's own value
+    assert_array_equal(vy, carried[1][seen])
     assert_allclose(np.hypot(dx, dy), distances, rtol=1e-15)
     assert_allclose(np.arctan2(dy, dx), bearings, rtol=0, atol=1e-15)
     assert (distances <= 0.4).all() and (h_distances <= 0.7).all() and talking[heard].all()
     assert len(offsets) == len(h_offsets) == len(rows) + 1
+
+
+def test_perceive_carries_no_column_unless_asked(rng):
+    positions, headings, talking = perceive_scene(rng, 50)
+    seen, _ = kernels.perceive(positions, headings, np.arange(50), sight=(1.0, 2 * np.pi, 0.0))
+    assert len(seen) == 6
+    (*_, vx), _ = kernels.perceive(positions, headings, [], sight=(1.0, 2 * np.pi, 0.0), carried=[np.ones(50)])
+    assert vx.shape == (0,) and vx.dtype == np.float64
+    odd = np.arange(50.0)
+    odd[7] = np.nan  # data, not geometry: carried as it is
+    (_, ids, *_, values), _ = kernels.perceive(positions, headings, [7, 8], sight=(2.0, 2 * np.pi, 0.0), carried=[odd])
+    assert_array_equal(values, odd[ids])
+    assert np.isnan(values).any()
 
 
 def test_a_perceived_row_does_not_depend_on_the_other_rows(rng):
@@ -262,6 +278,8 @@ def test_a_perceived_row_does_not_depend_on_the_other_rows(rng):
         (dict(rows=[0], sight=(-1.0, 1.0, 0.0)), "sensor range"),
         (dict(rows=[0], radio_range=1.0), "give both `radio_range` and `talking`"),
         (dict(rows=[0], radio_range=1.0, talking=[True]), "`talking` must"),
+        (dict(rows=[0], carried=[np.zeros(2)]), r"`carried` must hold arrays of shape \(3,\)"),
+        (dict(rows=[0], carried=[["a", "b", "c"]]), "`carried` must hold float arrays"),
     ],
 )
 def test_perceive_bad_input_is_named(options, message):

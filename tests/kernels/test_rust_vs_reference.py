@@ -315,7 +315,9 @@ def test_kernels_match_reference_on_a_thin_ring(rng, radius):
     wheels = dict(diameter=radius, wheel_radius=0.016, base_length=0.105, max_wheel=12.5)
     expected = _reference.validate(poses, commands, box, **wheels)
     assert expected[0] > 0 and (radius < 0.34 or expected[1] > 0)
-    assert _core.validate(poses, commands, box, **wheels) == expected
+    got = _core.validate(poses, commands, box, **wheels)
+    assert got[:3] == expected[:3]
+    assert_array_equal(got[3], expected[3])
 
 
 def test_hrvo_matches_reference_on_arbitrary_csr_with_self_loops_and_repeats(rng):

@@ -88,12 +88,15 @@ def test_each_robot_gets_its_own_row_of_the_swarms_view():
     for t in (0, 1):  # a round of messages on the air (the robots decide first at step 1)
         engine.step(t, x, np.zeros((2, n)))
         whole.step(t, x, np.zeros((2, n)))
-    views = engine.perceive(2, x, np.zeros((2, n)))
-    (view,) = whole.perceive(2, x, np.zeros((2, n)))
+    last = np.vstack((np.linspace(0.0, 0.1, n), np.linspace(-1.0, 1.0, n)))  # the commands they gave
+    views = engine.perceive(2, x, last)
+    (view,) = whole.perceive(2, x, last)
     assert view.heard.offsets[-1] > 0 and view.seen.offsets[-1] > 0
     assert [len(v) for v in views] == [1] * n and [int(v.ids[0]) for v in views] == view.ids.tolist()
     for r, mine in enumerate(views):
         assert np.array_equal(mine.pose, view.pose[r : r + 1]) and np.array_equal(mine.clock, view.clock[r : r + 1])
+        assert np.array_equal(mine.command, last[:, mine.ids].T)
+        assert np.array_equal(mine.command, view.command[r : r + 1])
         for hood, rows in ((mine.seen, view.seen), (mine.heard, view.heard), (mine.obstacles, view.obstacles)):
             cut = slice(rows.offsets[r], rows.offsets[r + 1])
             assert hood.offsets.tolist() == [0, cut.stop - cut.start] and hood.names == rows.names
@@ -102,7 +105,7 @@ def test_each_robot_gets_its_own_row_of_the_swarms_view():
         assert mine.memory.keys() == view.memory.keys()
         for key, values in view.memory.items():
             assert np.array_equal(mine.memory[key], values[r : r + 1], equal_nan=True)
-    for array in (views[0].ids, views[0].seen.offsets, views[0].seen["dx"], views[0].heard["x"]):
+    for array in (views[0].ids, views[0].command, views[0].seen.offsets, views[0].seen["dx"], views[0].heard["x"]):
         with pytest.raises(ValueError, match="read-only"):
             array[...] = 0
     views[0].memory["count"] += 5  # a robot's memory is its own

@@ -212,6 +212,7 @@ def test_the_decision_gets_rows_never_the_swarm():
         "heard",
         "memory",
         "obstacles",
+        "command",
         "said",
         "saying",
         "straight",
@@ -223,6 +224,21 @@ def test_the_decision_gets_rows_never_the_swarm():
     assert all(len(ids) == 6 for _, ids, _ in robot.views)
 
 
+def test_a_view_holds_each_robots_own_last_command():
+    # A robot knows what it told its wheels (after the safety layer): its odometry against it
+    # tells whether they obey (affine-formation's stuck-wheel detector).
+    robot = Recorder(period=1)
+    engine = dream.swarm.Engine(robot, 4, 0, dream.specs.ROBOTARIUM)
+    x = np.zeros((3, 4))
+    x[0] = np.linspace(-0.5, 0.5, 4)
+    commands = np.arange(8.0).reshape(2, 4) / 100
+    seen = []
+    robot.decide = lambda view: seen.append((view.ids.copy(), view.command.copy())) or np.zeros((len(view), 2))
+    engine.step(1, x, commands)
+    ids, command = seen[0]
+    assert len(ids) == 4 and np.array_equal(command, commands[:, ids].T)
+
+
 @pytest.mark.parametrize(
     "meddle",
     [
@@ -230,8 +246,9 @@ def test_the_decision_gets_rows_never_the_swarm():
         lambda view: view.seen["dx"].__setitem__(slice(None), 0.0),
         lambda view: view.heard["value"].__setitem__(slice(None), 0.0),
         lambda view: view.heard.offsets.__setitem__(slice(None), 0),
+        lambda view: view.command.__setitem__((0, 0), 1.0),
     ],
-    ids=["ids", "detections", "messages", "rows"],
+    ids=["ids", "detections", "messages", "rows", "command"],
 )
 def test_a_decision_cannot_change_what_the_others_perceive(meddle):
     class Meddler(SwarmRobot):

@@ -149,11 +149,10 @@ def test_cells_from_the_board_are_the_cells_from_the_rows(monkeypatch):
     # Without losses the engine finds each cell's messages near it on the board (heard_cells);
     # with them, View.cells goes through every message delivered. Forced through the rows, a
     # whole coverage run (packed start: many ties between equidistant neighbours) is the same.
-    from dream.experiments import voronoi_coverage as vc
 
-    board = vc.run(n=40, seed=2, backend="fast", steps=200, swarm=True, trace=True)
+    board = dream.run("voronoi-coverage", n=40, seed=2, backend="fast", steps=200, swarm=True, trace=True)
     monkeypatch.setattr(Engine, "_lossless", lambda self, faults: False)
-    rows = vc.run(n=40, seed=2, backend="fast", steps=200, swarm=True, trace=True)
+    rows = dream.run("voronoi-coverage", n=40, seed=2, backend="fast", steps=200, swarm=True, trace=True)
     assert np.array_equal(board.trace, rows.trace)
     assert np.ptp(board.trace[:, :2], axis=0).max() > 0.3  # the team did spread
 
@@ -176,10 +175,11 @@ def test_runs_are_the_same_whether_or_not_the_messages_are_counted(tmp_path, fau
     # Without an output that shows the message counts (a trajectory log, a recording) the runner
     # does not count them, and a lossless inbox is found only when the decision reads it (a
     # coverage robot's never is): the run is the same.
-    from dream.experiments import voronoi_coverage as vc
 
     runs = [
-        vc.run(n=30, seed=1, steps=150, backend="fast", swarm=True, trace=True, faults=faults, log=log)
+        dream.run(
+            "voronoi-coverage", n=30, seed=1, steps=150, backend="fast", swarm=True, trace=True, faults=faults, log=log
+        )
         for log in (None, tmp_path / "run.parquet")
     ]
     assert np.array_equal(runs[0].trace, runs[1].trace)

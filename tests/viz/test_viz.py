@@ -120,7 +120,7 @@ class Walk(Experiment):
 def test_the_default_title_has_the_name_and_measures_so_far():
     frames = []
     dream.run(Walk, backend="fast", record=frames.append)
-    measured = Walk.run(backend="fast").measures["mean_x"]
+    measured = dream.run(Walk, backend="fast").measures["mean_x"]
     assert frames[-1].title == f"walk: mean_x {measured:.3g}, moved True"
     renderer = Renderer(ROBOTARIUM)
     renderer.draw(frames[-1])

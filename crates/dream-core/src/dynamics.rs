@@ -199,6 +199,22 @@ pub fn validate_with(
     checks: &Checks,
     wheels: &Wheels,
 ) -> Result<Violations> {
+    Ok(validate_each(poses, velocities, n, arena, checks, wheels)?.0)
+}
+
+/// [`validate_with`]'s counts and the robots in a collision (ascending): the robots of the
+/// pairs it counts, from the same search (a reward's penalty, say).
+///
+/// # Errors
+/// As [`validate_with`].
+pub fn validate_each(
+    poses: &[f64],
+    velocities: &[f64],
+    n: usize,
+    arena: &Arena,
+    checks: &Checks,
+    wheels: &Wheels,
+) -> Result<(Violations, Vec<usize>)> {
     let p = rows("poses", poses, 3, n)?;
     let u = rows("velocities", velocities, 2, n)?;
     let (xs, ys) = (p[0], p[1]);
@@ -208,54 +224,55 @@ pub fn validate_with(
         BoundaryCount::Robots => outside,
         BoundaryCount::Iterations => u64::from(outside > 0),
     };
-
-    let grid = colliders(&p, n, checks);
-    let cells: Vec<Range<usize>> = grid.cell_runs().collect();
-    let count = |cell: &Range<usize>| {
-        let mut count = 0_u64;
-        pairs_in(&grid, cell, checks.diameter, |_, _| count += 1);
-        count
-    };
-    let collision = if n >= PARALLEL_ROBOTS {
-        cells.par_iter().with_min_len(PARALLEL_CELLS).map(count).sum()
-    } else {
-        cells.iter().map(count).sum()
-    };
-
+    let pairs = collision_pairs(&p, n, checks);
     let actuator = u64::from((0..n).any(|i| wheels.exceeded_by(u[0][i], u[1][i])));
-
-    Ok(Violations {
+    let mut robots: Vec<usize> = pairs.iter().flat_map(|&(i, j)| [i, j]).collect();
+    robots.sort_unstable();
+    robots.dedup();
+    let counts = Violations {
         boundary,
-        collision,
+        collision: pairs.len() as u64,
         actuator,
-    })
+    };
+    Ok((counts, robots))
 }
 
 /// Occupied cells a task counts the collisions of (a few thousand robots).
 const PARALLEL_CELLS: usize = 1024;
 
 /// Which robots are in a collision by the criteria `checks`: the robots of the pairs
-/// [`validate_with`] counts (a reward's penalty, say), found the same way.
+/// [`validate_with`] counts, found the same way.
 ///
 /// # Errors
 /// Length or finiteness problems of `poses` (`3 * n`).
 pub fn colliding(poses: &[f64], n: usize, checks: &Checks) -> Result<Vec<bool>> {
     let p = rows("poses", poses, 3, n)?;
-    let grid = colliders(&p, n, checks);
+    let mut flags = vec![false; n];
+    for (i, j) in collision_pairs(&p, n, checks) {
+        flags[i] = true;
+        flags[j] = true;
+    }
+    Ok(flags)
+}
+
+/// The pairs `(i, j)`, `i < j`, whose colliders are within `checks.diameter`, cell by cell.
+fn collision_pairs(p: &[&[f64]], n: usize, checks: &Checks) -> Vec<(usize, usize)> {
+    let grid = colliders(p, n, checks);
     let cells: Vec<Range<usize>> = grid.cell_runs().collect();
     let pairs = |cell: &Range<usize>| {
         let mut found = Vec::new();
-        pairs_in(&grid, cell, checks.diameter, |i, j| found.extend([i, j]));
+        pairs_in(&grid, cell, checks.diameter, |i, j| found.push((i, j)));
         found
     };
-    let found: Vec<Vec<usize>> = if n >= PARALLEL_ROBOTS {
-        cells.par_iter().with_min_len(PARALLEL_CELLS).map(pairs).collect()
+    if n >= PARALLEL_ROBOTS {
+        cells
+            .par_iter()
+            .with_min_len(PARALLEL_CELLS)
+            .flat_map_iter(pairs)
+            .collect()
     } else {
-        cells.iter().map(pairs).collect()
-    };
-    let mut flags = vec![false; n];
-    found.iter().flatten().for_each(|&i| flags[i] = true);
-    Ok(flags)
+        cells.iter().flat_map(pairs).collect()
+    }
 }
 
 /// The grid of the robots' colliders, `checks.collider_offset` ahead of their centres.

@@ -6,7 +6,8 @@
 //! it is heard when `|p_j - p_i| <= radio range` and j is talking (has a message out). Each row
 //! lists ids in increasing order, and a row is the same whichever other rows are asked: the
 //! robots can be perceived for one at a time or all at once. Distances are the neighbour
-//! query's, to the bit.
+//! query's, to the bit. Per-robot values `carried` (the velocities a movement sensor reports,
+//! say) are read at each robot seen, on every core.
 
 use std::f64::consts::TAU;
 
@@ -14,7 +15,7 @@ use rayon::prelude::*;
 
 use crate::error::{check_finite, check_len, try_room, GeomError, Result};
 use crate::neighbours::{within, wrap_angle};
-use crate::parallel::concat;
+use crate::parallel::{concat, map_range};
 
 /// Rows from which the robots are perceived for on every thread.
 const PARALLEL_ROWS: usize = 512;
@@ -32,6 +33,7 @@ pub struct Sight {
 /// distance of each and, for the seen ones, the bearing (world frame, from the perceiving robot
 /// towards the other) and the offset `(dx, dy)` (the other's position less the perceiving
 /// robot's); those three are empty for the heard ones, whom no one needs the direction of.
+/// `carried[c]` holds the `c`-th carried column's values at the robots seen (none for the heard).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Perceived {
     pub offsets: Vec<i64>,
@@ -40,6 +42,7 @@ pub struct Perceived {
     pub bearings: Vec<f64>,
     pub dxs: Vec<f64>,
     pub dys: Vec<f64>,
+    pub carried: Vec<Vec<f64>>,
 }
 
 impl Perceived {
@@ -78,6 +81,7 @@ impl Perceived {
             bearings: column(|p| &p.bearings)?,
             dxs: column(|p| &p.dxs)?,
             dys: column(|p| &p.dys)?,
+            carried: Vec::new(),
         })
     }
 }
@@ -99,7 +103,8 @@ fn check_range(arg: &'static str, value: f64) -> Result<()> {
 
 /// The robots `rows` (ids, increasing) see with `sight` and hear within `radio` (range, and who
 /// is talking), among the robots at `(xs[j], ys[j])` heading `headings[j]`: one neighbour query
-/// within the longer range ([`within`]), whose rows are then sorted out into the two.
+/// within the longer range ([`within`]), whose rows are then sorted out into the two. Each of
+/// `carried` holds one value per robot, read at every robot seen.
 ///
 /// # Errors
 /// Length mismatches, non-finite positions or headings, negative ranges, or rows that are not
@@ -111,11 +116,15 @@ pub fn perceive(
     rows: &[i64],
     sight: Option<Sight>,
     radio: Option<(f64, &[bool])>,
+    carried: &[&[f64]],
 ) -> Result<(Perceived, Perceived)> {
     let n = xs.len();
     check_len("ys", n, ys.len())?;
     check_len("headings", n, headings.len())?;
     check_finite("headings", headings)?;
+    for values in carried {
+        check_len("carried", n, values.len())?;
+    }
     if let Some(s) = sight {
         check_range("sensor range", s.range)?;
         check_range("fov", s.fov)?;
@@ -186,7 +195,11 @@ pub fn perceive(
         vec![sort_out(rows)?]
     };
     let (seen, heard): (Vec<Perceived>, Vec<Perceived>) = parts.into_iter().unzip();
-    let (seen, mut heard) = (Perceived::join(&seen)?, Perceived::join(&heard)?);
+    let (mut seen, mut heard) = (Perceived::join(&seen)?, Perceived::join(&heard)?);
+    seen.carried = carried
+        .iter()
+        .map(|values| map_range(seen.ids.len(), |e| values[seen.ids[e] as usize]))
+        .collect();
     if all_heard {
         heard.offsets = rows.iter().map(|&i| near.indptr[i as usize]).collect();
         heard.offsets.push(near.indptr[n]);
@@ -208,11 +221,24 @@ mod tests {
             direction: 0.0,
         };
         let talking = [true, true, false, true];
-        let (seen, heard) = perceive(&xs, &ys, &headings, &[0, 3], Some(sight), Some((1.0, &talking))).unwrap();
+        let speeds: &[f64] = &[0.5, 0.1, 0.2, 0.3];
+        let (seen, heard) = perceive(
+            &xs,
+            &ys,
+            &headings,
+            &[0, 3],
+            Some(sight),
+            Some((1.0, &talking)),
+            &[speeds],
+        )
+        .unwrap();
         assert_eq!(seen.offsets, vec![0, 1, 1]);
         assert_eq!(seen.ids, vec![1]); // robot 2 is behind robot 0
+        assert_eq!(seen.carried, vec![vec![0.1]]); // robot 1's value
         assert_eq!(heard.offsets, vec![0, 2, 4]);
         assert_eq!(heard.ids, vec![1, 3, 0, 1]); // robot 2 is silent; 0 and 3 are 0.9 apart
-        assert!(perceive(&xs, &ys, &headings, &[4], Some(sight), None).is_err());
+        assert!(heard.carried.is_empty());
+        assert!(perceive(&xs, &ys, &headings, &[4], Some(sight), None, &[]).is_err());
+        assert!(perceive(&xs, &ys, &headings, &[0], Some(sight), None, &[&speeds[1..]]).is_err());
     }
 }

@@ -57,17 +57,18 @@ pub fn threshold_wheels<'py>(
 }
 
 /// `(boundary, collision, actuator)` violation counts of one iteration, by rps's criteria
-/// (0.0.0's by default; 2.1's with `collider_offset=0.025, boundary_per_iteration=True`).
+/// (0.0.0's by default; 2.1's with `collider_offset=0.025, boundary_per_iteration=True`), and
+/// the robots in a collision `(m,)` int64, ascending (the robots of the pairs counted).
 #[pyfunction]
 #[pyo3(signature = (
     poses, velocities, bounds, *, diameter, wheel_radius, base_length, max_wheel,
     collider_offset = 0.0, boundary_per_iteration = false,
 ))]
 #[allow(clippy::too_many_arguments)]
-pub fn validate(
-    py: Python<'_>,
-    poses: Bound<'_, PyAny>,
-    velocities: Bound<'_, PyAny>,
+pub fn validate<'py>(
+    py: Python<'py>,
+    poses: Bound<'py, PyAny>,
+    velocities: Bound<'py, PyAny>,
     bounds: (f64, f64, f64, f64),
     diameter: f64,
     wheel_radius: f64,
@@ -75,7 +76,7 @@ pub fn validate(
     max_wheel: f64,
     collider_offset: f64,
     boundary_per_iteration: bool,
-) -> PyDreamResult<(u64, u64, u64)> {
+) -> PyDreamResult<(u64, u64, u64, Bound<'py, PyArray1<i64>>)> {
     let (p, n) = rows_of("poses", &poses, 3)?;
     let (u, m) = rows_of("velocities", &velocities, 2)?;
     same_count("velocities", n, m, 2)?;
@@ -87,8 +88,14 @@ pub fn validate(
         BoundaryCount::Robots
     };
     let checks = Checks::new(diameter, collider_offset, boundary)?;
-    let counts = py.detach(|| dynamics::validate_with(&p, &u, n, &arena, &checks, &wheels))?;
-    Ok((counts.boundary, counts.collision, counts.actuator))
+    let (counts, robots) = py.detach(|| dynamics::validate_each(&p, &u, n, &arena, &checks, &wheels))?;
+    let robots: Vec<i64> = robots.into_iter().map(|i| i as i64).collect();
+    Ok((
+        counts.boundary,
+        counts.collision,
+        counts.actuator,
+        robots.into_pyarray(py),
+    ))
 }
 
 /// `(n,)` bool: the robots in a collision by rps's criteria (the pairs `validate` counts: colliders

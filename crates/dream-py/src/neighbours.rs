@@ -4,6 +4,7 @@ use dream_core::neighbours::{self as core, FieldOfView, RowsOf};
 use dream_core::perceive::{perceive as core_perceive, Perceived, Sight};
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
+use pyo3::types::PyTuple;
 
 use crate::arrays::{count_of, flags_of, indices_of, points_of, vector_of};
 use crate::errors::{value_error, PyDreamResult};
@@ -84,9 +85,11 @@ pub fn far_from<'py>(
 }
 
 /// Who the robots `rows` see and hear: `(seen, heard)`, `(offsets, ids, distances, bearings, dx,
-/// dy)` and `(offsets, ids, distances)`.
+/// dy, *carried)` (each of `carried` `(n,)` read at the robots seen) and `(offsets, ids,
+/// distances)`.
 #[pyfunction]
-#[pyo3(signature = (positions, headings, rows, *, sight=None, radio_range=None, talking=None))]
+#[pyo3(signature = (positions, headings, rows, *, sight=None, radio_range=None, talking=None, carried=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn perceive<'py>(
     py: Python<'py>,
     positions: Bound<'py, PyAny>,
@@ -95,10 +98,16 @@ pub fn perceive<'py>(
     sight: Option<(f64, f64, f64)>,
     radio_range: Option<f64>,
     talking: Option<Bound<'py, PyAny>>,
-) -> PyDreamResult<(Perception<'py>, CsrArrays<'py>)> {
+    carried: Option<Vec<Bound<'py, PyAny>>>,
+) -> PyDreamResult<(Bound<'py, PyTuple>, CsrArrays<'py>)> {
     let p = points_of::<2>("positions", &positions)?;
     let n = p.len();
     let headings = vector_of("headings", &headings, Some(n))?;
+    let carried = carried
+        .unwrap_or_default()
+        .iter()
+        .map(|column| vector_of("carried", column, Some(n)))
+        .collect::<PyDreamResult<Vec<_>>>()?;
     let rows = indices_of("rows", &rows)?;
     let talking = talking.map(|t| flags_of("talking", &t, n)).transpose()?;
     let radio = match (radio_range, talking.as_deref()) {
@@ -108,7 +117,8 @@ pub fn perceive<'py>(
     };
     let sight = sight.map(|(range, fov, direction)| Sight { range, fov, direction });
     let (xs, ys): (Vec<f64>, Vec<f64>) = p.iter().map(|q| (q[0], q[1])).unzip();
-    let (seen, heard) = py.detach(|| core_perceive(&xs, &ys, &headings, &rows, sight, radio))?;
+    let columns: Vec<&[f64]> = carried.iter().map(|c| &c[..]).collect();
+    let (seen, heard) = py.detach(|| core_perceive(&xs, &ys, &headings, &rows, sight, radio, &columns))?;
     let Perceived {
         offsets,
         ids,
@@ -116,16 +126,13 @@ pub fn perceive<'py>(
         bearings,
         dxs,
         dys,
+        carried,
     } = seen;
+    let mut items: Vec<Bound<'py, PyAny>> = vec![offsets.into_pyarray(py).into_any(), ids.into_pyarray(py).into_any()];
+    items.extend([distances, bearings, dxs, dys].map(|column| column.into_pyarray(py).into_any()));
+    items.extend(carried.into_iter().map(|column| column.into_pyarray(py).into_any()));
     Ok((
-        (
-            offsets.into_pyarray(py),
-            ids.into_pyarray(py),
-            distances.into_pyarray(py),
-            bearings.into_pyarray(py),
-            dxs.into_pyarray(py),
-            dys.into_pyarray(py),
-        ),
+        PyTuple::new(py, items)?,
         (
             heard.offsets.into_pyarray(py),
             heard.ids.into_pyarray(py),
@@ -133,12 +140,3 @@ pub fn perceive<'py>(
         ),
     ))
 }
-
-type Perception<'py> = (
-    Bound<'py, PyArray1<i64>>,
-    Bound<'py, PyArray1<i64>>,
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray1<f64>>,
-);

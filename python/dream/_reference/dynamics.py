@@ -47,8 +47,9 @@ def validate(
     max_wheel: float,
     collider_offset: float = 0.0,
     boundary_per_iteration: bool = False,
-) -> tuple[int, int, int]:
-    """``(boundary, collision, actuator)`` counts of one iteration by rps's ``_validate`` criteria.
+) -> tuple[int, int, int, np.ndarray]:
+    """``(boundary, collision, actuator)`` counts of one iteration by rps's ``_validate`` criteria,
+    and the robots in a collision ``(m,)`` int64, ascending (the robots of the pairs counted).
 
     boundary: robots outside ``bounds`` (xmin, xmax, ymin, ymax), or 1 if any is when
     ``boundary_per_iteration``; collision: pairs whose colliders (``collider_offset`` ahead of the
@@ -60,9 +61,10 @@ def validate(
     boundary = int(np.count_nonzero((x < xmin) | (x > xmax) | (y < ymin) | (y > ymax)))
     if boundary_per_iteration:
         boundary = min(boundary, 1)
-    collision = int(np.count_nonzero(_pairs(poses, diameter, collider_offset)))
+    pairs = _pairs(poses, diameter, collider_offset)
     actuator = int(np.any(np.abs(wheel_speeds(velocities, wheel_radius, base_length)) > max_wheel))
-    return boundary, collision, actuator
+    robots = np.flatnonzero(pairs.any(axis=0) | pairs.any(axis=1)).astype(np.int64)
+    return boundary, int(np.count_nonzero(pairs)), actuator, robots
 
 
 def colliding(poses: FloatArray, *, diameter: float, collider_offset: float = 0.0) -> np.ndarray:

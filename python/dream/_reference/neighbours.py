@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from dream._checks import FloatArray
@@ -106,11 +108,12 @@ def perceive(
     sight: tuple[float, float, float] | None = None,
     radio_range: float | None = None,
     talking: np.ndarray | None = None,
+    carried: Sequence[FloatArray] | None = None,
 ) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
     """Who the robots ``rows`` see (``sight``: range, fov, direction) and hear (within
     ``radio_range``, among the ``talking``): ``(seen, heard)``, ``(offsets, ids, distances,
-    bearings, dx, dy)`` and ``(offsets, ids, distances)`` over those rows, ids increasing in each
-    row."""
+    bearings, dx, dy, *carried)`` (each of ``carried`` ``(n,)`` read at the robots seen) and
+    ``(offsets, ids, distances)`` over those rows, ids increasing in each row."""
     n = len(positions)
     reach = max(0.0 if sight is None else sight[0], 0.0 if radio_range is None else radio_range)
     asked = np.zeros(n, dtype=bool)
@@ -139,4 +142,6 @@ def perceive(
             return offsets, np.zeros(0, dtype=np.int64), *(np.zeros(0) for _ in range(columns - 1))
         return (offsets, *(np.concatenate([p[k] for p in parts]) for k in range(columns)))
 
-    return csr(seen, 5), csr(heard, 2)
+    seen_csr = csr(seen, 5)
+    ids = seen_csr[1]
+    return (*seen_csr, *(np.asarray(values, dtype=np.float64)[ids] for values in carried or ())), csr(heard, 2)

@@ -115,7 +115,7 @@ def make_robotarium(
         the arena is the Robotarium's, else the Fast backend.
     initial_conditions : (3, n) array_like, optional
         Initial poses; default: :func:`initial_poses` drawn from ``rng``, else from a generator
-        seeded with ``seed``, else from the current world's generator.
+        seeded with ``seed`` (neither: a fresh, unseeded generator, as rps draws its own).
     seed : int, optional
         Seed of the initial poses' generator.
     rng : numpy.random.Generator, optional
@@ -138,7 +138,7 @@ def make_robotarium(
             raise ValueError("give the initial poses' generator (rng) or its seed, not both")
         arena_for_poses = ROBOTARIUM if arena is None else arena
         if rng is None:
-            rng = current_world().rng if seed is None else np.random.default_rng(seed)
+            rng = np.random.default_rng(seed)
         initial_conditions = initial_poses(n, rng, arena_for_poses)
     sim = make_simulator(n, backend, initial_conditions, arena=arena, rules=rules, startup=startup)
     current_world().keep_to(sim.arena, sim.spec)

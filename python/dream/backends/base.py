@@ -35,6 +35,8 @@ class Backend(ABC):
         Steps taken.
     violations : dream.kernels.Violations
         Counts summed over all steps so far.
+    in_collision : (m,) int64 ndarray
+        The robots in a collision at the last step's count, ascending.
     """
 
     name = "backend"
@@ -49,6 +51,7 @@ class Backend(ABC):
         self._requested = np.zeros((2, self.number_of_robots))
         self.iterations = 0
         self.violations = kernels.Violations(0, 0, 0)
+        self.in_collision = np.zeros(0, dtype=np.int64)
         self._poses = poses.copy()
         self._poses_taken = False
         self._figure: Any = None
@@ -91,7 +94,7 @@ class Backend(ABC):
         if not self._poses_taken:
             raise RuntimeError("call get_poses() before each step(), as on the Robotarium")
         checked = self._requested if self.spec.validates_requested else self.velocities
-        found = kernels.validate(self._poses, checked, self.arena, self.spec)
+        found, self.in_collision = kernels.validate_each(self._poses, checked, self.arena, self.spec)
         self.violations = kernels.Violations(*(a + b for a, b in zip(self.violations, found)))
         self._advance()
         self.iterations += 1

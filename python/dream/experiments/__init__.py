@@ -6,27 +6,11 @@ from dream.experiments.affine_formation import AffineFormation
 from dream.experiments.files import ExperimentFileError, load_file
 from dream.experiments.hrvo_circle import HrvoCircle
 from dream.experiments.line_consensus import LineConsensus
+from dream.experiments.registry import EXPERIMENTS, find
 from dream.experiments.result import ExperimentResult
 from dream.experiments.runner import resume, run
 from dream.experiments.spec import Experiment, Param, param
 from dream.experiments.voronoi_coverage import VoronoiCoverage
-
-#: Built-in experiments by name.
-EXPERIMENTS: dict[str, type[Experiment]] = {
-    cls.name: cls for cls in (HrvoCircle, LineConsensus, VoronoiCoverage, AffineFormation)
-}
-
-
-def find(source: str) -> type[Experiment]:
-    """A built-in experiment by name, or the experiment a ``.py`` file defines."""
-    if source in EXPERIMENTS:
-        return EXPERIMENTS[source]
-    if source.endswith(".py"):
-        return load_file(source)
-    raise ValueError(
-        f"unknown experiment {source!r}: choose one of {', '.join(sorted(EXPERIMENTS))}, or give a .py file"
-    )
-
 
 __all__ = [
     "EXPERIMENTS",

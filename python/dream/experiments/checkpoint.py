@@ -37,7 +37,7 @@ from dream.experiments.files import ExperimentFileError, load_file, module_name,
 
 if TYPE_CHECKING:
     from dream.backends.base import Backend
-    from dream.experiments.runner import Stepper
+    from dream.experiments.stepper import Stepper
 
 #: The first line of a checkpoint; the signature (hex HMAC-SHA256 of the whole file but this line),
 #: a JSON line (version, experiment file) and the pickle follow.

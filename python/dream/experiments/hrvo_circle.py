@@ -449,6 +449,3 @@ class HrvoCircle(Experiment):
         assert isinstance(robot, CircleRobot)
         goals = robot.goals(np.arange(self.n), memory["heading"])
         return circle_frame(step, self.sim, goals, self.engine.dxi, memory["state"], sensing=self.sensing)
-
-
-run = HrvoCircle.run

@@ -277,6 +277,3 @@ class LineConsensus(Experiment):
             links=np.column_stack((receivers[upper], senders[upper])),
             title=f"{NAME}: y spread {spread:.3f} m, spacing error {error:.3f} m",
         )
-
-
-run = LineConsensus.run

@@ -290,13 +290,6 @@ class Experiment:
         """This instance's parameter values."""
         return {key: getattr(self, key) for key in self.parameters()}
 
-    @classmethod
-    def run(cls, n: int | None = None, seed: int = 0, backend: str = "auto", steps: int | None = None, **options: Any):  # type: ignore[no-untyped-def]
-        """:func:`dream.run` of this experiment (keyword arguments: the runner's and the parameters)."""
-        from dream.experiments.runner import run
-
-        return run(cls, n=n, seed=seed, backend=backend, steps=steps, **options)
-
     # -- hooks -------------------------------------------------------------------------------
     def check(self, n: int, backend: str) -> None:
         """Raise ``ValueError`` (saying why and what the limit is) for a size that cannot succeed."""

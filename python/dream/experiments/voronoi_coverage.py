@@ -310,6 +310,3 @@ class VoronoiCoverage(Experiment):
             ranges={"obstacle sensing": CELL_RADIUS, "radio": RADIO_RANGE},
             title=f"{NAME}: cost {self.last_cost / self.cost_start:.0%} of its start, static contacts {self.contacts}",
         )
-
-
-run = VoronoiCoverage.run

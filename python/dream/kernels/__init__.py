@@ -25,6 +25,7 @@ from dream.kernels._dynamics import (
     threshold_velocities,
     unicycle_step,
     validate,
+    validate_each,
     wheel_speeds,
 )
 from dream.kernels._guard import motion_guard
@@ -47,6 +48,7 @@ __all__ = [
     "threshold_velocities",
     "wheel_speeds",
     "validate",
+    "validate_each",
     "colliding",
     "dxi_to_dxu",
     "actuator_limit",

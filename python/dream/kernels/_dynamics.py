@@ -76,6 +76,14 @@ def validate(poses: Any, velocities: Any, arena: ArenaSpec = ROBOTARIUM, spec: S
     ``spec.diameter``, found with a grid by the Rust kernel (O(n)); robots outside the arena count
     one each, or once per iteration when ``spec.boundary_per_iteration`` (rps 2.1).
     """
+    return validate_each(poses, velocities, arena, spec)[0]
+
+
+def validate_each(
+    poses: Any, velocities: Any, arena: ArenaSpec = ROBOTARIUM, spec: SimulatorSpec = RPS
+) -> tuple[Violations, np.ndarray]:
+    """:func:`validate`'s counts and the robots in a collision ``(m,)`` int64, ascending (the robots
+    of the pairs counted, :func:`colliding`'s), from the same search."""
     p = as_poses(poses)
     u = _commands(velocities, "velocities", p.shape[1])
     counts = implementation("validate")(
@@ -89,7 +97,7 @@ def validate(poses: Any, velocities: Any, arena: ArenaSpec = ROBOTARIUM, spec: S
         collider_offset=spec.collider_offset,
         boundary_per_iteration=spec.boundary_per_iteration,
     )
-    return Violations(*counts)
+    return Violations(*counts[:3]), counts[3]
 
 
 def colliding(poses: Any, spec: SimulatorSpec = RPS) -> np.ndarray:

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from dream._checks import as_array, as_offsets
+from dream._checks import FloatArray, as_array, as_offsets
 from dream.kernels._dispatch import implementation
 
 
@@ -26,7 +26,24 @@ def motion_guard(
     x = as_array(dx, "dx", (None,))
     y = as_array(dy, "dy", (len(x),))
     cuts = as_offsets(offsets, "offsets", len(x), rows=len(v))
+    return motion_guard_trusted(v, theta, cuts, x, y, near=near, horizon=horizon)
+
+
+def motion_guard_trusted(
+    speeds: FloatArray,
+    headings: FloatArray,
+    offsets: np.ndarray,
+    dx: FloatArray,
+    dy: FloatArray,
+    *,
+    near: float,
+    horizon: float,
+) -> np.ndarray:
+    """:func:`motion_guard` of arrays its caller built and vouches for: finite float64 of the
+    right shapes, cut into rows by int64 ``offsets`` (the swarm engine's own commands and
+    perception), so that they are not checked again, entry by entry; ``near`` and ``horizon``
+    are."""
     for name, value in (("near", near), ("horizon", horizon)):
         if not (np.isfinite(value) and value > 0):
             raise ValueError(f"`{name}` must be finite and > 0, got {value}")
-    return implementation("motion_guard")(v, theta, cuts, x, y, near=near, horizon=horizon)
+    return implementation("motion_guard")(speeds, headings, offsets, dx, dy, near=near, horizon=horizon)

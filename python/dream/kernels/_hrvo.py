@@ -21,6 +21,8 @@ PREFERRED_LIMIT = 1e6
 
 def _bounded(preferred: FloatArray) -> FloatArray:
     """``preferred`` ``(n, 2)`` with each row no longer than :data:`PREFERRED_LIMIT`."""
+    if not preferred.size or max(preferred.max(), -preferred.min()) <= PREFERRED_LIMIT / 2:
+        return preferred  # no coordinate above half the limit, so no row near it (NaN: checked below)
     norm = np.hypot(preferred[:, 0], preferred[:, 1])
     huge = norm > PREFERRED_LIMIT
     if not huge.any():
@@ -226,7 +228,7 @@ def hrvo_rows(
     pos = as_array(positions, "positions", (None, 2))
     m = pos.shape[0]
     v = as_array(velocities, "velocities", (m, 2))
-    pref = _bounded(as_array(preferred, "preferred", (m, 2)))
+    pref = as_array(preferred, "preferred", (m, 2))  # bounded by hrvo_rows_trusted
     if isinstance(detections, tuple):
         if len(detections) != 4:
             raise ValueError(f"`detections` columns must be (distance, angle, vx, vy), got {len(detections)} columns")
@@ -238,13 +240,48 @@ def hrvo_rows(
     if len(distance) and distance.min() < 0:
         raise ValueError(f"`detection distance` must be finite and >= 0, got {distance.min()}")
     cuts = as_offsets(offsets, "offsets", len(distance), m)
-    return implementation("hrvo_rows")(
+    return hrvo_rows_trusted(
         v,
         pref,
         pos,
         cuts,
         seen,
         safety=check_nonnegative(safety, "safety"),
+        v_max=v_max,
+        bounds=bounds,
+        n_angles=n_angles,
+        n_speeds=n_speeds,
+        include_preferred=include_preferred,
+        towards=towards,
+    )
+
+
+def hrvo_rows_trusted(
+    velocities: FloatArray,
+    preferred: FloatArray,
+    positions: FloatArray,
+    offsets: np.ndarray,
+    detections: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    *,
+    safety: float,
+    v_max: float,
+    bounds: Bounds | None,
+    n_angles: int,
+    n_speeds: int,
+    include_preferred: bool,
+    towards: bool,
+) -> FloatArray:
+    """:func:`hrvo_rows` of arrays its caller built and vouches for: float64 of the right shapes,
+    finite, detections at distances >= 0 cut into rows by int64 ``offsets`` (the swarm engine's
+    own perception and checked decisions), so that they are not checked again, entry by entry;
+    the parameters are. Huge preferred velocities are bounded as :func:`hrvo_rows` bounds them."""
+    return implementation("hrvo_rows")(
+        velocities,
+        _bounded(preferred),
+        positions,
+        offsets,
+        detections,
+        safety=safety,
         v_max=v_max,
         bounds=checked_bounds(bounds),
         candidates=_checked_grid(v_max, n_angles, n_speeds),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -108,8 +109,9 @@ def far_from(points: Any, others: Any, distance: float, *, offsets: tuple[Any, A
     return implementation("far_from")(p, q, distance, cuts, theirs)
 
 
-#: What the asked robots see: ``(offsets, ids, distances, bearings, dx, dy)`` over their rows.
-Perceived = tuple[np.ndarray, np.ndarray, FloatArray, FloatArray, FloatArray, FloatArray]
+#: What the asked robots see: ``(offsets, ids, distances, bearings, dx, dy, *carried)`` over
+#: their rows.
+Perceived = tuple[np.ndarray, ...]
 #: What they hear: ``(offsets, ids, distances)``.
 Heard = tuple[np.ndarray, np.ndarray, FloatArray]
 
@@ -122,6 +124,7 @@ def perceive(
     sight: tuple[float, float, float] | None = None,
     radio_range: float | None = None,
     talking: Any = None,
+    carried: Sequence[Any] = (),
 ) -> tuple[Perceived, Heard]:
     """Who the robots ``rows`` ``(m,)`` (increasing ids) see and hear, in one neighbour query.
 
@@ -131,8 +134,9 @@ def perceive(
     ``(seen, heard)``: ``(offsets (m + 1,), ids, distances, bearings, dx, dy)`` and ``(offsets,
     ids, distances)``; row r's entries are ``offsets[r]:offsets[r + 1]``, ids increasing;
     bearings are world-frame directions from the perceiving robot towards the other, ``(dx, dy)``
-    the other's position less the perceiving robot's. A row does not
-    depend on which other rows are asked.
+    the other's position less the perceiving robot's; then one column per array of ``carried``
+    (each ``(n,)``, one value per robot, NaN passed on: the velocities a movement sensor reports,
+    say), its values at the robots seen. A row does not depend on which other rows are asked.
     """
     p = as_array(positions, "positions", (None, 2))
     n = p.shape[0]
@@ -152,4 +156,19 @@ def perceive(
     if radio_range is not None:
         check_nonnegative(radio_range, "radio range")
         flags = as_flags(talking, "talking", n)
-    return implementation("perceive")(p, h, asked, sight=sight, radio_range=radio_range, talking=flags)
+    columns = [_carried(values, n) for values in carried]
+    return implementation("perceive")(
+        p, h, asked, sight=sight, radio_range=radio_range, talking=flags, carried=columns or None
+    )
+
+
+def _carried(values: Any, n: int) -> FloatArray:
+    """``values`` as a C-contiguous ``(n,)`` float64 array: data carried to the robots seen, not
+    geometry, so NaN goes through as it is."""
+    try:
+        array = np.ascontiguousarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"`carried` must hold float arrays of shape ({n},): {err}") from None
+    if array.shape != (n,):
+        raise ValueError(f"`carried` must hold arrays of shape ({n},), one value per robot, got {array.shape}")
+    return array

@@ -37,7 +37,7 @@ import numpy as np
 from dream import kernels
 from dream.backends import make_robotarium, rules_named
 from dream.experiments import Experiment
-from dream.experiments.runner import Stepper
+from dream.experiments.stepper import Stepper
 from dream.faults import Faults
 from dream.rl.learner import goals_of, learning_class
 from dream.rl.observation import Layout
@@ -169,13 +169,13 @@ class Team:
                 top = engine.limits
                 exp.dxu[:, rows] = kernels.actuator_limit(actions[rows].T * [[top.v_max], [top.w_max]], top)
             self.sim.set_velocities(np.arange(self.n), self.stepper.carried_out())
-            collisions = self.sim.violations.collision
             self.sim.step()
-            collided = self.sim.violations.collision > collisions
             poses = self.sim.poses
             done = self.stepper.after(self.t + 1, poses)
         self.t += 1
-        rewards = self._rewards(poses, done, self._colliding(self.x) if collided else np.zeros(self.n, dtype=bool))
+        colliding = np.zeros(self.n, dtype=bool)
+        colliding[self.sim.in_collision] = True  # the robots of the pairs the simulator counted
+        rewards = self._rewards(poses, done, colliding)
         terminated = np.full(self.n, done) | self.gone
         truncated = np.full(self.n, self.t >= self.cap)
         self.ended = done or self.t >= self.cap
@@ -218,11 +218,6 @@ class Team:
         if done:
             rewards += SUCCESS * self.exp.correct
         return rewards
-
-    def _colliding(self, poses: np.ndarray) -> np.ndarray:
-        """``(n,)`` bool: robots whose collider is within a diameter of another's, the pairs the
-        simulator counted (searched only in a step where it counted a collision)."""
-        return kernels.colliding(poses, self.sim.spec)
 
     def _outside(self, poses: np.ndarray) -> np.ndarray:
         xmin, xmax, ymin, ymax = self.exp.arena.bounds

@@ -27,7 +27,7 @@ def cut(whole: View) -> list[View]:
     k = len(whole)
     seen, heard = _rows(whole.seen, k), _rows(whole.heard, k)
     obstacles: Sequence[Neighbourhood | None] = [None] * k if whole.obstacles is None else _rows(whole.obstacles, k)
-    ids, clock, pose, memory = whole.ids, whole.clock, whole.pose, whole.memory
+    ids, clock, pose, memory, command = whole.ids, whole.clock, whole.pose, whole.memory, whole.command
     return [
         View(
             ids[r : r + 1],
@@ -37,6 +37,7 @@ def cut(whole: View) -> list[View]:
             heard[r],
             {key: values[r : r + 1] for key, values in memory.items()},
             obstacles[r],
+            None if command is None else command[r : r + 1],
             board_cells=whole.board_cells,
         )
         for r in range(k)

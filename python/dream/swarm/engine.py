@@ -41,7 +41,7 @@ from dream.specs import ArenaSpec, SimulatorSpec
 from dream.swarm import byrobot, draws
 from dream.swarm.neighbourhood import Deferred, Neighbourhood
 from dream.swarm.robot import SwarmRobot, View
-from dream.swarm.safety import DETECTION, drive
+from dream.swarm.safety import DETECTION, at_rows, drive
 from dream.traffic import Traffic
 
 #: What robots said: their ids ``(k,)`` and their message's fields (name to ``(k,)``).
@@ -134,7 +134,9 @@ class Engine:
             due &= ~faults.crashed
         self.last[due] = clock[due]
         rows = np.flatnonzero(due)
-        rows = rows[self._odometry(t, rows, x, faults)]
+        known = self._odometry(t, rows, x, faults)
+        if not known.all():
+            rows = rows[known]
         if self.robot.movement is not None:  # a robot whose sensor reading is lost holds its command
             rows = rows[self._kept(t, rows, np.full(len(rows), -2), faults)]
         if self.robot.obstacles is not None:  # so does one whose obstacle reading is lost
@@ -143,9 +145,9 @@ class Engine:
         if not len(rows):
             return []
         # What the sensors see of the others' motion: their commands before anyone decides now.
-        velocities = seen_velocity(commands, x[2])
+        velocities = () if self.robot.movement is None else seen_velocity(commands, x[2])
         talking = self.sent_at >= 0
-        whole = self._view(t, rows, clock[rows], x, velocities, talking, faults)
+        whole = self._view(t, rows, clock[rows], x, commands, velocities, talking, faults)
         if not self.one_by_one:
             return [whole]
         self._cut = (whole, byrobot.cut(whole))  # perceived at once, decided one by one
@@ -180,11 +182,13 @@ class Engine:
         rows: np.ndarray,
         clock: np.ndarray,
         x: np.ndarray,
-        velocities: tuple[np.ndarray, np.ndarray],
+        commands: np.ndarray,
+        velocities: tuple[np.ndarray, ...],
         talking: np.ndarray,
         faults: FaultState | None,
     ) -> View:
-        """What the robots ``rows`` perceive and hear."""
+        """What the robots ``rows`` perceive and hear (``velocities``: every robot's ``(vx, vy)`` as
+        the movement sensor reports them, none without one)."""
         movement, radio = self.robot.movement, self.robot.radio
         by_range = radio is not None and radio.graph is None
         lossless = by_range and self._lossless(faults)
@@ -198,6 +202,7 @@ class Engine:
             sight=None if movement is None else (movement.range, movement.fov, movement.direction),
             radio_range=radio.range if radio is not None and by_range and not deferred else None,
             talking=talking if by_range and not deferred else None,
+            carried=velocities,  # read at the robots seen, in the same pass
         )
         if radio is not None and radio.graph is not None:
             heard = _linked(radio.graph, rows, x, talking)
@@ -211,16 +216,18 @@ class Engine:
             )
         else:
             inbox = self._hear(t, rows, heard, faults).frozen()
-        ids = rows.copy()
-        ids.flags.writeable = False
+        ids, command = rows.copy(), commands[:, rows].T.copy()
+        ids.flags.writeable = command.flags.writeable = False
+        at = at_rows(rows, self.n)
         view = View(
             ids,
             clock.copy(),
-            self.belief[rows],
-            self._sense(t, rows, seen, velocities, faults).frozen(),
+            _taken(self.belief, at),
+            self._sense(t, rows, seen, faults).frozen(),
             inbox,
-            {key: values[rows] for key, values in self.memory.items()},
+            {key: _taken(values, at) for key, values in self.memory.items()},
             self._obstacles(t, rows, x, faults).frozen(),
+            command,
         )
         if lossless:
             view.board_cells = partial(self._board_cells, x[:2].T, talking)
@@ -232,9 +239,10 @@ class Engine:
         """Check a view's decision, keep its memory and put its commands into ``out``. Returns what
         its robots said (their ids and fields), if anything."""
         rows = np.asarray(view.ids)
+        at = at_rows(rows, self.n)
         wished, straight, safety, heeded, said = self._settle(view, wished)
         seen = view.seen if heeded is None else view.seen.where(heeded)
-        out[:, rows] = drive(self, rows, wished, self.belief[rows], seen, straight, safety)
+        out[:, at] = drive(self, rows, wished, self.belief[at], seen, straight, safety)
         return said
 
     def _apply_pieces(self, whole: View, views: list[View], wishes: list[Any], out: np.ndarray) -> list[Said | None]:
@@ -243,10 +251,11 @@ class Engine:
         pieces = enumerate(zip(views, wishes, self._handed))
         settled = [self._settle(view, wish, (whole.memory, slice(r, r + 1), kept)) for r, (view, wish, kept) in pieces]
         rows = np.asarray(whole.ids)
+        at = at_rows(rows, self.n)
         for key, values in whole.memory.items():  # every robot's memory row, changed or not
-            self.memory[key][rows] = values
+            self.memory[key][at] = values
         wished, straight, safety, seen = byrobot.merged(whole, settled, self.robot.avoid)
-        out[:, rows] = drive(self, rows, wished, self.belief[rows], seen, straight, safety)
+        out[:, at] = drive(self, rows, wished, self.belief[at], seen, straight, safety)
         return [said for *_, said in settled]
 
     def _settle(
@@ -264,7 +273,7 @@ class Engine:
                 f"{name}.decide must return finite velocities of shape (k, 2) = ({len(rows)}, 2), "
                 f"got shape {wished.shape}" + ("" if wished.shape != (len(rows), 2) else " with NaN or inf")
             )
-        into, at, handed = (self.memory, rows, {}) if piece is None else piece
+        into, at, handed = (self.memory, at_rows(rows, self.n), {}) if piece is None else piece
         for key, values in view.memory.items():
             if key in handed and values is handed[key]:
                 continue
@@ -335,13 +344,17 @@ class Engine:
     def _odometry(self, t: int, rows: np.ndarray, x: np.ndarray, faults: FaultState | None) -> np.ndarray:
         """Read the odometry of ``rows`` into :attr:`belief`; a dropped reading leaves the belief as
         it was. Returns which of ``rows`` know their pose (``(k,)`` bool)."""
-        reading = x[:, rows].T.copy()
+        at = at_rows(rows, self.n)
+        reading = x[:, at].T
         sigma = math.hypot(self.robot.odometry_noise, 0.0 if faults is None else faults.faults.sensor_noise)
         if sigma > 0:
-            reading += sigma * draws.normal(self.seed, draws.ODOMETRY_NOISE, t, rows[:, None], np.arange(3))
+            reading = reading + sigma * draws.normal(self.seed, draws.ODOMETRY_NOISE, t, rows[:, None], np.arange(3))
         kept = self._kept(t, rows, np.full(len(rows), -1), faults)
-        self.belief[rows[kept]] = reading[kept]
-        return np.isfinite(self.belief[rows, 0])
+        if kept.all():
+            self.belief[at] = reading
+        else:
+            self.belief[rows[kept]] = reading[kept]
+        return np.isfinite(self.belief[at, 0])
 
     def _kept(self, t: int, me: np.ndarray, others: np.ndarray, faults: FaultState | None) -> np.ndarray:
         """Which readings of robots ``me`` the dropout fault keeps (``others``: -1 for the odometry,
@@ -358,17 +371,16 @@ class Engine:
         t: int,
         rows: np.ndarray,
         seen: Perceived,
-        velocities: tuple[np.ndarray, np.ndarray],
         faults: FaultState | None,
     ) -> Neighbourhood:
         """The movement sensor's detections (what :func:`dream.kernels.perceive` found ``rows``
-        see; ``velocities``: every robot's as the sensor estimates it), with the sensor's noise and
-        the world's sensor faults."""
+        see, with the velocities the sensor reports for them), with the sensor's noise and the
+        world's sensor faults."""
         sensor = self.robot.movement
-        offsets, others, gaps, bearing, dx, dy = seen
+        offsets, others, gaps, bearing, dx, dy, *moving = seen
         if sensor is None:
             return Neighbourhood(offsets, {name: np.zeros(0) for name in (*DETECTION, "dx", "dy")})
-        columns = {"distance": gaps, "bearing": bearing, "vx": velocities[0][others], "vy": velocities[1][others]}
+        columns = {"distance": gaps, "bearing": bearing, "vx": moving[0], "vy": moving[1]}
         sigma = math.hypot(sensor.noise, 0.0 if faults is None else faults.faults.sensor_noise)
         if sigma > 0:
             me = np.repeat(rows, np.diff(offsets))
@@ -504,7 +516,9 @@ class Engine:
         # was sent: robots deciding together cannot hear each other (the order they decide in is
         # no one's business).
         air = {"visible": t + np.maximum(delay, 1), "sender": senders, "sent": np.full(len(senders), t), **fields}
-        self.air = {key: np.concatenate((self.air[key], air[key])) for key in self.air}
+        if len(self.air["visible"]):
+            air = {key: np.concatenate((self.air[key], air[key])) for key in self.air}
+        self.air = air
 
     def _lie(self, t: int, senders: np.ndarray, liars: np.ndarray, fields: dict[str, np.ndarray], rule: str) -> None:
         """Replace the float fields of the liars' messages by the adversary ``rule`` (ints kept)."""
@@ -526,11 +540,15 @@ class Engine:
         arrived = np.flatnonzero(air["visible"] <= t)
         if not len(arrived):
             return
-        # The newest per sender: sort by (sender, sent), keep each sender's last.
-        order = arrived[np.lexsort((air["sent"][arrived], air["sender"][arrived]))]
-        last = np.r_[air["sender"][order][1:] != air["sender"][order][:-1], True]
-        newest = order[last]
-        senders = air["sender"][newest]
+        senders = air["sender"][arrived]
+        if len(senders) > 1 and (senders[1:] <= senders[:-1]).any():
+            # The newest per sender: sort by (sender, sent), keep each sender's last.
+            order = arrived[np.lexsort((air["sent"][arrived], senders))]
+            last = np.r_[air["sender"][order][1:] != air["sender"][order][:-1], True]
+            newest = order[last]
+            senders = air["sender"][newest]
+        else:  # one message from each sender, in order (all sent at one step, say): no sort
+            newest = arrived
         newer = air["sent"][newest] > self.sent_at[senders]
         newest, senders = newest[newer], senders[newer]
         self.sent_at[senders] = air["sent"][newest]
@@ -547,6 +565,11 @@ class Engine:
         gone = crashed[self.air["sender"]]
         if gone.any():
             self.air = {key: values[~gone] for key, values in self.air.items()}
+
+
+def _taken(values: np.ndarray, at: slice | np.ndarray) -> np.ndarray:
+    """``values[at]`` (:func:`~dream.swarm.safety.at_rows`), an array of its own either way."""
+    return values[at].copy() if isinstance(at, slice) else values[at]
 
 
 def _linked(graph: tuple[np.ndarray, np.ndarray], rows: np.ndarray, x: np.ndarray, talking: np.ndarray) -> Heard:

@@ -192,6 +192,9 @@ class View:
         (read-only) The obstacle sensor's reading (:class:`Obstacles`), one entry per obstacle
         sensed, in the sensor's order: columns ``dx``, ``dy`` (the closest point less the
         robot's position) and ``distance``; empty rows without an obstacle sensor.
+    command : (k, 2)
+        (read-only) The command ``[v, w]`` (m/s, rad/s) each robot last gave its wheels, after
+        the safety layer: held against its odometry, it tells a robot whether its wheels obey.
     """
 
     ids: np.ndarray
@@ -201,6 +204,7 @@ class View:
     heard: Neighbourhood
     memory: dict[str, np.ndarray]
     obstacles: Neighbourhood | None = None
+    command: Any = None
     said: dict[str, np.ndarray] | None = field(default=None, repr=False)
     saying: Any = field(default=None, repr=False)  #: which rows send (``where`` of :meth:`send`)
     straight: Any = field(default=None, repr=False)  #: which rows skip HRVO (:meth:`direct`)

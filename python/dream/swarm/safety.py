@@ -15,6 +15,8 @@ import numpy as np
 
 from dream import kernels, rules
 from dream._csr import spans
+from dream.kernels._guard import motion_guard_trusted
+from dream.kernels._hrvo import hrvo_rows_trusted
 from dream.robot import GUARD_HORIZON, guard_distance
 from dream.specs import ArenaSpec, RobotSpec
 from dream.swarm.neighbourhood import Neighbourhood
@@ -35,6 +37,13 @@ class Driver(Protocol):
 #: The columns of a detection that HRVO reads, in the order of their noise keys (``dx`` and
 #: ``dy``, the offsets, come with them).
 DETECTION = ("distance", "bearing", "vx", "vy")
+
+
+def at_rows(rows: np.ndarray, n: int) -> slice | np.ndarray:
+    """How to index ``(n, ...)`` per-robot arrays at ``rows`` (increasing ids below ``n``): a slice
+    when they are all ``n`` robots, so that a read is a view or a block copy and a write a block,
+    not a gather or a scatter over every robot (every robot decides, in many rules)."""
+    return slice(None) if len(rows) == n else rows
 
 
 def drive(
@@ -81,6 +90,7 @@ def _drive_apart(
 ) -> np.ndarray:
     """:func:`drive` for rows that keep one ``safety`` radius (m)."""
     robot, avoid = engine.robot, engine.robot.avoid
+    n = len(engine.dxi)
     chosen = wished
     if avoid is not None and safety is not None:
         chosen = wished.copy()
@@ -94,15 +104,15 @@ def _drive_apart(
         ids, want = rows[steer], wished[steer]
         asked = want
         if avoid.sidestep:
-            asked, engine.sidestep[ids] = rules.sidestep_preference(want, engine.sidestep[ids], engine.side[ids])
-        detections = tuple(seen[name][entries] for name in ("distance", "bearing", "vx", "vy"))
+            asked = _sidestep_preference(engine, ids, want)
+        distance, bearing, vx, vy = (np.ascontiguousarray(seen[name][entries]) for name in DETECTION)
         margin = robot.spec.radius if avoid.margin is None else avoid.margin
-        steered = kernels.hrvo_rows(
-            engine.dxi[ids],
-            asked,
-            pose[steer, :2],
+        steered = hrvo_rows_trusted(  # the engine's own perception, and a decision checked in `Engine._apply`
+            engine.dxi[at_rows(ids, n)],
+            np.ascontiguousarray(asked),
+            np.ascontiguousarray(pose[steer, :2]),
             offsets,
-            detections,
+            (distance, bearing, vx, vy),
             safety=safety,
             v_max=robot.spec.v_max,
             bounds=engine.arena.shrunk(margin) if avoid.check_boundaries else None,
@@ -113,10 +123,8 @@ def _drive_apart(
         )
         chosen[steer] = steered
         if avoid.sidestep:
-            engine.sidestep[ids], engine.side[ids] = rules.sidestep_update(
-                steered, want, engine.sidestep[ids], engine.side[ids], avoid.sidestep
-            )
-    engine.dxi[rows] = chosen
+            _sidestep_update(engine, ids, steered, want, avoid.sidestep)
+    engine.dxi[at_rows(rows, n)] = chosen
     out = kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain)
     if robot.halts:  # no wish, no command (the conversion alone turns some robots at full speed)
         out[:, ~chosen.any(axis=1)] = 0.0
@@ -128,8 +136,30 @@ def _drive_apart(
         near = guard_distance(robot.spec.diameter, safety)
     if near is not None:
         horizon = GUARD_HORIZON if avoid is None else avoid.horizon
-        stop = kernels.motion_guard(
-            out[0], pose[:, 2], seen.offsets, seen["dx"], seen["dy"], near=near, horizon=horizon
+        stop = motion_guard_trusted(  # the engine's own commands, poses and perception
+            out[0], np.ascontiguousarray(pose[:, 2]), seen.offsets, seen["dx"], seen["dy"], near=near, horizon=horizon
         )
         out[0, stop] = 0.0
     return out
+
+
+def _sidestep_preference(engine: Driver, ids: np.ndarray, want: np.ndarray) -> np.ndarray:
+    """What the robots ``ids`` ask HRVO for (:func:`dream.rules.sidestep_preference`), their
+    counters counted down: ``want`` itself when none of them is stepping aside."""
+    at = at_rows(ids, len(engine.sidestep))
+    counters = engine.sidestep[at]
+    if not counters.any():
+        return want
+    asked, engine.sidestep[at] = rules.sidestep_preference(want, counters, engine.side[at])
+    return asked
+
+
+def _sidestep_update(engine: Driver, ids: np.ndarray, steered: np.ndarray, want: np.ndarray, updates: int) -> None:
+    """:func:`dream.rules.sidestep_update` of the robots ``ids`` after HRVO chose ``steered``:
+    nothing to do when it stopped none of them (only a stopped robot is blocked)."""
+    if not ((steered[:, 0] == 0.0) & (steered[:, 1] == 0.0)).any():
+        return
+    at = at_rows(ids, len(engine.sidestep))
+    engine.sidestep[at], engine.side[at] = rules.sidestep_update(
+        steered, want, engine.sidestep[at], engine.side[at], updates
+    )

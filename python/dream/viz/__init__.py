@@ -6,7 +6,7 @@ An experiment run with ``record=callback`` calls ``callback(frame)`` once per st
 
     >>> from dream.viz import Recorder
     >>> with Recorder(video="run.gif", every=2, focus=0) as recorder:      # doctest: +SKIP
-    ...     hrvo_circle.run(n=10, record=recorder)
+    ...     dream.run("hrvo-circle", n=10, record=recorder)
 
 What a picture shows, to scale (metres on the axes): each robot as a disc of its real diameter
 (0.11 m) with a dark notch at the front (its heading), its chosen velocity as an arrow (none for a

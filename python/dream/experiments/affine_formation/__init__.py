@@ -128,11 +128,12 @@ class AffineFormation(Experiment):
 
     def anchors(self, poses: np.ndarray) -> np.ndarray:
         """The leaders' positions ``(n, 2)`` (rows of followers unused) that the survivors' formation
-        is the affine image of: where the leaders are, and for a crashed leader its place in the
-        plan (where a surviving leader of its formation aims it now)."""
+        is the affine image of: where the leaders are, and for a crashed leader (or a stuck one, which
+        takes itself for crashed) its place in the plan (where a moving leader of its formation aims
+        it now)."""
         anchors = poses[:2].T.copy()
         state = self.world.fault_state
-        if state is None or not state.crashed[self.leader].any():
+        if state is None or not (halted := state.crashed | state.stuck)[self.leader].any():
             return anchors
         assert self.engine is not None
         robot, memory = self.engine.robot, self.engine.memory
@@ -140,11 +141,11 @@ class AffineFormation(Experiment):
         first = np.arange(0, self.n, MEMBERS)
         for i in range(LEADERS):  # a later leader's aims over an earlier one's
             ids = first + i
-            alive = ~state.crashed[ids]
+            alive = ~halted[ids]
             aims = robot.aims(ids[alive], {key: memory[key][ids[alive]] for key in ("start", "goals", "decisions")})
             for m in range(LEADERS):
-                crashed = state.crashed[first[alive] + m]
-                anchors[first[alive][crashed] + m] = aims[crashed, m]
+                stopped = halted[first[alive] + m]
+                anchors[first[alive][stopped] + m] = aims[stopped, m]
         return anchors
 
     def done(self, step: int, poses: np.ndarray) -> bool:
@@ -180,6 +181,3 @@ class AffineFormation(Experiment):
             roles=np.where(self.leader, "leader", "follower"),
             title=f"{NAME}: follower error {self.error:.3f} m, bar contacts {self.contacts}",
         )
-
-
-run = AffineFormation.run

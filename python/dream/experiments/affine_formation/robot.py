@@ -38,6 +38,11 @@ MATCH = 0.15  #: a claimed position this close (m) to a robot seen matches it (r
 STRIKES = 3  #: decisions in a row whose claims match no robot seen make a liar
 PLAN_SLACK = 0.5  #: a leader claiming to be this far (m) from every place the other leaders plan for it lies
 SILENCE = 20  #: radio rounds without a message after which a robot is taken for crashed
+#: Decisions in a row a robot's odometry stands still while its wheels are told to move, after
+#: which it takes them for stuck for good: it stops driving them and says so, and its formation
+#: takes it for crashed (fail-stop).
+STILL = 3
+DRIVE = 1e-3  #: a forward speed (m/s) that moves a robot by more than its odometry's last bit
 START_DELAY = 10  #: start-up delay of robot i: this plus its place in its formation (i % 7) steps
 CONTROL_GAP = 4  #: steps between two decisions (and radio rounds) of a robot
 #: The message's fields beyond the position: where the plan has each leader head now (leaders only).
@@ -82,10 +87,12 @@ class FormationRobot(SwarmRobot):
         "decisions": MORPH,  # its decisions since then
         "shift": 0.0,  # how far (m) along x it shifts the plan clear of crashed robots
         "silent": np.zeros(MEMBERS, dtype=np.int64),  # the robots it takes for crashed
+        "was": np.full(2, np.nan),  # its position by odometry at its last decision
+        "still": 0,  # its decisions in a row without moving while its wheels were told to
     }
 
     def __init__(self, n: int, centres: np.ndarray) -> None:
-        self.radio = Radio(graph=formation_graph(n), fields=("x", "y", *AIMS))
+        self.radio = Radio(graph=formation_graph(n), fields=("x", "y", "stuck", *AIMS))
         self.avoid = Avoid(safety=SAFETY, sidestep=SIDESTEP_UPDATES)
         self.centres = centres  #: the centres ``(n / 7, 2)`` of the formations' tiles
         self.tiles = np.array([tile_bounds(centre) for centre in centres]).reshape(-1, 4)  #: and their bounds
@@ -111,7 +118,8 @@ class FormationRobot(SwarmRobot):
             self.plan(view, rows, alive[rows])
             mine = {key: memory[key][rows] for key in ("start", "goals", "decisions")}
             aims = self.aims(view.ids[rows], mine)
-        view.send(x=here[:, 0], y=here[:, 1], **self.said(lead, aims))
+        stuck = wheels_stuck(view)
+        view.send(x=here[:, 0], y=here[:, 1], stuck=stuck.astype(float), **self.said(lead, aims))
         if len(rows):
             memory["decisions"][rows] += 1
             mine["decisions"] = mine["decisions"] + 1
@@ -125,7 +133,9 @@ class FormationRobot(SwarmRobot):
         if (~lead).any():
             rows = np.flatnonzero(~lead)
             desired[rows] = self.follow(view, rows, alive[rows], spotted)
+        desired[stuck] = 0.0  # a robot seen driving its stuck wheels would pass for a moving one
         view.heed(heeded)
+        memory["was"] = here
         # Close to its place HRVO would forbid a follower the last centimetres towards a neighbour.
         view.direct(~lead & rules.settles(desired, np.inf, FINE, 0.0))
         return desired
@@ -202,15 +212,27 @@ class FormationRobot(SwarmRobot):
         return rules.capped(-GAIN * pull, self.spec.v_max)
 
 
+def wheels_stuck(view: View) -> np.ndarray:
+    """Which robots deciding now take their wheels for stuck: their odometry's position has not
+    changed by a bit over :data:`STILL` decisions in a row while their wheels were told to drive
+    (a robot the safety layer stops is told to stand, and does), or before."""
+    memory = view.memory
+    still = (np.abs(view.command[:, 0]) > DRIVE) & (view.pose[:, :2] == memory["was"]).all(axis=1)
+    memory["still"] = np.where(still | (memory["still"] >= STILL), memory["still"] + 1, 0)
+    return memory["still"] >= STILL
+
+
 def listen(view: View) -> None:
-    """A radio round of the robots deciding now: keep each message's position, when it came and
-    (from a leader) its word on the leaders' aims."""
+    """A radio round of the robots deciding now: keep each message's position, when it came (unless
+    it says its wheels are stuck: the failure detector then takes it for crashed) and (from a
+    moving leader) its word on the leaders' aims."""
     memory, heard = view.memory, view.heard
     memory["rounds"] = memory["rounds"] + 1
     owner, place = heard.owner, heard["sender"] % MEMBERS
     memory["heard"][owner, place] = np.column_stack((heard["x"], heard["y"]))
-    memory["news"][owner, place] = memory["rounds"][owner]
-    lead = place < LEADERS
+    moving = heard["stuck"] == 0
+    memory["news"][owner[moving], place[moving]] = memory["rounds"][owner[moving]]
+    lead = moving & (place < LEADERS)  # a stuck leader's word on the aims is not heeded
     aims = np.column_stack([heard[name] for name in AIMS]).reshape(-1, LEADERS, 2)[lead]
     aims[np.arange(len(aims)), place[lead]] = np.nan  # a leader's word on the others only
     memory["plans"][owner[lead], place[lead]] = aims
