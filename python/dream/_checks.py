@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import operator
 from typing import Any
 
 import numpy as np
@@ -55,10 +56,19 @@ def as_offsets(value: Any, name: str, length: int, rows: int | None = None, part
         raise ValueError(f"{what} must hold integer offsets, got dtype {array.dtype}")
     cuts = np.ascontiguousarray(array, dtype=np.int64)
     fits = cuts.ndim == 1 and len(cuts) >= 1 and (rows is None or len(cuts) == rows + 1)
-    if not fits or cuts[0] != 0 or cuts[-1] != length or np.any(np.diff(cuts) < 0):
+    if not fits or not _rising(cuts, length):
         shape = "(rows + 1,)" if rows is None else f"({rows + 1},)"
         raise ValueError(f"{what} must be offsets of shape {shape} rising from 0 to {length}, got {cuts.tolist()[:8]}")
     return cuts
+
+
+def _rising(cuts: NDArray[np.int64], length: int) -> bool:
+    """Whether ``cuts`` ``(m,)`` rise from 0 to ``length``; a robot's few offsets in Python (NumPy's
+    per-call cost is most of the check there)."""
+    if len(cuts) <= 64:
+        values = cuts.tolist()
+        return values[0] == 0 and values[-1] == length and all(map(operator.le, values, values[1:]))
+    return bool(cuts[0] == 0 and cuts[-1] == length and not np.any(np.diff(cuts) < 0))
 
 
 def as_index(value: Any, name: str) -> NDArray[np.int64]:
@@ -160,3 +170,18 @@ class RobotCallback:
                 f"{getattr(callback, '__name__', 'callback')}: give a robot's sensors and radio its own id"
             )
         setattr(obj, self.slot, callback)
+
+
+def per_robot(values: Any, k: int, kind: np.dtype, what: str, shape: tuple[int, ...] = ()) -> np.ndarray:
+    """``values`` as ``(k, *shape)`` of ``kind``: one value (of ``shape``) per deciding robot, or one
+    for all of them; anything else (a shape that would spread one robot's value over the others,
+    a float for an int field) is refused, naming ``what``."""
+    if type(values) is np.ndarray and values.shape == (k, *shape) and values.dtype == kind:
+        return values  # already one value of its kind per robot (most memory): no copy to make
+    array = np.asarray(values)
+    if array.shape not in (shape, (k, *shape)):
+        want = ", ".join(map(str, (k, *shape))) + ("," if not shape else "")
+        raise ValueError(f"{what} must have one value per deciding robot, shape ({want}), got shape {array.shape}")
+    if not np.can_cast(array.dtype, kind, casting="same_kind"):
+        raise ValueError(f"{what} holds {kind} values, got {array.dtype}")
+    return np.broadcast_to(array, (k, *shape)).astype(kind)

@@ -49,6 +49,15 @@ def _pairs(*values: Any) -> bool:
     return True
 
 
+def _row(*values: Any) -> bool:
+    """Whether every one of ``values`` is one robot's row, a float64 ndarray ``(1, 2)`` (a swarm
+    robot deciding robot by robot): the rules then take their scalar path on it."""
+    for v in values:
+        if type(v) is not np.ndarray or v.shape != (1, 2) or v.dtype is not _FLOAT64:
+            return False
+    return True
+
+
 def _scalars(*values: Any) -> bool:
     """Whether every one of ``values`` is a Python or NumPy number or a 0-d array (a robot's own counter)."""
     for v in values:
@@ -82,6 +91,9 @@ def arrival(positions: Any, goals: Any, unreached: Any, tolerance: float) -> tup
     if _pairs(positions, goals) and (isinstance(unreached, (bool, np.bool_)) or _scalars(unreached)):
         arrived = np.hypot(float(goals[0]) - float(positions[0]), float(goals[1]) - float(positions[1])) < tolerance
         return arrived, arrived & np.bool_(unreached)
+    if _row(positions, goals) and type(unreached) is np.ndarray and unreached.shape == (1,):
+        one, now = arrival(positions[0], goals[0], unreached[0], tolerance)
+        return np.array([one]), np.array([now])
     offset = np.asarray(goals, dtype=np.float64) - np.asarray(positions, dtype=np.float64)
     arrived = np.hypot(offset[..., 0], offset[..., 1]) < tolerance
     return arrived, arrived & np.asarray(unreached, dtype=bool)
@@ -135,6 +147,8 @@ def roundabout_aim(positions: Any, goals: Any, semi_axes: tuple[float, float], i
             angle = float(np.arctan2(qy, qx) + turn)
             gx, gy = island * float(np.cos(angle)), island * float(np.sin(angle))
         return np.array([gx * a, gy * b])
+    if _row(positions, goals):
+        return roundabout_aim(positions[0], goals[0], semi_axes, island)[None]
     scale = np.asarray(semi_axes, dtype=np.float64)
     q = np.asarray(positions, dtype=np.float64) / scale
     g = np.asarray(goals, dtype=np.float64) / scale
@@ -183,6 +197,8 @@ def preferred_velocity(positions: Any, aims: Any, goals: Any, v_max: float, gain
         speed = min(v_max, gain * float(np.hypot(float(goals[0]) - px, float(goals[1]) - py)))
         factor = speed / max(distance, 1e-300) if distance > 0.0 else 0.0
         return np.array([ox * factor, oy * factor])
+    if _row(positions, aims, goals):
+        return preferred_velocity(positions[0], aims[0], goals[0], v_max, gain)[None]
     p = np.asarray(positions, dtype=np.float64)
     offset = np.asarray(aims, dtype=np.float64) - p
     left = np.asarray(goals, dtype=np.float64) - p

@@ -14,6 +14,18 @@ import numpy as np
 from dream import kernels
 from dream._checks import FloatArray
 
+_FLOAT64, _INT64 = np.dtype(np.float64), np.dtype(np.int64)
+
+
+def _alone(*values: Any) -> bool:
+    """Whether every one of ``values`` is one robot's row, an ndarray ``(1,)`` (a swarm robot
+    deciding robot by robot): a rule then decides in Python, skipping NumPy's per-call cost, with
+    the same operations in the same order as its array path."""
+    for v in values:
+        if type(v) is not np.ndarray or v.shape != (1,):
+            return False
+    return True
+
 
 def arc_merge(
     n: int, state: Any, left: Any, right: Any, released: Any, rows: Any, offsets: Any, heard: Any
@@ -136,6 +148,11 @@ def stall(distance: Any, closest: Any, stalled: Any, unreached: Any, progress: f
     """``(closest, stalled)`` after a decision ``distance`` (m) from the goal: a robot that has come
     ``progress`` (m) closer than ``closest`` since its last progress starts counting again; one
     that has not counts one more decision stalled; one waiting on a goal reached is not stalled."""
+    alone = _alone(distance, closest, stalled, unreached)
+    if alone and distance.dtype == closest.dtype == _FLOAT64 and stalled.dtype == _INT64:  # one robot's row
+        d, c, waiting = float(distance[0]), float(closest[0]), bool(unreached[0])
+        moved = waiting and d < c - progress
+        return np.array([d if moved else c]), np.array([stalled[0] + 1 if waiting and not moved else 0])
     distance, closest = np.asarray(distance, dtype=np.float64), np.asarray(closest, dtype=np.float64)
     unreached = np.asarray(unreached, dtype=bool)
     moved = unreached & (distance < closest - progress)
@@ -147,6 +164,9 @@ def squeezes(squeezing: Any, stalled: Any, patience: int, outside: Any, nearest:
     """Whether each robot takes its least safety radius: stalled for ``patience`` decisions while
     ``outside`` the ring of parked robots (a wall at the ring's radius), until the ``nearest``
     robot it sees (m, NaN: none) is ``safety`` (the ring's radius) away."""
+    if _alone(squeezing, stalled, outside, nearest) and nearest.dtype == _FLOAT64:  # one robot's row
+        stuck = bool(stalled[0] >= patience) and bool(outside[0])
+        return np.array([stuck or (bool(squeezing[0]) and float(nearest[0]) < safety)])
     clear = ~(np.asarray(nearest, dtype=np.float64) < safety)
     stuck = (np.asarray(stalled) >= patience) & np.asarray(outside, dtype=bool)
     return stuck | (np.asarray(squeezing, dtype=bool) & ~clear)
@@ -168,6 +188,9 @@ def goal_taken(here: Any, goals: Any, offsets: Any, seen: Any, speeds: Any, reac
 
 def outside_ring(positions: Any, semi_axes: tuple[float, float]) -> np.ndarray:
     """Whether each position lies beyond the ring with ``semi_axes`` (m), centred on the origin."""
+    if type(positions) is np.ndarray and positions.shape == (1, 2) and positions.dtype == _FLOAT64:  # one robot's row
+        x, y = float(positions[0, 0]) / float(semi_axes[0]), float(positions[0, 1]) / float(semi_axes[1])
+        return np.array([np.hypot(x, y) > 1.0])
     q = np.asarray(positions, dtype=np.float64) / np.asarray(semi_axes, dtype=np.float64)
     return np.hypot(q[..., 0], q[..., 1]) > 1.0
 

@@ -23,12 +23,14 @@ messages leave the air.
 from __future__ import annotations
 
 import math
+import operator
 from functools import partial
 from typing import Any
 
 import numpy as np
 
 from dream import kernels
+from dream._checks import all_finite, per_robot
 from dream._csr import spans
 from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
 from dream.kernels import VoronoiCells
@@ -36,11 +38,17 @@ from dream.kernels._neighbours import Heard, Perceived
 from dream.obstacles import sensed
 from dream.sensors import seen_velocity
 from dream.specs import ArenaSpec, SimulatorSpec
-from dream.swarm import draws
+from dream.swarm import byrobot, draws
 from dream.swarm.neighbourhood import Deferred, Neighbourhood
 from dream.swarm.robot import SwarmRobot, View
 from dream.swarm.safety import DETECTION, at_rows, drive
 from dream.traffic import Traffic
+
+#: What robots said: their ids ``(k,)`` and their message's fields (name to ``(k,)``).
+Said = tuple[np.ndarray, dict[str, np.ndarray]]
+#: A checked decision: the wished velocities, the rows driven direct, the safety radii, the
+#: detections heeded (None where not chosen) and what was said.
+Settled = tuple[np.ndarray, np.ndarray | None, np.ndarray | None, np.ndarray | None, Said | None]
 
 
 class Engine:
@@ -97,6 +105,9 @@ class Engine:
         self.focus: int | None = None  #: a robot whose last readings and inbox to keep (for a recording)
         #: robot :attr:`focus`'s last decision: its ``step``, and the columns of what it ``seen`` and ``heard``
         self.focus_view: dict[str, Any] = {}
+        #: robot by robot, the view of every robot deciding now and the views cut from it
+        self._cut: tuple[View | None, list[View]] = (None, [])
+        self._handed: list[dict[str, np.ndarray]] = []  #: the memory rows each of those views was handed
 
     def attach(self, simulator: SimulatorSpec) -> None:
         """Keep to the limits of the simulator the robots run on."""
@@ -130,13 +141,18 @@ class Engine:
             rows = rows[self._kept(t, rows, np.full(len(rows), -2), faults)]
         if self.robot.obstacles is not None:  # so does one whose obstacle reading is lost
             rows = rows[self._kept(t, rows, np.full(len(rows), -3), faults)]
+        self._cut = (None, [])
         if not len(rows):
             return []
         # What the sensors see of the others' motion: their commands before anyone decides now.
         velocities = () if self.robot.movement is None else seen_velocity(commands, x[2])
         talking = self.sent_at >= 0
-        batches = np.split(rows, len(rows)) if self.one_by_one else [rows]
-        return [self._view(t, b, clock[b], x, commands, velocities, talking, faults) for b in batches]
+        whole = self._view(t, rows, clock[rows], x, commands, velocities, talking, faults)
+        if not self.one_by_one:
+            return [whole]
+        self._cut = (whole, byrobot.cut(whole))  # perceived at once, decided one by one
+        self._handed = [dict(view.memory) for view in self._cut[1]]
+        return self._cut[1]
 
     def act(
         self,
@@ -150,7 +166,12 @@ class Engine:
         what the views remember and send: ``commands`` ``(2, n)`` with the deciding robots' columns
         replaced."""
         out = commands.copy()
-        said = [self._apply(view, wished, out) for view, wished in zip(views, wishes)]
+        whole, pieces = self._cut
+        if whole is not None and len(views) == len(pieces) and all(map(operator.is_, views, pieces)):
+            said = self._apply_pieces(whole, views, list(wishes), out)
+        else:
+            said = [self._apply(view, wished, out) for view, wished in zip(views, wishes)]
+        self._cut, self._handed = (None, []), []  # the step's views are done with (a checkpoint keeps none)
         if self.robot.radio is not None:
             self._publish(t, [s for s in said if s is not None], faults)
         return out
@@ -209,57 +230,87 @@ class Engine:
             command,
         )
         if lossless:
-            view.board_cells = partial(self._board_cells, rows, x[:2].T, talking)
+            view.board_cells = partial(self._board_cells, x[:2].T, talking)
         if self.focus is not None:
             self._keep_focus(t, rows, view, self.focus)
         return view
 
-    def _apply(self, view: View, wished: Any, out: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]] | None:
+    def _apply(self, view: View, wished: Any, out: np.ndarray) -> Said | None:
         """Check a view's decision, keep its memory and put its commands into ``out``. Returns what
         its robots said (their ids and fields), if anything."""
         rows = np.asarray(view.ids)
         at = at_rows(rows, self.n)
+        wished, straight, safety, heeded, said = self._settle(view, wished)
+        seen = view.seen if heeded is None else view.seen.where(heeded)
+        out[:, at] = drive(self, rows, wished, self.belief[at], seen, straight, safety)
+        return said
+
+    def _apply_pieces(self, whole: View, views: list[View], wishes: list[Any], out: np.ndarray) -> list[Said | None]:
+        """:meth:`_apply` of the views :func:`~dream.swarm.byrobot.cut` made of ``whole``: each
+        decision checked and kept on its own, all of them driven at once."""
+        pieces = enumerate(zip(views, wishes, self._handed))
+        settled = [self._settle(view, wish, (whole.memory, slice(r, r + 1), kept)) for r, (view, wish, kept) in pieces]
+        rows = np.asarray(whole.ids)
+        at = at_rows(rows, self.n)
+        for key, values in whole.memory.items():  # every robot's memory row, changed or not
+            self.memory[key][at] = values
+        wished, straight, safety, seen = byrobot.merged(whole, settled, self.robot.avoid)
+        out[:, at] = drive(self, rows, wished, self.belief[at], seen, straight, safety)
+        return [said for *_, said in settled]
+
+    def _settle(
+        self, view: View, wished: Any, piece: tuple[dict[str, np.ndarray], slice, dict[str, np.ndarray]] | None = None
+    ) -> Settled:
+        """Check a view's decision and keep its memory and its side to step aside to. A view
+        :func:`~dream.swarm.byrobot.cut` from all the robots' (``piece``: that one's memory, this
+        view's row of it, the memory it was handed) keeps its memory in that row (a row handed
+        holds its changes already)."""
+        rows = np.asarray(view.ids)
         wished = np.asarray(wished, dtype=np.float64)
         name = type(self.robot).__name__
-        if wished.shape != (len(rows), 2) or not np.isfinite(wished).all():
+        if wished.shape != (len(rows), 2) or not all_finite(wished):
             raise ValueError(
                 f"{name}.decide must return finite velocities of shape (k, 2) = ({len(rows)}, 2), "
                 f"got shape {wished.shape}" + ("" if wished.shape != (len(rows), 2) else " with NaN or inf")
             )
+        into, at, handed = (self.memory, at_rows(rows, self.n), {}) if piece is None else piece
         for key, values in view.memory.items():
+            if key in handed and values is handed[key]:
+                continue
             if key not in self.memory:
                 raise ValueError(f"{name} remembers {key!r}, which its memory does not declare: add it to `memory`")
             memory = self.memory[key]
-            memory[at] = _per_robot(values, len(rows), memory.dtype, f"{name} memory {key!r}", memory.shape[1:])
+            into[key][at] = per_robot(values, len(rows), memory.dtype, f"{name} memory {key!r}", memory.shape[1:])
+        for key in handed.keys() - view.memory.keys():  # a field forgotten: kept as it was
+            into[key][at] = self.memory[key][rows]
         straight = safety = None
         if view.straight is not None:
-            straight = _per_robot(view.straight, len(rows), np.dtype(bool), f"{name}'s rows driven direct")
+            straight = per_robot(view.straight, len(rows), np.dtype(bool), f"{name}'s rows driven direct")
         if view.safety is not None:
-            safety = _per_robot(view.safety, len(rows), np.dtype(np.float64), f"{name}'s safety radii")
+            safety = per_robot(view.safety, len(rows), np.dtype(np.float64), f"{name}'s safety radii")
             if not (np.isfinite(safety).all() and (safety >= 0).all()):
                 raise ValueError(f"{name}'s safety radii must be finite and >= 0")
         if view.turn is not None:
-            side = _per_robot(view.turn[0], len(rows), np.dtype(np.float64), f"{name}'s sides to step aside to")
-            stop = _per_robot(view.turn[1], len(rows), np.dtype(bool), f"{name}'s rows that stop stepping aside")
+            side = per_robot(view.turn[0], len(rows), np.dtype(np.float64), f"{name}'s sides to step aside to")
+            stop = per_robot(view.turn[1], len(rows), np.dtype(bool), f"{name}'s rows that stop stepping aside")
             self.side[rows] = np.where(side != 0.0, np.sign(side), self.side[rows])
             self.sidestep[rows[stop]] = 0
-        seen = view.seen
+        heeded = None
         if view.heeded is not None:
-            heeded = np.asarray(view.heeded)
-            if heeded.shape != (seen.offsets[-1],) or heeded.dtype != bool:
+            heeded, detections = np.asarray(view.heeded), view.seen.offsets[-1]
+            if heeded.shape != (detections,) or heeded.dtype != bool:
                 raise ValueError(
-                    f"{name}'s heeded detections must be one bool per detection, shape ({seen.offsets[-1]},), "
+                    f"{name}'s heeded detections must be one bool per detection, shape ({detections},), "
                     f"got {heeded.dtype} of shape {heeded.shape}"
                 )
-            seen = seen.where(heeded)
-        out[:, at] = drive(self, rows, wished, self.belief[at], seen, straight, safety)
         if view.said is None:
-            return None
+            return wished, straight, safety, heeded, None
         message = self._message(view.said, len(rows))
         if view.saying is None:
-            return rows, message
-        saying = _per_robot(view.saying, len(rows), np.dtype(bool), f"{name}'s senders (`where`)")
-        return rows[saying], {key: values[saying] for key, values in message.items()}
+            return wished, straight, safety, heeded, (rows, message)
+        saying = per_robot(view.saying, len(rows), np.dtype(bool), f"{name}'s senders (`where`)")
+        said = rows[saying], {key: values[saying] for key, values in message.items()}
+        return wished, straight, safety, heeded, said
 
     def _keep_focus(self, t: int, rows: np.ndarray, view: View, focus: int) -> None:
         """Keep what robot ``focus`` reads and hears now, if it is among ``rows`` (increasing)."""
@@ -398,9 +449,9 @@ class Engine:
 
     def _board_cells(
         self,
-        rows: np.ndarray,
         positions: np.ndarray,
         talking: np.ndarray,
+        rows: np.ndarray,
         here: np.ndarray,
         fields: tuple[str, str],
         seen: tuple[Any, Any],
@@ -441,11 +492,9 @@ class Engine:
             raise ValueError(
                 f"{name} sent fields {sorted(said)}, but its radio declares {sorted(self.kinds)}: send every field"
             )
-        return {
-            key: _per_robot(said[key], k, kind, f"{name} message field {key!r}") for key, kind in self.kinds.items()
-        }
+        return {key: per_robot(said[key], k, kind, f"{name} message field {key!r}") for key, kind in self.kinds.items()}
 
-    def _publish(self, t: int, said: list[tuple[np.ndarray, dict[str, np.ndarray]]], faults: FaultState | None) -> None:
+    def _publish(self, t: int, said: list[Said], faults: FaultState | None) -> None:
         """Put what the robots said this step in the air: lies from Byzantine senders, each
         message heard from ``t + 1 + latency`` on."""
         if not said:
@@ -521,21 +570,6 @@ class Engine:
 def _taken(values: np.ndarray, at: slice | np.ndarray) -> np.ndarray:
     """``values[at]`` (:func:`~dream.swarm.safety.at_rows`), an array of its own either way."""
     return values[at].copy() if isinstance(at, slice) else values[at]
-
-
-def _per_robot(values: Any, k: int, kind: np.dtype, what: str, shape: tuple[int, ...] = ()) -> np.ndarray:
-    """``values`` as ``(k, *shape)`` of ``kind``: one value (of ``shape``) per deciding robot, or one
-    for all of them; anything else (a shape that would spread one robot's value over the others,
-    a float for an int field) is refused, naming ``what``."""
-    if type(values) is np.ndarray and values.shape == (k, *shape) and values.dtype == kind:
-        return values  # already one value of its kind per robot (most memory): no copy to make
-    array = np.asarray(values)
-    if array.shape not in (shape, (k, *shape)):
-        want = ", ".join(map(str, (k, *shape))) + ("," if not shape else "")
-        raise ValueError(f"{what} must have one value per deciding robot, shape ({want}), got shape {array.shape}")
-    if not np.can_cast(array.dtype, kind, casting="same_kind"):
-        raise ValueError(f"{what} holds {kind} values, got {array.dtype}")
-    return np.broadcast_to(array, (k, *shape)).astype(kind)
 
 
 def _linked(graph: tuple[np.ndarray, np.ndarray], rows: np.ndarray, x: np.ndarray, talking: np.ndarray) -> Heard:

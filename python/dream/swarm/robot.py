@@ -211,7 +211,8 @@ class View:
     heeded: Any = field(default=None, repr=False)  #: which detections the safety layer heeds (:meth:`heed`)
     safety: Any = field(default=None, repr=False)  #: each row's safety radius (:meth:`keep_apart`)
     turn: Any = field(default=None, repr=False)  #: each row's side and stop (:meth:`aside`)
-    #: The engine's way to :meth:`cells` when every message in range got through (None: the rows').
+    #: The engine's way to :meth:`cells` of robots ``ids`` when every message in range got through
+    #: (None: the rows').
     board_cells: Any = field(default=None, repr=False)
 
     def __len__(self) -> int:
@@ -279,7 +280,7 @@ class View:
         here = self.pose[:, :2]
         shape: dict[str, Any] = {"radius": radius, "bounds": bounds, "resolution": resolution, "polygons": polygons}
         if self.board_cells is not None:
-            cells: VoronoiCells = self.board_cells(here, (x, y), seen, same, virtual, **shape)
+            cells: VoronoiCells = self.board_cells(np.asarray(self.ids), here, (x, y), seen, same, virtual, **shape)
             return cells
         heard = self.heard
         messages = np.column_stack((heard[x], heard[y])).reshape(-1, 2)
