@@ -173,7 +173,7 @@ pub fn threshold_wheels(velocities: &mut [f64], n: usize, wheels: &Wheels) -> Re
 /// rps 0.0.0's criteria (centres within `diameter`, every robot outside counted).
 ///
 /// # Errors
-/// As [`validate_with`].
+/// As [`validate_each`].
 pub fn validate(
     poses: &[f64],
     velocities: &[f64],
@@ -183,30 +183,16 @@ pub fn validate(
     wheels: &Wheels,
 ) -> Result<Violations> {
     let checks = Checks::new(diameter, 0.0, BoundaryCount::Robots)?;
-    validate_with(poses, velocities, n, arena, &checks, wheels)
+    Ok(validate_each(poses, velocities, n, arena, &checks, wheels)?.0)
 }
 
 /// Counts boundary, collision and actuator violations of the current poses and commands with
-/// the criteria `checks`; collisions use a grid, so the cost is O(n).
+/// the criteria `checks`, and lists the robots in a collision (ascending): the robots of the
+/// pairs counted, from the same search (a reward's penalty, say). Collisions use a grid, so
+/// the cost is O(n).
 ///
 /// # Errors
 /// Length or finiteness problems of `poses` (`3 * n`) or `velocities` (`2 * n`).
-pub fn validate_with(
-    poses: &[f64],
-    velocities: &[f64],
-    n: usize,
-    arena: &Arena,
-    checks: &Checks,
-    wheels: &Wheels,
-) -> Result<Violations> {
-    Ok(validate_each(poses, velocities, n, arena, checks, wheels)?.0)
-}
-
-/// [`validate_with`]'s counts and the robots in a collision (ascending): the robots of the
-/// pairs it counts, from the same search (a reward's penalty, say).
-///
-/// # Errors
-/// As [`validate_with`].
 pub fn validate_each(
     poses: &[f64],
     velocities: &[f64],
@@ -241,7 +227,7 @@ pub fn validate_each(
 const PARALLEL_CELLS: usize = 1024;
 
 /// Which robots are in a collision by the criteria `checks`: the robots of the pairs
-/// [`validate_with`] counts, found the same way.
+/// [`validate_each`] counts, found the same way.
 ///
 /// # Errors
 /// Length or finiteness problems of `poses` (`3 * n`).
@@ -445,7 +431,7 @@ mod tests {
             0.0,
         ];
         let checks = Checks::new(0.135, 0.025, BoundaryCount::Iterations).unwrap();
-        let counts = validate_with(&poses, &[0.0; 8], 4, &robotarium(), &checks, &gritsbot()).unwrap();
+        let (counts, _) = validate_each(&poses, &[0.0; 8], 4, &robotarium(), &checks, &gritsbot()).unwrap();
         assert_eq!((counts.boundary, counts.collision), (1, 1));
         let counts = validate(&poses, &[0.0; 8], 4, &robotarium(), 0.11, &gritsbot()).unwrap();
         assert_eq!((counts.boundary, counts.collision), (2, 0));
