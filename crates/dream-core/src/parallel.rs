@@ -6,7 +6,7 @@ use crate::error::{try_room, Result};
 
 /// Items from which [`map_range`] runs on every thread (below, the thread pool costs more than
 /// it saves: per-robot kernels are called with a handful of items, thousands of times a step).
-const PARALLEL_ITEMS: usize = 4096;
+pub(crate) const PARALLEL_ITEMS: usize = 4096;
 
 /// `value(i)` for every `i < n`, in order: in parallel for many items.
 pub fn map_range<T: Send>(n: usize, value: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {

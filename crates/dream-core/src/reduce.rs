@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use crate::csr::check_offsets;
 use crate::error::{GeomError, Result};
-use crate::parallel::map_range;
+use crate::parallel::{map_range, PARALLEL_ITEMS};
 
 /// Entries from which the nearest of each row are picked on every thread: the messages of a few
 /// thousand robots, a few dozen each (their rows alone stay under [`map_range`]'s threshold).
@@ -114,8 +114,11 @@ pub fn nearest_k(keys: &[f64], offsets: &[i64], k: usize) -> Result<Vec<i64>> {
     if k == 0 {
         return Ok(Vec::new());
     }
-    let row = |r: usize| {
-        let (mut best, mut least) = (vec![-1i64; k], vec![f64::INFINITY; k]);
+    // Each row's slots are filled where they lie in the output, with one buffer of the kept keys
+    // per task: no vector per row to allocate and then copy out.
+    let row = |least: &mut Vec<f64>, (r, best): (usize, &mut [i64])| {
+        least.clear();
+        least.resize(k, f64::INFINITY);
         let mut filled = 0;
         let start = offsets[r] as usize;
         for (e, &key) in keys[start..offsets[r + 1] as usize].iter().enumerate() {
@@ -133,15 +136,23 @@ pub fn nearest_k(keys: &[f64], offsets: &[i64], k: usize) -> Result<Vec<i64>> {
             (least[slot], best[slot]) = (key, e as i64);
             filled = (filled + 1).min(k);
         }
-        best
     };
     let rows = offsets.len() - 1;
-    let picked: Vec<Vec<i64>> = if keys.len() >= PARALLEL_ENTRIES {
-        (0..rows).into_par_iter().with_min_len(64).map(row).collect()
+    let mut picked = vec![-1_i64; rows * k];
+    if keys.len() >= PARALLEL_ENTRIES || rows >= PARALLEL_ITEMS {
+        picked
+            .par_chunks_mut(k)
+            .enumerate()
+            .with_min_len(64)
+            .for_each_init(Vec::new, row);
     } else {
-        map_range(rows, row)
-    };
-    Ok(picked.into_iter().flatten().collect())
+        let mut least = Vec::new();
+        picked
+            .chunks_mut(k)
+            .enumerate()
+            .for_each(|slots| row(&mut least, slots));
+    }
+    Ok(picked)
 }
 
 #[cfg(test)]
