@@ -26,6 +26,7 @@ import os
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).parent))
 from harness import machine  # noqa: E402
@@ -38,32 +39,43 @@ GROUPS = {"affine-formation": 7}  #: experiments whose robots come in groups: n 
 # One run in its own process (so that its peak RSS is its own): the step times come from the
 # progress callback, which the runner calls after every step.
 ONE_RUN = """
-import json, resource, statistics, sys, time
+import cProfile, json, pstats, resource, statistics, sys, time
 import dream
 from dream.experiments import find
 
-name, n, steps, warm_up = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4])
+name, n, steps, warm_up, top = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5])
 stamps = []
+profile = cProfile.Profile()
+
+def progress(step, cap):
+    stamps.append(time.perf_counter())
+    if top and len(stamps) == warm_up + 1:  # profile the steps that the mean covers
+        profile.enable()
+
 start = time.perf_counter()
-result = dream.run(find(name), n=n, steps=steps, backend="fast", swarm=True,
-                   progress=lambda step, cap: stamps.append(time.perf_counter()))
+result = dream.run(find(name), n=n, steps=steps, backend="fast", swarm=True, progress=progress)
+profile.disable()
 gaps = [b - a for a, b in zip(stamps, stamps[1:])]
+own = sorted(((row[2], f[2]) for f, row in pstats.Stats(profile).stats.items()), reverse=True)
 print(json.dumps({
     "n": result.n, "steps": result.steps, "step_s": statistics.mean(gaps[warm_up:]),
     "setup_s": stamps[0] - start - gaps[0],
     "rss": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, "collisions": result.collisions,
+    "own": [(what, seconds / len(gaps[warm_up:])) for seconds, what in own[:top]],
 }))
 """
 
 
-def one_run(name: str, n: int, steps: int, warm_up: int, threads: int | None, timeout: float) -> dict[str, float] | str:
+def one_run(
+    name: str, n: int, steps: int, warm_up: int, threads: int | None, timeout: float, top: int = 0
+) -> dict[str, Any] | str:
     """The figures of one run, or why there are none."""
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     if threads is not None:
         env["RAYON_NUM_THREADS"] = str(threads)
     try:
         done = subprocess.run(
-            [sys.executable, "-c", ONE_RUN, name, str(n), str(steps), str(warm_up)],
+            [sys.executable, "-c", ONE_RUN, name, str(n), str(steps), str(warm_up), str(top)],
             capture_output=True,
             text=True,
             env=env,
@@ -79,6 +91,13 @@ def one_run(name: str, n: int, steps: int, warm_up: int, threads: int | None, ti
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
+def short(function: str) -> str:
+    """A profiled function's name, shortened: `perceive [Rust]` for `<built-in method dream._core.perceive>`."""
+    if function.startswith("<built-in method dream._core."):
+        return function.removeprefix("<built-in method dream._core.").rstrip(">") + " [Rust]"
+    return function.removeprefix("<").removesuffix(">")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("-e", "--experiments", nargs="+", default=EXPERIMENTS)
@@ -89,6 +108,13 @@ def main() -> None:
         "--warm-up", type=int, default=32, help="steps left out of the mean: the robots' staggered start"
     )
     parser.add_argument("--timeout", type=float, default=900.0, help="seconds a run may take")
+    parser.add_argument(
+        "--breakdown",
+        type=int,
+        default=0,
+        metavar="K",
+        help="also profile the steps the mean covers (cProfile) and print the K functions of most own time",
+    )
     args = parser.parse_args()
     print(machine())
     threads: list[int | None] = list(args.threads) if args.threads else [None]
@@ -102,12 +128,13 @@ def main() -> None:
         f"| experiment | robots | threads | step (ms) | robot-steps/s | µs per robot-step | set-up (s) "
         f"| peak RSS | above 200 MiB, per robot | scaling |\n|{'---|' * 10}"
     )
+    breakdowns: list[str] = []
     for name in args.experiments:
         for asked in args.robots:
             n = asked - asked % GROUPS.get(name, 1)
             first: float | None = None
             for count in threads:
-                got = one_run(name, n, args.steps, args.warm_up, count, args.timeout)
+                got = one_run(name, n, args.steps, args.warm_up, count, args.timeout, args.breakdown)
                 shown = "all" if count is None else str(count)
                 if isinstance(got, str):
                     print(f"| {name} | {n:,} | {shown} | {got} | | | | | | |", flush=True)
@@ -121,6 +148,12 @@ def main() -> None:
                     f"| {first / step:.1f}x |",
                     flush=True,
                 )
+                if args.breakdown:
+                    parts = ", ".join(f"{short(what)} {seconds * 1e3:,.1f}" for what, seconds in got["own"])
+                    breakdowns.append(f"- {name}, {n:,} robots, {shown} threads: {parts}")
+    if breakdowns:
+        print("\nOwn time per step (ms, cProfile of the steps the mean covers):")
+        print("\n".join(breakdowns))
 
 
 if __name__ == "__main__":

@@ -99,9 +99,10 @@ class Rendezvous(Experiment):
 
     def spread(self, poses: np.ndarray) -> float:
         """The largest distance of a correct robot from the correct robots' centre (m)."""
-        team = poses[:2, self.correct]
-        offsets = team - team.mean(axis=1, keepdims=True)
-        return float(np.hypot(*offsets).max())
+        correct = self.correct
+        team = poses[:2] if correct.all() else poses[:2, correct]  # no copy of a team without faults
+        squares = (team - team.mean(axis=1, keepdims=True)) ** 2
+        return math.sqrt((squares[0] + squares[1]).max())  # one root, of the largest: a measure taken every step
 
     def done(self, step: int, poses: np.ndarray) -> bool:
         return self.spread(poses) <= self.radius

@@ -16,6 +16,7 @@ use rayon::prelude::*;
 use crate::error::{check_finite, check_len, check_positive, Result};
 use crate::geom::Arena;
 use crate::grid::Grid;
+use crate::parallel::map_range;
 
 /// Swarms of this many robots or more are stepped and validated on every core (at 10,000
 /// robots each takes about a millisecond on one).
@@ -265,12 +266,11 @@ fn collision_pairs(p: &[&[f64]], n: usize, checks: &Checks) -> Vec<(usize, usize
 fn colliders(p: &[&[f64]], n: usize, checks: &Checks) -> Grid {
     let (xs, ys, offset) = (p[0], p[1], checks.collider_offset);
     if offset == 0.0 {
-        return Grid::new(xs, ys, checks.diameter);
+        return Grid::loose(xs, ys, checks.diameter);
     }
-    let (cx, cy): (Vec<f64>, Vec<f64>) = (0..n)
-        .map(|i| (xs[i] + offset * p[2][i].cos(), ys[i] + offset * p[2][i].sin()))
-        .unzip();
-    Grid::new(&cx, &cy, checks.diameter)
+    let cx = map_range(n, |i| xs[i] + offset * p[2][i].cos());
+    let cy = map_range(n, |i| ys[i] + offset * p[2][i].sin());
+    Grid::loose(&cx, &cy, checks.diameter)
 }
 
 /// Calls `pair(i, j)` for each pair `i < j` within `diameter` whose point `i` lies in `cell` (a

@@ -102,6 +102,9 @@ class Engine:
         #: whether to count them (the runner counts only for an output that reads them: the
         #: trajectory log, a recording; without, a lossless inbox is found only when read)
         self.count_traffic = True
+        #: whether a decision has read a deferred inbox: from then on it is found with the robots
+        #: seen, in the same neighbour query (one pass where two would be made)
+        self.inbox_read = False
         self.focus: int | None = None  #: a robot whose last readings and inbox to keep (for a recording)
         #: robot :attr:`focus`'s last decision: its ``step``, and the columns of what it ``seen`` and ``heard``
         self.focus_view: dict[str, Any] = {}
@@ -193,8 +196,8 @@ class Engine:
         by_range = radio is not None and radio.graph is None
         lossless = by_range and self._lossless(faults)
         # Without losses and counts to keep, the inbox is found only if the decision reads it
-        # (View.cells need not: a robot in a crowd hears hundreds of messages).
-        deferred = lossless and not self.count_traffic
+        # (View.cells need not: a robot in a crowd hears hundreds of messages), until one does.
+        deferred = lossless and not self.count_traffic and not self.inbox_read
         seen, heard = kernels.perceive(
             x[:2].T,
             x[2],
@@ -209,11 +212,13 @@ class Engine:
         inbox: Neighbourhood
         if deferred:
             assert radio is not None
-            inbox = Deferred(
-                lambda: self._hear(
-                    t, rows, kernels.perceive(x[:2].T, x[2], rows, radio_range=radio.range, talking=talking)[1], faults
-                ).frozen()
-            )
+
+            def load() -> Neighbourhood:
+                self.inbox_read = True
+                heard = kernels.perceive(x[:2].T, x[2], rows, radio_range=radio.range, talking=talking)[1]
+                return self._hear(t, rows, heard, faults).frozen()
+
+            inbox = Deferred(load)
         else:
             inbox = self._hear(t, rows, heard, faults).frozen()
         ids, command = rows.copy(), commands[:, rows].T.copy()
