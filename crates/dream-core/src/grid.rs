@@ -154,6 +154,11 @@ impl Grid {
         }
     }
 
+    /// The cell of `(x, y)`: points with the same cell share their 3x3 block.
+    pub fn cell_of(&self, x: f64, y: f64) -> (i64, i64) {
+        cell_of(x, y, self.cell)
+    }
+
     /// Point indices in cell order: position `k` of a run holds point `members()[k]`.
     pub fn members(&self) -> &[usize] {
         &self.members

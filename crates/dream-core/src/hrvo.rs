@@ -31,6 +31,7 @@ use crate::csr::{check_csr, check_offsets};
 use crate::error::{check_finite, check_len, GeomError, Result};
 use crate::geom::{Arena, Vec2};
 use crate::neighbours::Near;
+use crate::parallel::{map_range, PARALLEL_ITEMS};
 
 /// Rows below this count run on one thread.
 const PARALLEL_ROBOTS: usize = 256;
@@ -517,23 +518,30 @@ pub fn hrvo_one(
 
 /// Fails at the first neighbour with a non-finite value or a negative distance.
 fn check_neighbours(neighbours: &[Neighbour]) -> Result<()> {
-    for (k, b) in neighbours.iter().enumerate() {
+    let bad = |b: &Neighbour| {
         let values = [b.direction[0], b.direction[1], b.distance, b.velocity[0], b.velocity[1]];
-        if !values.iter().all(|v| v.is_finite()) {
-            return Err(GeomError::NonFinite {
-                arg: "detections",
-                index: k,
-            });
-        }
-        if b.distance < 0.0 {
-            return Err(GeomError::InvalidParameter {
-                arg: "detection distance",
-                rule: ">= 0",
-                got: b.distance,
-            });
-        }
+        !values.iter().all(|v| v.is_finite()) || b.distance < 0.0
+    };
+    // The first bad one, found on every core for many.
+    let first = if neighbours.len() >= PARALLEL_ITEMS {
+        neighbours.par_iter().position_first(bad)
+    } else {
+        neighbours.iter().position(bad)
+    };
+    let Some(k) = first else { return Ok(()) };
+    let b = &neighbours[k];
+    if b.distance.is_finite() && b.direction.iter().chain(&b.velocity).all(|v| v.is_finite()) {
+        Err(GeomError::InvalidParameter {
+            arg: "detection distance",
+            rule: ">= 0",
+            got: b.distance,
+        })
+    } else {
+        Err(GeomError::NonFinite {
+            arg: "detections",
+            index: k,
+        })
     }
-    Ok(())
 }
 
 /// HRVO velocities of the robots deciding now, each from its own detections (what its movement
@@ -562,7 +570,8 @@ pub fn hrvo_rows(
     check_vec2s("preferred", preferred)?;
     check_vec2s("positions", positions)?;
     check_vec2s("candidates", grid)?;
-    let around: Vec<Neighbour> = detections.iter().copied().map(Neighbour::from_detection).collect();
+    // On every core: a million robots see millions of others, each a cosine and a sine.
+    let around = map_range(detections.len(), |e| Neighbour::from_detection(detections[e]));
     check_neighbours(&around)?;
     let robot = |scratch: &mut Scratch, r: usize| {
         scratch.cones.clear();

@@ -264,7 +264,7 @@ pub(crate) fn in_range(dx: f64, dy: f64, radius: f64, radius_squared: f64) -> bo
 
 /// `sqrt(squared)`, the length of `(dx, dy)` whose `squared` is `dx^2 + dy^2`; `hypot` when the
 /// squares overflowed (beyond ~1.3e154 m), which a huge radius still lets through.
-fn length(squared: f64, dx: f64, dy: f64) -> f64 {
+pub(crate) fn length(squared: f64, dx: f64, dy: f64) -> f64 {
     if squared.is_finite() {
         squared.sqrt()
     } else {

@@ -3,6 +3,7 @@
 use dream_core::geom::Arena;
 use dream_core::geom::Vec2;
 use dream_core::hrvo::{self as core, HrvoParams, Neighbour};
+use dream_core::parallel::map_range;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
@@ -94,10 +95,15 @@ pub fn hrvo_rows<'py>(
     if towards {
         // Bearings towards the detected robots, as the movement sensor's angles from them: the
         // reference's flip, to the bit.
-        for detection in &mut seen {
-            let bearing = detection[1];
-            detection[1] = if bearing > 0.0 { bearing - PI } else { bearing + PI };
-        }
+        seen = map_range(seen.len(), |e| {
+            let [distance, bearing, vx, vy] = seen[e];
+            [
+                distance,
+                if bearing > 0.0 { bearing - PI } else { bearing + PI },
+                vx,
+                vy,
+            ]
+        });
     }
     let grid = points_of::<2>("candidates", &candidates)?;
     let params = params(safety, v_max, bounds, include_preferred)?;
@@ -122,9 +128,9 @@ fn detections_of(object: &Bound<'_, PyAny>) -> PyDreamResult<Vec<[f64; 4]>> {
     let rest: Vec<Vec<f64>> = (1..4)
         .map(|c| vector_of("detections", &columns.get_item(c)?, Some(distance.len())))
         .collect::<PyDreamResult<_>>()?;
-    Ok((0..distance.len())
-        .map(|e| [distance[e], rest[0][e], rest[1][e], rest[2][e]])
-        .collect())
+    Ok(map_range(distance.len(), |e| {
+        [distance[e], rest[0][e], rest[1][e], rest[2][e]]
+    }))
 }
 
 /// A robot's HRVO planner: parameters and candidate grid, fixed; one call per decision.
