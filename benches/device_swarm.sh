@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The swarm figures a many-core machine shows, in one run that prints everything (and tees each
 # table into $OUT when that is set): every built-in and the rendezvous example in swarm mode at
-# 100,000 robots on 1-16 threads and at 1,000,000 robots on 1 and 16, hrvo-circle's 100 steps
-# at 1,000,000 robots with its peak RSS, and where a 16-thread step's time goes (cProfile).
+# 100,000 robots on 1-16 threads and at 1,000,000 robots on 1 and 16, each with where its step's
+# time goes (cProfile), and hrvo-circle's 100 steps at 1,000,000 robots with its peak RSS.
 #   bash benches/device_swarm.sh [WHEEL_DIR]   # installs DREAM's wheel from WHEEL_DIR first, if any
 #   N1=1000 N2=10000 bash benches/device_swarm.sh   # a quick try of the script at small sizes
 set -u
@@ -14,10 +14,10 @@ if ls "$wheels"/*.whl >/dev/null 2>&1; then
 fi
 export PYTHONUNBUFFERED=1
 echo "cores $(nproc); $(uptime); $(python3 --version); $(date -u +%FT%TZ)"
-python3 benches/bench_swarm.py -n ${N1:-100000} --threads 1 2 4 8 16 --steps 24 --warm-up 14 --timeout 90 | tee "$out/swarm-100k.md"
-python3 benches/bench_swarm.py -n ${N2:-1000000} --threads 1 16 --steps 20 --warm-up 14 --timeout 150 | tee "$out/swarm-1m.md"
+python3 benches/bench_swarm.py -n ${N1:-100000} --threads 1 2 4 8 16 --steps 24 --warm-up 14 --timeout 90 --breakdown 6 | tee "$out/swarm-100k.md"
+python3 benches/bench_swarm.py -n ${N2:-1000000} --threads 1 16 --steps 20 --warm-up 15 --timeout 150 --breakdown 10 | tee "$out/swarm-1m.md"
 echo "== hrvo-circle --swarm -n 1000000 --steps 100, every core"
-python3 - "${N2:-1000000}" <<'PY' | tee "$out/hrvo-1m-100.txt"
+timeout 240 python3 - "${N2:-1000000}" <<'PY' | tee "$out/hrvo-1m-100.txt"
 import resource, sys, time
 import dream
 from dream.experiments import find
@@ -28,19 +28,4 @@ rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
 print(f"steps {result.steps}, collisions {result.collisions}, wall {time.perf_counter() - start:.1f} s "
       f"(stepping {result.wall_time:.1f} s), peak RSS {rss:.2f} GiB")
 PY
-for name in examples/rendezvous.py hrvo-circle; do
-    echo "== cProfile: $name --swarm -n 1000000 --steps 20, every core"
-    python3 - "$name" "${N2:-1000000}" <<'PY' | tee "$out/profile-$(basename "$name" .py).txt"
-import cProfile, pstats, sys
-import dream
-from dream.experiments import find
-
-dream.run(find(sys.argv[1]), n=100, steps=2, backend="fast", swarm=True)  # imports out of the profile
-profile = cProfile.Profile()
-profile.enable()
-dream.run(find(sys.argv[1]), n=int(sys.argv[2]), steps=20, backend="fast", swarm=True)
-profile.disable()
-pstats.Stats(profile).sort_stats("tottime").print_stats(22)
-PY
-done
 echo "done $(date -u +%FT%TZ); $(uptime)"

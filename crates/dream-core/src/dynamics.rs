@@ -206,13 +206,23 @@ pub fn validate_each(
     let u = rows("velocities", velocities, 2, n)?;
     let (xs, ys) = (p[0], p[1]);
 
-    let outside = (0..n).filter(|&i| !arena.contains(xs[i], ys[i])).count() as u64;
+    let out = |i: usize| !arena.contains(xs[i], ys[i]);
+    let outside = if n >= PARALLEL_ROBOTS {
+        (0..n).into_par_iter().filter(|&i| out(i)).count()
+    } else {
+        (0..n).filter(|&i| out(i)).count()
+    } as u64;
     let boundary = match checks.boundary {
         BoundaryCount::Robots => outside,
         BoundaryCount::Iterations => u64::from(outside > 0),
     };
     let pairs = collision_pairs(&p, n, checks);
-    let actuator = u64::from((0..n).any(|i| wheels.exceeded_by(u[0][i], u[1][i])));
+    let fast = |i: usize| wheels.exceeded_by(u[0][i], u[1][i]);
+    let actuator = u64::from(if n >= PARALLEL_ROBOTS {
+        (0..n).into_par_iter().any(fast)
+    } else {
+        (0..n).any(fast)
+    });
     let mut robots: Vec<usize> = pairs.iter().flat_map(|&(i, j)| [i, j]).collect();
     robots.sort_unstable();
     robots.dedup();
@@ -224,8 +234,8 @@ pub fn validate_each(
     Ok((counts, robots))
 }
 
-/// Occupied cells a task counts the collisions of (a few thousand robots).
-const PARALLEL_CELLS: usize = 1024;
+/// Cells (occupied or not) a task counts the collisions of.
+const PARALLEL_CELLS: usize = 4096;
 
 /// Which robots are in a collision by the criteria `checks`: the robots of the pairs
 /// [`validate_each`] counts, found the same way.
@@ -245,20 +255,15 @@ pub fn colliding(poses: &[f64], n: usize, checks: &Checks) -> Result<Vec<bool>> 
 /// The pairs `(i, j)`, `i < j`, whose colliders are within `checks.diameter`, cell by cell.
 fn collision_pairs(p: &[&[f64]], n: usize, checks: &Checks) -> Vec<(usize, usize)> {
     let grid = colliders(p, n, checks);
-    let cells: Vec<Range<usize>> = grid.cell_runs().collect();
-    let pairs = |cell: &Range<usize>| {
+    let pairs = |cell: Range<usize>| {
         let mut found = Vec::new();
-        pairs_in(&grid, cell, checks.diameter, |i, j| found.push((i, j)));
+        pairs_in(&grid, &cell, checks.diameter, |i, j| found.push((i, j)));
         found
     };
     if n >= PARALLEL_ROBOTS {
-        cells
-            .par_iter()
-            .with_min_len(PARALLEL_CELLS)
-            .flat_map_iter(pairs)
-            .collect()
+        grid.par_cell_runs(PARALLEL_CELLS).flat_map_iter(pairs).collect()
     } else {
-        cells.iter().flat_map(pairs).collect()
+        grid.cell_runs().flat_map(pairs).collect()
     }
 }
 

@@ -317,6 +317,16 @@ impl Grid {
         self.starts.windows(2).filter(|w| w[1] > w[0]).map(|w| w[0]..w[1])
     }
 
+    /// [`Grid::cell_runs`] on every core, `min_cells` cells (occupied or not) a task: the table
+    /// of a million robots' collision search has millions of cells to go through.
+    pub fn par_cell_runs(&self, min_cells: usize) -> impl ParallelIterator<Item = Range<usize>> + '_ {
+        self.starts
+            .par_windows(2)
+            .with_min_len(min_cells)
+            .filter(|w| w[1] > w[0])
+            .map(|w| w[0]..w[1])
+    }
+
     fn slot(&self, cx: i64, cy: i64) -> Option<usize> {
         match &self.table {
             CellTable::Dense { x0, y0, columns, rows } => {
@@ -337,18 +347,19 @@ impl Grid {
 /// Counting sort of point indices by `slots[point]` into `cells` buckets: the buckets' starts
 /// (`cells + 1` of them) and the points in bucket order, each bucket in increasing index.
 fn bucket(slots: &[usize], cells: usize) -> (Vec<usize>, Vec<usize>) {
+    // Each bucket's end, then filled from its end with the points taken last to first, which
+    // leaves each bucket's start (and no second table of the size of the cells').
     let mut starts = vec![0_usize; cells + 1];
     for &slot in slots {
-        starts[slot + 1] += 1;
+        starts[slot] += 1;
     }
-    for s in 0..cells {
-        starts[s + 1] += starts[s];
+    for s in 1..=cells {
+        starts[s] += starts[s - 1];
     }
-    let mut fill = starts.clone();
     let mut members = vec![0; slots.len()];
-    for (point, &slot) in slots.iter().enumerate() {
-        members[fill[slot]] = point;
-        fill[slot] += 1;
+    for (point, &slot) in slots.iter().enumerate().rev() {
+        starts[slot] -= 1;
+        members[starts[slot]] = point;
     }
     (starts, members)
 }
