@@ -15,6 +15,7 @@ __all__ = [
     "validate",
     "colliding",
     "dxi_to_dxu",
+    "dxu_to_dxi",
     "actuator_limit",
     "neighbours",
     "far_from",
@@ -69,6 +70,9 @@ def dxi_to_dxu(
     dxi: NDArray[np.float64], poses: NDArray[np.float64], vel_gain: float, ang_gain: float
 ) -> NDArray[np.float64]:
     """Unicycle commands (2, n) from single-integrator velocities (2, n) at poses (3, n)."""
+
+def dxu_to_dxi(dxu: NDArray[np.float64], headings: NDArray[np.float64], projection: float) -> NDArray[np.float64]:
+    """Velocities (2, n) of the points projection ahead of robots of headings (n,) driven by commands (2, n)."""
 
 def actuator_limit(
     dxu: NDArray[np.float64],

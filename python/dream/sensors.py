@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from dream import kernels
 from dream._checks import FloatArray, RobotCallback, check_nonnegative, check_robot_id
 from dream.world import current_world
 
@@ -81,10 +82,8 @@ def seen_velocity(commands: np.ndarray, headings: np.ndarray) -> tuple[np.ndarra
     """``(vx, vy)`` ``(k,)`` that a movement sensor reports for robots of last unicycle commands
     ``commands`` ``(2, k)`` and headings ``headings`` ``(k,)``: the velocity of the point
     :data:`PROJECTION_DISTANCE` ahead of each."""
-    lin, ang = commands
-    cos, sin = np.cos(headings), np.sin(headings)
-    ahead = PROJECTION_DISTANCE * ang
-    return lin * cos - ahead * sin, lin * sin + ahead * cos
+    velocities = kernels.dxu_to_dxi(commands, headings, PROJECTION_DISTANCE)
+    return velocities[0], velocities[1]
 
 
 class MovementSensor(Sensor):

@@ -53,6 +53,7 @@ def test_every_public_kernel_goes_through_the_dispatch(monkeypatch):
     kernels.validate(poses, commands)
     kernels.colliding(poses)
     kernels.dxi_to_dxu(commands, poses)
+    kernels.dxu_to_dxi(commands, poses[2], 0.05)
     kernels.actuator_limit(commands)
     kernels.neighbours(points, 1.0)
     kernels.far_from(points, points, 0.1)

@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 
 from dream import _core, _reference, kernels
+from dream.sensors import PROJECTION_DISTANCE, seen_velocity
 from dream.specs import ROBOTARIUM, RPS, ArenaSpec, RobotSpec, SimulatorSpec
 
 SIZES = [0, 1, 2, 500]
@@ -425,6 +426,70 @@ def test_dxi_to_dxu_property_matches_formula(dx, dy, th, kv, kw):
     if abs(c * dx + s * dy) > 1e-9 or abs(-s * dx + c * dy) > 1e-6:
         assert_allclose(got[1], expected[1], rtol=1e-9, atol=1e-9)
     assert abs(got[1, 0]) <= 2 * kw * (1 + 1e-12)
+
+
+# -- dxu_to_dxi -----------------------------------------------------------------------------------
+def dxi_by_hand(dxu, headings, projection):
+    out = np.zeros_like(dxu, dtype=float)
+    for i in range(dxu.shape[1]):
+        c, s = math.cos(headings[i]), math.sin(headings[i])
+        v, ahead = dxu[0, i], projection * dxu[1, i]
+        out[:, i] = v * c - ahead * s, v * s + ahead * c
+    return out
+
+
+@pytest.mark.parametrize("n", [*SIZES, 5000])  # 5000: on every core
+@pytest.mark.parametrize("projection", [0.05, 0.0, -0.2])
+def test_dxu_to_dxi_matches_reference_and_formula(rng, n, projection):
+    dxu, headings = random_commands(rng, n), rng.uniform(-10.0, 10.0, n)
+    expected = dxi_by_hand(dxu, headings, projection)
+    # The kernel calls the libm that `math` calls, in the same order: the same bits.
+    assert_array_equal(_core.dxu_to_dxi(dxu, headings, projection), expected)
+    assert_allclose(_reference.dxu_to_dxi(dxu, headings, projection), expected, **TOL)
+    assert_allclose(kernels.dxu_to_dxi(dxu, headings, projection), expected, **TOL)
+
+
+@pytest.mark.parametrize(
+    ("dxu", "theta", "expected"),
+    [
+        ((0.2, 0.0), 0.0, (0.2, 0.0)),  # straight ahead
+        ((0.0, 1.0), 0.0, (0.0, 0.05)),  # turning on the spot: the point ahead moves sideways
+        ((0.1, 0.0), math.pi, (-0.1, 0.0)),
+        ((0.1, 2.0), math.pi / 2, (-0.1, 0.1)),  # facing +y, turning left: the point sweeps to -x
+        ((0.1, 0.0), math.pi / 4, (0.1 / math.sqrt(2), 0.1 / math.sqrt(2))),
+    ],
+)
+def test_dxu_to_dxi_hand_worked_cases(dxu, theta, expected):
+    u, headings = np.array(dxu, dtype=float).reshape(2, 1), np.array([theta])
+    assert_allclose(kernels.dxu_to_dxi(u, headings, 0.05)[:, 0], expected, rtol=1e-12, atol=1e-15)
+    assert_allclose(_core.dxu_to_dxi(u, headings, 0.05)[:, 0], expected, rtol=1e-12, atol=1e-15)
+
+
+def test_seen_velocity_is_the_point_ahead_to_the_bit(rng):
+    dxu, headings = random_commands(rng, 300), rng.uniform(-4.0, 4.0, 300)
+    vx, vy = seen_velocity(dxu, headings)
+    expected = dxi_by_hand(dxu, headings, PROJECTION_DISTANCE)
+    if kernels.IMPLEMENTATION == "rust":
+        assert_array_equal(np.vstack((vx, vy)), expected)
+    assert_allclose(np.vstack((vx, vy)), expected, **TOL)
+
+
+@pytest.mark.parametrize("dxu_to_dxi", [_core.dxu_to_dxi, kernels.dxu_to_dxi], ids=["core", "kernels"])
+def test_dxu_to_dxi_rejects_bad_input_naming_it(dxu_to_dxi):
+    with pytest.raises(ValueError, match=r"`dxu` must have shape \(2, n\), " + SHAPE_GOT.format("3, 4")):
+        dxu_to_dxi(np.zeros((3, 4)), np.zeros(4), 0.05)
+    with pytest.raises(ValueError, match=r"`headings` must have shape \(4,\), " + SHAPE_GOT.format("3,?")):
+        dxu_to_dxi(np.zeros((2, 4)), np.zeros(3), 0.05)
+    for bad in (np.nan, np.inf):
+        commands, headings = np.zeros((2, 3)), np.zeros(3)
+        commands[1, 2] = bad
+        with pytest.raises(ValueError, match=r"`dxu`.*non-finite"):
+            dxu_to_dxi(commands, np.zeros(3), 0.05)
+        headings[1] = bad
+        with pytest.raises(ValueError, match=r"`headings`.*non-finite"):
+            dxu_to_dxi(np.zeros((2, 3)), headings, 0.05)
+        with pytest.raises(ValueError, match=r"`projection`.*finite"):
+            dxu_to_dxi(np.zeros((2, 3)), np.zeros(3), bad)
 
 
 # -- actuator_limit -------------------------------------------------------------------------------

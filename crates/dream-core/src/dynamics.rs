@@ -358,6 +358,27 @@ pub fn dxi_to_dxu(dxi: &[f64], poses: &[f64], n: usize, vel_gain: f64, ang_gain:
     Ok(dxu)
 }
 
+/// Converts unicycle commands `(2, n)` of robots of headings `(n,)` to the velocities `(2, n)`
+/// of the points `projection` ahead of them: `dx = v c - p w s`, `dy = v s + p w c` (rps's
+/// `uni_to_si`; a movement sensor's reading). The products are taken in the order of NumPy's
+/// reference, so both give the same bits where their `sin` and `cos` do.
+///
+/// # Errors
+/// Length or finiteness problems of `dxu` or `headings`, or a non-finite `projection`.
+pub fn dxu_to_dxi(dxu: &[f64], headings: &[f64], n: usize, projection: f64) -> Result<Vec<f64>> {
+    check_finite("projection", &[projection])?;
+    let u = rows("dxu", dxu, 2, n)?;
+    let theta = rows("headings", headings, 1, n)?[0];
+    let mut dxi = vec![0.0; 2 * n];
+    let (dx, dy) = dxi.split_at_mut(n);
+    for_each_robot(dx, dy, |i, dx, dy| {
+        let (c, s, ahead) = (theta[i].cos(), theta[i].sin(), projection * u[1][i]);
+        *dx = u[0][i] * c - ahead * s;
+        *dy = u[0][i] * s + ahead * c;
+    });
+    Ok(dxi)
+}
+
 /// Limits unicycle commands `(2, n)` in place as DREAM's `Robot.actuator_limit`: clip `v` and `w`
 /// to their limits, then, if the faster wheel would exceed `max_wheel`, shrink `|v|` (keeping its
 /// sign and keeping `w`: turning matters more) so that it does not.
@@ -460,6 +481,23 @@ mod tests {
         actuator_limit(&mut dxu, 1, 0.2, MAX_ANGULAR, &gritsbot()).unwrap();
         assert!((dxu[0] + (0.2 - 3.0 * 0.0525)).abs() < 1e-15);
         assert_eq!(dxu[1], 3.0);
+    }
+
+    #[test]
+    fn dxu_to_dxi_moves_the_point_ahead() {
+        // Facing +y at 0.1 m/s while turning at 2 rad/s: the point 0.05 m ahead also sweeps
+        // sideways, at 0.1 m/s towards -x.
+        let got = dxu_to_dxi(&[0.1, 2.0], &[std::f64::consts::FRAC_PI_2], 1, 0.05).unwrap();
+        assert!((got[0] + 0.1).abs() < 1e-15 && (got[1] - 0.1).abs() < 1e-15);
+        assert!(matches!(
+            dxu_to_dxi(&[0.0; 4], &[0.0], 2, 0.05),
+            Err(GeomError::LengthMismatch { arg: "headings", .. })
+        ));
+        assert!(matches!(
+            dxu_to_dxi(&[0.0; 2], &[0.0], 1, f64::NAN),
+            Err(GeomError::NonFinite { arg: "projection", .. })
+        ));
+        assert!(dxu_to_dxi(&[], &[], 0, 0.05).unwrap().is_empty());
     }
 
     #[test]

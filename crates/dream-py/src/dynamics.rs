@@ -5,7 +5,7 @@ use dream_core::geom::Arena;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
-use crate::arrays::{rows_of, same_count};
+use crate::arrays::{rows_of, same_count, vector_of};
 use crate::errors::PyDreamResult;
 
 fn into_rows<'py>(py: Python<'py>, values: Vec<f64>, rows: usize, n: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
@@ -127,6 +127,21 @@ pub fn dxi_to_dxu<'py>(
     same_count("poses", n, m, 3)?;
     let dxu = py.detach(|| dynamics::dxi_to_dxu(&d, &p, n, vel_gain, ang_gain))?;
     Ok(into_rows(py, dxu, 2, n)?)
+}
+
+/// Velocities `(2, n)` of the points `projection` ahead of robots of headings `(n,)` driven by
+/// unicycle commands `(2, n)`.
+#[pyfunction]
+pub fn dxu_to_dxi<'py>(
+    py: Python<'py>,
+    dxu: Bound<'py, PyAny>,
+    headings: Bound<'py, PyAny>,
+    projection: f64,
+) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
+    let (u, n) = rows_of("dxu", &dxu, 2)?;
+    let theta = vector_of("headings", &headings, Some(n))?;
+    let dxi = py.detach(|| dynamics::dxu_to_dxi(&u, &theta, n, projection))?;
+    Ok(into_rows(py, dxi, 2, n)?)
 }
 
 /// Commands `(2, n)` clipped to the speed limits, then slowed so that no wheel is too fast.

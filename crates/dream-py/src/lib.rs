@@ -27,6 +27,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(dynamics::validate, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::colliding, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::dxi_to_dxu, m)?)?;
+    m.add_function(wrap_pyfunction!(dynamics::dxu_to_dxi, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::actuator_limit, m)?)?;
     m.add_function(wrap_pyfunction!(neighbours::neighbours, m)?)?;
     m.add_function(wrap_pyfunction!(neighbours::far_from, m)?)?;

@@ -107,6 +107,17 @@ def dxi_to_dxu(dxi: FloatArray, poses: FloatArray, vel_gain: float, ang_gain: fl
     return np.vstack((v, w))
 
 
+def dxu_to_dxi(dxu: FloatArray, headings: FloatArray, projection: float) -> FloatArray:
+    """Velocities ``(2, n)`` of the points ``projection`` ahead of robots of ``headings`` ``(n,)``
+    driven by unicycle commands ``(2, n)`` (rps's ``uni_to_si``; what a movement sensor reports).
+
+    ``dx = v c - projection w s`` and ``dy = v s + projection w c`` with ``c, s = cos, sin(theta)``.
+    """
+    c, s = np.cos(headings), np.sin(headings)
+    ahead = projection * dxu[1]
+    return np.vstack((dxu[0] * c - ahead * s, dxu[0] * s + ahead * c))
+
+
 def actuator_limit(
     dxu: FloatArray,
     *,

@@ -123,6 +123,22 @@ def dxi_to_dxu(dxi: Any, poses: Any, vel_gain: float = 0.8, ang_gain: float = 3.
     return implementation("dxi_to_dxu")(d, p, *gains)
 
 
+def dxu_to_dxi(dxu: Any, headings: Any, projection: float) -> FloatArray:
+    """Velocities ``(2, n)`` of the points ``projection`` (m) ahead of robots of ``headings`` ``(n,)``
+    driven by unicycle commands ``(2, n)``: the other way from :func:`dxi_to_dxu` (rps's ``uni_to_si``).
+
+    ``dx = v cos(theta) - projection w sin(theta)``, ``dy = v sin(theta) + projection w cos(theta)``.
+
+    Raises
+    ------
+    ValueError
+        A non-finite command, heading or ``projection`` (naming it), or shapes that do not match.
+    """
+    u = _commands(dxu, "dxu")
+    theta = as_array(headings, "headings", (u.shape[1],))
+    return implementation("dxu_to_dxi")(u, theta, check_finite(projection, "projection"))
+
+
 def actuator_limit(dxu: Any, robot: RobotSpec = GRITSBOT) -> FloatArray:
     """Commands ``(2, n)`` within the robot's limits; linear speed is sacrificed before turning."""
     return implementation("actuator_limit")(
