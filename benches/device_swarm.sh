@@ -10,7 +10,7 @@ wheels=${1:-.device}
 out=${OUT:-/tmp/device-out}
 mkdir -p "$out"
 if ls "$wheels"/*.whl >/dev/null 2>&1; then
-    python3 -m pip install -q --no-index --no-deps --no-compile --target /tmp/site "$wheels"/*.whl && export PYTHONPATH=/tmp/site
+    python3 -m pip install -q --no-index --no-deps --no-compile --upgrade --target /tmp/site "$wheels"/*.whl && export PYTHONPATH=/tmp/site
 fi
 export PYTHONUNBUFFERED=1
 echo "cores $(nproc); $(uptime); $(python3 --version); $(date -u +%FT%TZ)"
