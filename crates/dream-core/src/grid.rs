@@ -95,39 +95,43 @@ impl Grid {
             } else if !keys.is_empty() && columns <= budget {
                 // A swarm spread thin over a wide arena (a ring hundreds of metres across): too
                 // many cells for a table of them all, few columns.
-                let (by_column, order) = bucket(
-                    &keys.iter().map(|&(cx, _)| (cx - x0) as usize).collect::<Vec<_>>(),
-                    columns as usize,
-                );
-                let mut members = order;
-                // Each column's points by row, the columns on every core (stable: increasing
-                // index per cell).
-                let mut points = Vec::with_capacity(by_column.len());
-                let mut rest = &mut members[..];
-                for column in by_column.windows(2) {
-                    let (head, tail) = std::mem::take(&mut rest).split_at_mut(column[1] - column[0]);
-                    points.push(head);
-                    rest = tail;
-                }
-                points
+                let (by_column, order) =
+                    bucket(&map_range(keys.len(), |i| (keys[i].0 - x0) as usize), columns as usize);
+                // (row, point) in column order; each column sorted by row (stable: increasing
+                // index per cell) and its cells counted, then written where they go: on every
+                // core, since a million robots on a ring or a line make a million columns.
+                let mut entries: Vec<(i64, usize)> = map_range(order.len(), |k| (keys[order[k]].1, order[k]));
+                let same_cell = |a: &(i64, usize), b: &(i64, usize)| a.0 == b.0;
+                let counts: Vec<usize> = split(&mut entries, &by_column)
                     .into_par_iter()
-                    .with_min_len(64)
-                    .for_each(|points| points.sort_by_key(|&point| keys[point].1));
-                let (mut firsts, mut rows_of, mut starts) =
-                    (Vec::with_capacity(by_column.len()), Vec::new(), Vec::new());
-                for column in by_column.windows(2) {
-                    firsts.push(rows_of.len());
-                    let points = &members[column[0]..column[1]];
-                    for (k, &point) in points.iter().enumerate() {
-                        let row = keys[point].1;
-                        if k == 0 || rows_of.last() != Some(&row) {
-                            rows_of.push(row);
-                            starts.push(column[0] + k);
-                        }
-                    }
+                    .with_min_len(256)
+                    .map(|column| {
+                        column.sort_by_key(|entry| entry.0);
+                        column.chunk_by(same_cell).count()
+                    })
+                    .collect();
+                let mut firsts = Vec::with_capacity(counts.len() + 1);
+                firsts.push(0);
+                for count in &counts {
+                    firsts.push(firsts[firsts.len() - 1] + count);
                 }
-                firsts.push(rows_of.len());
-                starts.push(keys.len());
+                let cells = firsts[counts.len()];
+                let (mut rows_of, mut starts) = (vec![0_i64; cells], vec![keys.len(); cells + 1]);
+                let by_cells = split(&mut rows_of, &firsts)
+                    .into_par_iter()
+                    .zip(split(&mut starts[..cells], &firsts));
+                let columns_entries: Vec<(&[(i64, usize)], usize)> =
+                    by_column.windows(2).map(|w| (&entries[w[0]..w[1]], w[0])).collect();
+                by_cells
+                    .zip(columns_entries)
+                    .with_min_len(256)
+                    .for_each(|((rows, cell_starts), (column, mut at))| {
+                        for ((slot, start), run) in rows.iter_mut().zip(cell_starts).zip(column.chunk_by(same_cell)) {
+                            (*slot, *start) = (run[0].0, at);
+                            at += run.len();
+                        }
+                    });
+                let members = map_range(entries.len(), |k| entries[k].1);
                 (CellTable::Columns { x0, firsts, rows_of }, starts, members)
             } else {
                 let mut index: FxHashMap<(i64, i64), usize> =
@@ -342,6 +346,17 @@ impl Grid {
             CellTable::Sparse(index) => index.get(&(cx, cy)).copied(),
         }
     }
+}
+
+/// `values` cut into consecutive pieces at `bounds` (piece k is `bounds[k]..bounds[k + 1]`).
+fn split<'a, T>(mut values: &'a mut [T], bounds: &[usize]) -> Vec<&'a mut [T]> {
+    let mut pieces = Vec::with_capacity(bounds.len().saturating_sub(1));
+    for bound in bounds.windows(2) {
+        let (head, tail) = std::mem::take(&mut values).split_at_mut(bound[1] - bound[0]);
+        pieces.push(head);
+        values = tail;
+    }
+    pieces
 }
 
 /// Counting sort of point indices by `slots[point]` into `cells` buckets: the buckets' starts
