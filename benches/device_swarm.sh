@@ -14,8 +14,8 @@ if ls "$wheels"/*.whl >/dev/null 2>&1; then
 fi
 export PYTHONUNBUFFERED=1
 echo "cores $(nproc); $(uptime); $(python3 --version); $(date -u +%FT%TZ)"
-python3 benches/bench_swarm.py -n ${N1:-100000} --threads 1 2 4 8 16 --steps 24 --warm-up 14 --timeout 90 --breakdown 6 | tee "$out/swarm-100k.md"
-python3 benches/bench_swarm.py -n ${N2:-1000000} --threads 1 16 --steps 20 --warm-up 15 --timeout 150 --breakdown 10 | tee "$out/swarm-1m.md"
+python3 benches/bench_swarm.py -n ${N1:-100000} --threads 1 2 4 8 16 --steps 44 --warm-up 32 --timeout 120 --breakdown 6 | tee "$out/swarm-100k.md"
+python3 benches/bench_swarm.py -n ${N2:-1000000} --threads 1 16 --steps 38 --warm-up 32 --timeout 240 --breakdown 10 | tee "$out/swarm-1m.md"
 echo "== hrvo-circle --swarm -n 1000000 --steps 100, every core"
 timeout 240 python3 - "${N2:-1000000}" <<'PY' | tee "$out/hrvo-1m-100.txt"
 import resource, sys, time

@@ -118,3 +118,21 @@ def test_a_bad_row_choice_is_named(choice, message):
 def test_a_field_named_where_is_refused():
     with pytest.raises(ValueError, match="other than 'sender' and 'where'"):
         Radio(fields=("where",))
+
+
+@pytest.mark.parametrize("op", ["sum", "mean", "min", "max"])
+def test_board_fields_reduced_together_equal_field_by_field(op):
+    """Several message fields read from the board in one pass give, to the bit, what each field
+    gives alone and what the fields copied out give."""
+    rng = np.random.default_rng(7)
+    n, e = 50, 400
+    board = {"x": rng.normal(size=n), "y": rng.normal(size=n), "k": rng.integers(-5, 5, n)}
+    senders = rng.integers(0, n, e)
+    offsets = np.concatenate(([0], np.sort(rng.integers(0, e, 29)), [e]))
+    rows = Neighbourhood(offsets, {"sender": senders}, (senders, board))
+    together = getattr(rows, op)(["x", "y", "k"])
+    apart = np.column_stack([getattr(rows, op)(name) for name in ("x", "y", "k")])
+    copied = getattr(Neighbourhood(offsets, {name: board[name][senders] for name in board}), op)(["x", "y", "k"])
+    assert together.shape == (30, 3)
+    np.testing.assert_array_equal(together, apart)
+    np.testing.assert_array_equal(together, copied)
