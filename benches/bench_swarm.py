@@ -56,7 +56,7 @@ start = time.perf_counter()
 result = dream.run(find(name), n=n, steps=steps, backend="fast", swarm=True, progress=progress)
 profile.disable()
 gaps = [b - a for a, b in zip(stamps, stamps[1:])]
-own = sorted(((row[2], f[2]) for f, row in pstats.Stats(profile).stats.items()), reverse=True)
+own = sorted(((row[2], f[2]) for f, row in pstats.Stats(profile).stats.items()), reverse=True) if top else []
 print(json.dumps({
     "n": result.n, "steps": result.steps, "step_s": statistics.mean(gaps[warm_up:]),
     "setup_s": stamps[0] - start - gaps[0],

@@ -97,40 +97,48 @@ impl Grid {
                 // many cells for a table of them all, few columns.
                 let (by_column, order) =
                     bucket(&map_range(keys.len(), |i| (keys[i].0 - x0) as usize), columns as usize);
-                // (row, point) in column order; each column sorted by row (stable: increasing
-                // index per cell) and its cells counted, then written where they go: on every
-                // core, since a million robots on a ring or a line make a million columns.
+                // (row, point) in column order, then runs of columns of about COLUMN_POINTS
+                // points each, one task a run (a million robots on a ring or a line make a
+                // million columns): each column sorted by row (stable: increasing index per
+                // cell) and its cells listed.
                 let mut entries: Vec<(i64, usize)> = map_range(order.len(), |k| (keys[order[k]].1, order[k]));
-                let same_cell = |a: &(i64, usize), b: &(i64, usize)| a.0 == b.0;
-                let counts: Vec<usize> = split(&mut entries, &by_column)
+                let mut runs = vec![0];
+                for (c, &first) in by_column.iter().enumerate().skip(1) {
+                    if first - by_column[runs[runs.len() - 1]] >= COLUMN_POINTS || c == columns as usize {
+                        runs.push(c);
+                    }
+                }
+                let cut: Vec<usize> = runs.iter().map(|&c| by_column[c]).collect();
+                let tables: Vec<(Vec<usize>, Vec<i64>, Vec<usize>)> = split(&mut entries, &cut)
                     .into_par_iter()
-                    .with_min_len(256)
-                    .map(|column| {
-                        column.sort_by_key(|entry| entry.0);
-                        column.chunk_by(same_cell).count()
+                    .zip(runs.par_windows(2))
+                    .map(|(mut piece, run)| {
+                        let (mut firsts, mut rows_of, mut starts) = (Vec::new(), Vec::new(), Vec::new());
+                        for column in run[0]..run[1] {
+                            let (first, size) = (by_column[column], by_column[column + 1] - by_column[column]);
+                            let entries;
+                            (entries, piece) = std::mem::take(&mut piece).split_at_mut(size);
+                            entries.sort_by_key(|entry| entry.0);
+                            firsts.push(rows_of.len());
+                            let mut at = first;
+                            for cell in entries.chunk_by(|a, b| a.0 == b.0) {
+                                rows_of.push(cell[0].0);
+                                starts.push(at);
+                                at += cell.len();
+                            }
+                        }
+                        (firsts, rows_of, starts)
                     })
                     .collect();
-                let mut firsts = Vec::with_capacity(counts.len() + 1);
-                firsts.push(0);
-                for count in &counts {
-                    firsts.push(firsts[firsts.len() - 1] + count);
+                let (mut firsts, mut rows_of, mut starts) = (Vec::new(), Vec::new(), Vec::new());
+                for (run_firsts, run_rows, run_starts) in tables {
+                    let before = rows_of.len();
+                    firsts.extend(run_firsts.iter().map(|f| f + before));
+                    rows_of.extend(run_rows);
+                    starts.extend(run_starts);
                 }
-                let cells = firsts[counts.len()];
-                let (mut rows_of, mut starts) = (vec![0_i64; cells], vec![keys.len(); cells + 1]);
-                let by_cells = split(&mut rows_of, &firsts)
-                    .into_par_iter()
-                    .zip(split(&mut starts[..cells], &firsts));
-                let columns_entries: Vec<(&[(i64, usize)], usize)> =
-                    by_column.windows(2).map(|w| (&entries[w[0]..w[1]], w[0])).collect();
-                by_cells
-                    .zip(columns_entries)
-                    .with_min_len(256)
-                    .for_each(|((rows, cell_starts), (column, mut at))| {
-                        for ((slot, start), run) in rows.iter_mut().zip(cell_starts).zip(column.chunk_by(same_cell)) {
-                            (*slot, *start) = (run[0].0, at);
-                            at += run.len();
-                        }
-                    });
+                firsts.push(rows_of.len());
+                starts.push(keys.len());
                 let members = map_range(entries.len(), |k| entries[k].1);
                 (CellTable::Columns { x0, firsts, rows_of }, starts, members)
             } else {
@@ -347,6 +355,9 @@ impl Grid {
         }
     }
 }
+
+/// Points whose columns one task sorts out when building the column table.
+const COLUMN_POINTS: usize = 16_384;
 
 /// `values` cut into consecutive pieces at `bounds` (piece k is `bounds[k]..bounds[k + 1]`).
 fn split<'a, T>(mut values: &'a mut [T], bounds: &[usize]) -> Vec<&'a mut [T]> {
