@@ -11,8 +11,9 @@ use std::f64::consts::{PI, TAU};
 use rayon::prelude::*;
 
 use crate::csr::{check_offsets, Csr};
-use crate::error::{check_finite, check_len, try_filled, try_room, GeomError, Result};
+use crate::error::{check_finite, check_len, try_room, GeomError, Result};
 use crate::grid::Grid;
+use crate::parallel::gather_rows;
 
 /// Rows below this count run on one thread: spawning costs more than it saves.
 const PARALLEL_ROWS: usize = 512;
@@ -42,37 +43,9 @@ impl Csr {
         for &(_, _, length) in &rows {
             indptr.push(indptr[indptr.len() - 1] + length as i64);
         }
-        let total = indptr[n] as usize;
-        let indices = try_filled(total, 0_i64, "neighbour indices");
-        let (mut indices, mut distances) = (indices?, try_filled(total, 0.0, "neighbour distances")?);
-        // Robots in runs of GATHER_ROWS, each run's rows copied into its own part of the output:
-        // on all cores for a large swarm, where the copy is a sixth of the query.
-        let mut parts = Vec::with_capacity(n / GATHER_ROWS + 1);
-        let (mut rest_i, mut rest_d) = (&mut indices[..], &mut distances[..]);
-        for first in (0..n).step_by(GATHER_ROWS) {
-            let last = (first + GATHER_ROWS).min(n);
-            let size = (indptr[last] - indptr[first]) as usize;
-            let (part_i, tail_i) = std::mem::take(&mut rest_i).split_at_mut(size);
-            let (part_d, tail_d) = std::mem::take(&mut rest_d).split_at_mut(size);
-            (rest_i, rest_d) = (tail_i, tail_d);
-            parts.push((first..last, part_i, part_d));
-        }
-        let copy = |(robots, part_i, part_d): (std::ops::Range<usize>, &mut [i64], &mut [f64])| {
-            let mut at = 0;
-            for &(b, from, length) in &rows[robots] {
-                if length > 0 {
-                    let block = &blocks[b];
-                    part_i[at..at + length].copy_from_slice(&block.indices[from..from + length]);
-                    part_d[at..at + length].copy_from_slice(&block.distances[from..from + length]);
-                    at += length;
-                }
-            }
-        };
-        if total >= PARALLEL_GATHER {
-            parts.into_par_iter().for_each(copy);
-        } else {
-            parts.into_iter().for_each(copy);
-        }
+        let block = |i: usize| &blocks[rows[i].0];
+        let indices = gather_rows(&indptr, |i| (&block(i).indices[..], rows[i].1), "neighbour indices")?;
+        let distances = gather_rows(&indptr, |i| (&block(i).distances[..], rows[i].1), "neighbour distances")?;
         Ok(Csr {
             indptr,
             indices,
@@ -80,13 +53,6 @@ impl Csr {
         })
     }
 }
-
-/// Robots whose rows are copied into robot order by one task.
-const GATHER_ROWS: usize = 4096;
-
-/// Neighbour pairs below this count are put in robot order on one thread (at 100,000 pairs the
-/// parallel copy measured 10-17 % slower, at 1,000,000 it is 1.14-1.31x faster).
-const PARALLEL_GATHER: usize = 400_000;
 
 /// Wraps an angle to [-pi, pi) as NumPy's `(a + pi) % (2 pi) - pi` does.
 pub(crate) fn wrap_angle(angle: f64) -> f64 {

@@ -48,3 +48,62 @@ pub fn concat<T: Copy + Default + Send + Sync>(pieces: &[&[T]], what: &'static s
         .for_each(|(head, piece)| head.copy_from_slice(piece));
     Ok(out)
 }
+
+/// Rows whose entries one task of [`gather_rows`] copies.
+const GATHER_ROWS: usize = 4096;
+
+/// Entries from which [`gather_rows`] fills and copies on every core (at 100,000 entries the
+/// parallel copy measured 10-17 % slower, at 1,000,000 it is 1.14-1.31x faster).
+const PARALLEL_GATHER: usize = 400_000;
+
+/// Ragged rows put in order, one column at a time: row r's `offsets[r + 1] - offsets[r]`
+/// entries come from `from(r)`, a slice and where the row's entries start in it (the rows of
+/// a parallel search, each found by some task in some order). At a million robots the result is
+/// hundreds of megabytes, each fresh page faulted in: filled and copied on every core.
+///
+/// # Errors
+/// [`crate::GeomError::OutOfMemory`] (naming `what`) when the result cannot be allocated.
+pub(crate) fn gather_rows<'a, T: Copy + Default + Send + Sync + 'a>(
+    offsets: &[i64],
+    from: impl Fn(usize) -> (&'a [T], usize) + Sync,
+    what: &'static str,
+) -> Result<Vec<T>> {
+    let rows = offsets.len() - 1;
+    let total = offsets[rows] as usize;
+    let mut out = Vec::new();
+    try_room(&mut out, total, what)?;
+    let parallel = total >= PARALLEL_GATHER;
+    if parallel {
+        out.par_extend(
+            (0..total)
+                .into_par_iter()
+                .with_min_len(PARALLEL_ITEMS)
+                .map(|_| T::default()),
+        );
+    } else {
+        out.resize(total, T::default());
+    }
+    let mut tasks = Vec::with_capacity(rows / GATHER_ROWS + 1);
+    let mut rest = &mut out[..];
+    for first in (0..rows).step_by(GATHER_ROWS) {
+        let last = (first + GATHER_ROWS).min(rows);
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut((offsets[last] - offsets[first]) as usize);
+        tasks.push((first..last, head));
+        rest = tail;
+    }
+    let copy = |(range, head): (std::ops::Range<usize>, &mut [T])| {
+        let mut at = 0;
+        for r in range {
+            let length = (offsets[r + 1] - offsets[r]) as usize;
+            let (column, start) = from(r);
+            head[at..at + length].copy_from_slice(&column[start..start + length]);
+            at += length;
+        }
+    };
+    if parallel {
+        tasks.into_par_iter().for_each(copy);
+    } else {
+        tasks.into_iter().for_each(copy);
+    }
+    Ok(out)
+}

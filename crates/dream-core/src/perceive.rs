@@ -16,7 +16,7 @@ use rayon::prelude::*;
 use crate::error::{check_finite, check_len, try_filled, try_room, GeomError, Result};
 use crate::grid::Grid;
 use crate::neighbours::{length, radius_squared, wrap_angle};
-use crate::parallel::{map_range, PARALLEL_ITEMS};
+use crate::parallel::{gather_rows, map_range, PARALLEL_ITEMS};
 
 /// A movement sensor's reach: range (m), full aperture `fov` (rad) about the heading turned by
 /// `direction` (rad).
@@ -48,9 +48,6 @@ const PARALLEL_ROWS: usize = 512;
 
 /// Rows one task finds: enough to amortise a task, few enough to balance the cores.
 const TASK_ROWS: usize = 256;
-
-/// Rows whose entries one task copies into row order.
-const COPY_ROWS: usize = 2048;
 
 /// What one task found, its rows in the order it went through them: the `t`-th is row
 /// `rows[t]` (an index into the asked rows), with `seen_counts[t]` entries in `seen`'s columns
@@ -335,12 +332,14 @@ fn in_row_order(parts: &[Part], rows: usize) -> Result<(Perceived, Perceived)> {
         seen_offsets[r + 1] += seen_offsets[r];
         heard_offsets[r + 1] += heard_offsets[r];
     }
-    let seen_column =
-        |of: fn(&Perceived) -> &Vec<f64>| in_order(&seen_offsets, |r| (&of(&parts[at[r].0].seen)[..], at[r].1));
-    let heard_column =
-        |of: fn(&Perceived) -> &Vec<f64>| in_order(&heard_offsets, |r| (&of(&parts[at[r].0].heard)[..], at[r].2));
+    let seen_column = |of: fn(&Perceived) -> &Vec<f64>| {
+        gather_rows(&seen_offsets, |r| (&of(&parts[at[r].0].seen)[..], at[r].1), WHAT)
+    };
+    let heard_column = |of: fn(&Perceived) -> &Vec<f64>| {
+        gather_rows(&heard_offsets, |r| (&of(&parts[at[r].0].heard)[..], at[r].2), WHAT)
+    };
     let seen = Perceived {
-        ids: in_order(&seen_offsets, |r| (&parts[at[r].0].seen.ids[..], at[r].1))?,
+        ids: gather_rows(&seen_offsets, |r| (&parts[at[r].0].seen.ids[..], at[r].1), WHAT)?,
         distances: seen_column(|p| &p.distances)?,
         bearings: seen_column(|p| &p.bearings)?,
         dxs: seen_column(|p| &p.dxs)?,
@@ -349,54 +348,12 @@ fn in_row_order(parts: &[Part], rows: usize) -> Result<(Perceived, Perceived)> {
         carried: Vec::new(),
     };
     let heard = Perceived {
-        ids: in_order(&heard_offsets, |r| (&parts[at[r].0].heard.ids[..], at[r].2))?,
+        ids: gather_rows(&heard_offsets, |r| (&parts[at[r].0].heard.ids[..], at[r].2), WHAT)?,
         distances: heard_column(|p| &p.distances)?,
         offsets: heard_offsets.clone(),
         ..Perceived::default()
     };
     Ok((seen, heard))
-}
-
-/// One column in row order: row r's `offsets[r + 1] - offsets[r]` entries from `from(r)`, a
-/// column of a part and where the row's entries start in it. Filled and copied on every core:
-/// at a million robots the columns are hundreds of megabytes, each fresh page faulted in.
-fn in_order<'a, T: Copy + Default + Send + Sync + 'a>(
-    offsets: &[i64],
-    from: impl Fn(usize) -> (&'a [T], usize) + Sync,
-) -> Result<Vec<T>> {
-    let rows = offsets.len() - 1;
-    let total = offsets[rows] as usize;
-    let mut out = Vec::new();
-    try_room(&mut out, total, "perceived robots")?;
-    out.par_extend(
-        (0..total)
-            .into_par_iter()
-            .with_min_len(PARALLEL_ITEMS)
-            .map(|_| T::default()),
-    );
-    let mut tasks = Vec::with_capacity(rows / COPY_ROWS + 1);
-    let mut rest = &mut out[..];
-    for first in (0..rows).step_by(COPY_ROWS) {
-        let last = (first + COPY_ROWS).min(rows);
-        let (head, tail) = std::mem::take(&mut rest).split_at_mut((offsets[last] - offsets[first]) as usize);
-        tasks.push((first..last, head));
-        rest = tail;
-    }
-    let copy = |(range, head): (std::ops::Range<usize>, &mut [T])| {
-        let mut at = 0;
-        for r in range {
-            let length = (offsets[r + 1] - offsets[r]) as usize;
-            let (column, start) = from(r);
-            head[at..at + length].copy_from_slice(&column[start..start + length]);
-            at += length;
-        }
-    };
-    if total >= PARALLEL_ITEMS {
-        tasks.into_par_iter().for_each(copy);
-    } else {
-        tasks.into_iter().for_each(copy);
-    }
-    Ok(out)
 }
 
 #[cfg(test)]
