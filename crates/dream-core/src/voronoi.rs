@@ -136,15 +136,19 @@ impl Clipper {
             .map(|u| [p[0] + radius * u[0], p[1] + radius * u[1]])
             .collect();
         let mut scratch = Vec::with_capacity(circle.len() + 8);
+        // Each wall with whether the disc's square lies within it: then so does every vertex
+        // (rounding is monotone), and the clip would give the polygon back as it is.
         let walls = [
-            ([arena.xmin, 0.0], [-1.0, 0.0]),
-            ([arena.xmax, 0.0], [1.0, 0.0]),
-            ([0.0, arena.ymin], [0.0, -1.0]),
-            ([0.0, arena.ymax], [0.0, 1.0]),
+            ([arena.xmin, 0.0], [-1.0, 0.0], p[0] - radius >= arena.xmin),
+            ([arena.xmax, 0.0], [1.0, 0.0], p[0] + radius <= arena.xmax),
+            ([0.0, arena.ymin], [0.0, -1.0], p[1] - radius >= arena.ymin),
+            ([0.0, arena.ymax], [0.0, 1.0], p[1] + radius <= arena.ymax),
         ];
-        for (point, normal) in walls {
-            clip(&polygon, point, normal, &mut scratch);
-            std::mem::swap(&mut polygon, &mut scratch);
+        for (point, normal, within) in walls {
+            if !within {
+                clip(&polygon, point, normal, &mut scratch);
+                std::mem::swap(&mut polygon, &mut scratch);
+            }
         }
         let reach = farthest(&polygon, p);
         Self {
