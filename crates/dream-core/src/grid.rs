@@ -484,6 +484,64 @@ mod tests {
     }
 
     #[test]
+    fn a_ring_of_many_points_builds_its_column_table_in_runs_and_finds_every_block() {
+        // More points than one run of columns holds (COLUMN_POINTS), so that several tasks
+        // build the table.
+        let (n, cell) = (3 * COLUMN_POINTS + 123, 0.25);
+        let (xs, ys): (Vec<f64>, Vec<f64>) = (0..n)
+            .map(|i| {
+                let angle = i as f64 * std::f64::consts::TAU / n as f64;
+                (
+                    3000.0 * angle.cos(),
+                    1900.0 * angle.sin() + (i as f64 * 0.569_840_29).fract() * 0.4,
+                )
+            })
+            .unzip();
+        let grid = Grid::new(&xs, &ys, cell);
+        assert!(matches!(grid.table, CellTable::Columns { .. }));
+        let mut all = grid.members().to_vec();
+        all.sort_unstable();
+        assert!(all.iter().copied().eq(0..n), "every point once");
+        assert!(grid.occupied().all(|members| members.windows(2).all(|w| w[0] < w[1])));
+        let key = |x: f64, y: f64| cell_of(x, y, cell * (1.0 + 1e-9));
+        for q in (0..n).step_by(331) {
+            let (cx, cy) = key(xs[q], ys[q]);
+            let expected: Vec<usize> = (0..n)
+                .filter(|&j| {
+                    let (jx, jy) = key(xs[j], ys[j]);
+                    (jx - cx).abs() <= 1 && (jy - cy).abs() <= 1
+                })
+                .collect();
+            assert_eq!(near(&grid, xs[q], ys[q]), expected, "around point {q}");
+        }
+    }
+
+    #[test]
+    fn a_loose_grid_widens_its_cells_to_stay_dense_and_misses_no_neighbour() {
+        // Points spread so that cells of `reach` would make about twice the dense budget.
+        let (n, reach) = (5000, 0.1);
+        let side = (8.0 * n as f64).sqrt() * reach;
+        let (xs, ys): (Vec<f64>, Vec<f64>) = (0..n)
+            .map(|i| {
+                let i = i as f64;
+                ((i * 0.754_877_666).fract() * side, (i * 0.569_840_29).fract() * side)
+            })
+            .unzip();
+        assert!(matches!(Grid::new(&xs, &ys, reach).table, CellTable::Columns { .. }));
+        let grid = Grid::loose(&xs, &ys, reach);
+        assert!(matches!(grid.table, CellTable::Dense { .. }));
+        assert!(grid.cell > reach && grid.cell <= 2.0 * reach * 1.02);
+        for q in (0..n).step_by(7) {
+            let found = near(&grid, xs[q], ys[q]);
+            for j in 0..n {
+                if ((xs[j] - xs[q]).powi(2) + (ys[j] - ys[q]).powi(2)).sqrt() <= reach {
+                    assert!(found.binary_search(&j).is_ok(), "{j} near {q}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn a_pair_exactly_reach_apart_across_two_borders_is_found() {
         // The exact distance is a hair over 0.11 but computes to 0.11: it must still be found.
         let grid = Grid::new(&[0.0, 0.0], &[-1e-18, 0.11], 0.11);
