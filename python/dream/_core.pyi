@@ -17,6 +17,7 @@ __all__ = [
     "dxi_to_dxu",
     "dxu_to_dxi",
     "actuator_limit",
+    "hypot",
     "neighbours",
     "far_from",
     "perceive",
@@ -73,6 +74,9 @@ def dxi_to_dxu(
 
 def dxu_to_dxi(dxu: NDArray[np.float64], headings: NDArray[np.float64], projection: float) -> NDArray[np.float64]:
     """Velocities (2, n) of the points projection ahead of robots of headings (n,) driven by commands (2, n)."""
+
+def hypot(x: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray[np.float64]:
+    """math.hypot(x[i], y[i]) for the arrays x, y (n,), to the bit."""
 
 def actuator_limit(
     dxu: NDArray[np.float64],

@@ -55,6 +55,7 @@ def test_every_public_kernel_goes_through_the_dispatch(monkeypatch):
     kernels.dxi_to_dxu(commands, poses)
     kernels.dxu_to_dxi(commands, poses[2], 0.05)
     kernels.actuator_limit(commands)
+    kernels.hypot(points[:, 0], points[:, 1])
     kernels.neighbours(points, 1.0)
     kernels.far_from(points, points, 0.1)
     kernels.hrvo(points, points, points)

@@ -15,6 +15,7 @@
 //! - [`dynamics`]: unicycle Euler step, rps velocity thresholding and validation counts,
 //!   single-integrator to unicycle conversion and actuator limiting, for the whole swarm.
 //! - [`grid`]: the uniform grid behind neighbour queries.
+//! - [`length`]: vector lengths rounded as Python's `math.hypot` rounds them.
 //! - [`neighbours`]: who is near whom, within a range and field of view, for the whole swarm.
 //! - [`perceive`]: who the robots deciding now see and hear, in one neighbour query.
 //! - [`reduce`]: sums, means, extremes and nearest entries of ragged rows (a robot's neighbourhood).
@@ -33,6 +34,7 @@ pub mod grid;
 pub mod guard;
 pub mod heard;
 pub mod hrvo;
+pub mod length;
 pub mod neighbours;
 pub mod obstacles;
 pub mod parallel;

@@ -7,6 +7,7 @@ mod errors;
 mod guard;
 mod heard;
 mod hrvo;
+mod length;
 mod neighbours;
 mod obstacles;
 mod raycast;
@@ -29,6 +30,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(dynamics::dxi_to_dxu, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::dxu_to_dxi, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::actuator_limit, m)?)?;
+    m.add_function(wrap_pyfunction!(length::hypot, m)?)?;
     m.add_function(wrap_pyfunction!(neighbours::neighbours, m)?)?;
     m.add_function(wrap_pyfunction!(neighbours::far_from, m)?)?;
     m.add_function(wrap_pyfunction!(neighbours::perceive, m)?)?;

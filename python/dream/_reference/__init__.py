@@ -28,6 +28,7 @@ from dream._reference.hrvo import (
     hrvo_velocity,
     unit_directions,
 )
+from dream._reference.length import hypot
 from dream._reference.neighbours import far_from, neighbours, neighbours_of, perceive
 from dream._reference.obstacles import agents_from_closest, mirrored, virtual_agents
 from dream._reference.raycast import distance_rays
@@ -53,6 +54,7 @@ __all__ = [
     "far_from",
     "hrvo",
     "hrvo_velocity",
+    "hypot",
     "neighbours",
     "neighbours_of",
     "threshold_velocities",

@@ -31,6 +31,7 @@ from dream.kernels._dynamics import (
 )
 from dream.kernels._guard import motion_guard
 from dream.kernels._hrvo import HrvoPlanner, hrvo, hrvo_rows
+from dream.kernels._length import hypot
 from dream.kernels._neighbours import far_from, neighbours, neighbours_of, perceive
 from dream.kernels._obstacles import obstacle_agents, virtual_agents
 from dream.kernels._raycast import distance_rays
@@ -54,6 +55,7 @@ __all__ = [
     "dxi_to_dxu",
     "dxu_to_dxi",
     "actuator_limit",
+    "hypot",
     "neighbours",
     "neighbours_of",
     "far_from",

@@ -12,7 +12,6 @@ and are read from here too. Units: metres, metres per second.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -411,10 +410,7 @@ def length(vectors: Any) -> FloatArray:
     rounds them (which can differ from ``numpy.hypot`` in the last bit): a robot's rules and the
     swarm's then round alike, and as the per-robot code always has."""
     v = np.asarray(vectors, dtype=np.float64)
-    return np.asarray(_HYPOT(v[..., 0], v[..., 1]), dtype=np.float64)
-
-
-_HYPOT = np.frompyfunc(math.hypot, 2, 1)
+    return kernels.hypot(v[..., 0], v[..., 1])
 
 
 def toward(positions: Any, goals: Any, gain: float, v_max: float) -> FloatArray:
