@@ -573,8 +573,9 @@ class Engine:
 
 
 def _taken(values: np.ndarray, at: slice | np.ndarray) -> np.ndarray:
-    """``values[at]`` (:func:`~dream.swarm.safety.at_rows`), an array of its own either way."""
-    return values[at].copy() if isinstance(at, slice) else values[at]
+    """``values[at]`` (:func:`~dream.swarm.safety.at_rows`), an array of its own either way
+    (``numpy.take`` copies rows of several values 3-4 times faster than indexing does)."""
+    return values[at].copy() if isinstance(at, slice) else np.take(values, at, axis=0)
 
 
 def _linked(graph: tuple[np.ndarray, np.ndarray], rows: np.ndarray, x: np.ndarray, talking: np.ndarray) -> Heard:
