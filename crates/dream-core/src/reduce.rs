@@ -6,6 +6,8 @@
 //! or a maximum (nothing to take them of); NaN entries are skipped by the minimum, the maximum
 //! and the nearest, and carried by the sum and the mean.
 
+use std::ops::Range;
+
 use rayon::prelude::*;
 
 use crate::csr::check_offsets;
@@ -51,19 +53,26 @@ pub fn reduce(values: &[f64], width: usize, offsets: &[i64], index: Option<&[i64
     };
     check_offsets("offsets", offsets, entries, "entries")?;
     let at = |e: usize| index.map_or(e, |index| index[e] as usize);
-    // Each row's values are written where they lie in the output: no vector per row.
+    // Each row's values are written where they lie in the output: no vector per row. In entry
+    // order from +0.0, as the NumPy reference adds: the same bits on both paths.
     let row = |(r, out): (usize, &mut [f64])| {
-        let (start, end) = (offsets[r] as usize, offsets[r + 1] as usize);
-        for (c, slot) in out.iter_mut().enumerate() {
-            // In entry order from +0.0, as the NumPy reference adds: the same bits on both paths.
-            let column = (start..end).map(|e| values[at(e) * width + c]);
-            *slot = match op {
-                Reduce::Sum => column.fold(0.0, |a, b| a + b),
-                Reduce::Mean if end > start => column.fold(0.0, |a, b| a + b) / (end - start) as f64,
-                Reduce::Min => column.fold(f64::NAN, f64::min),
-                Reduce::Max => column.fold(f64::NAN, f64::max),
-                Reduce::Mean => f64::NAN,
-            };
+        let entries = offsets[r] as usize..offsets[r + 1] as usize;
+        let count = entries.len();
+        let fold = Fold {
+            values,
+            width,
+            entries,
+            at: &at,
+        };
+        match op {
+            Reduce::Sum => fold.each_column(out, 0.0, |a, b| a + b),
+            Reduce::Mean => {
+                fold.each_column(out, 0.0, |a, b| a + b);
+                out.iter_mut()
+                    .for_each(|slot| *slot = if count > 0 { *slot / count as f64 } else { f64::NAN });
+            }
+            Reduce::Min => fold.each_column(out, f64::NAN, f64::min),
+            Reduce::Max => fold.each_column(out, f64::NAN, f64::max),
         }
     };
     let m = offsets.len() - 1;
@@ -74,6 +83,45 @@ pub fn reduce(values: &[f64], width: usize, offsets: &[i64], index: Option<&[i64
         out.chunks_mut(width).enumerate().for_each(row);
     }
     Ok(out)
+}
+
+/// One row's entries of `values` (rows of `width`, entry `e` at row `at(e)`) to fold.
+struct Fold<'a, At> {
+    values: &'a [f64],
+    width: usize,
+    entries: Range<usize>,
+    at: &'a At,
+}
+
+impl<At: Fn(usize) -> usize> Fold<'_, At> {
+    /// Each column folded with `combine` from `init`, in entry order, into `out`: the columns of
+    /// a narrow row side by side in one pass over the entries (each index read once, and the
+    /// columns' additions, which wait on one another within a column, interleaved).
+    fn each_column(&self, out: &mut [f64], init: f64, combine: impl Fn(f64, f64) -> f64 + Copy) {
+        match self.width {
+            1 => self.side_by_side::<1>(out, init, combine),
+            2 => self.side_by_side::<2>(out, init, combine),
+            3 => self.side_by_side::<3>(out, init, combine),
+            4 => self.side_by_side::<4>(out, init, combine),
+            width => {
+                for (c, slot) in out.iter_mut().enumerate() {
+                    let column = self.entries.clone().map(|e| self.values[(self.at)(e) * width + c]);
+                    *slot = column.fold(init, combine);
+                }
+            }
+        }
+    }
+
+    fn side_by_side<const W: usize>(&self, out: &mut [f64], init: f64, combine: impl Fn(f64, f64) -> f64) {
+        let mut folded = [init; W];
+        for e in self.entries.clone() {
+            let row = &self.values[(self.at)(e) * W..][..W];
+            for c in 0..W {
+                folded[c] = combine(folded[c], row[c]);
+            }
+        }
+        out.copy_from_slice(&folded);
+    }
 }
 
 /// Every entry of `index` must name one of `rows` rows.
