@@ -97,10 +97,14 @@ class Rendezvous(Experiment):
         if self.radius == 0.0:
             self.radius = self.met_radius(n)
 
+    def correct_positions(self, poses: np.ndarray) -> np.ndarray:
+        """The correct robots' positions ``(2, k)`` (no copy of a team without faults)."""
+        correct = self.correct
+        return poses[:2] if correct.all() else poses[:2, correct]
+
     def spread(self, poses: np.ndarray) -> float:
         """The largest distance of a correct robot from the correct robots' centre (m)."""
-        correct = self.correct
-        team = poses[:2] if correct.all() else poses[:2, correct]  # no copy of a team without faults
+        team = self.correct_positions(poses)
         squares = (team - team.mean(axis=1, keepdims=True)) ** 2
         return math.sqrt((squares[0] + squares[1]).max())  # one root, of the largest: a measure taken every step
 
@@ -110,8 +114,7 @@ class Rendezvous(Experiment):
     def potential(self, poses: np.ndarray) -> np.ndarray:
         """For learners (:mod:`dream.rl`): each robot's distance to the correct robots' centre, negated
         (m; a learner's reward is its gain over a step)."""
-        team = poses[:2, self.correct]
-        return -np.hypot(*(poses[:2] - team.mean(axis=1, keepdims=True)))
+        return -np.hypot(*(poses[:2] - self.correct_positions(poses).mean(axis=1, keepdims=True)))
 
     def measures(self) -> dict[str, float]:
         return {"spread": self.spread(self.sim.poses)}
