@@ -223,6 +223,7 @@ pub(crate) fn radius_squared(radius: f64) -> f64 {
 
 /// Whether the offset `(dx, dy)` lies within `radius` (inclusive), as every neighbour query
 /// decides it; `radius_squared` is [`radius_squared`]`(radius)`.
+#[inline]
 pub(crate) fn in_range(dx: f64, dy: f64, radius: f64, radius_squared: f64) -> bool {
     let squared = dx * dx + dy * dy;
     squared <= radius_squared && length(squared, dx, dy) <= radius
@@ -230,6 +231,7 @@ pub(crate) fn in_range(dx: f64, dy: f64, radius: f64, radius_squared: f64) -> bo
 
 /// `sqrt(squared)`, the length of `(dx, dy)` whose `squared` is `dx^2 + dy^2`; `hypot` when the
 /// squares overflowed (beyond ~1.3e154 m), which a huge radius still lets through.
+#[inline]
 pub(crate) fn length(squared: f64, dx: f64, dy: f64) -> f64 {
     if squared.is_finite() {
         squared.sqrt()
