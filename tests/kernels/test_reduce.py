@@ -101,6 +101,25 @@ def test_segment_nearest_k_matches_the_reference_and_a_stable_sort(rng, rows, k)
         assert_array_equal(got[:, 0], _core.segment_nearest(keys, offsets))  # its first slot: the nearest
 
 
+@pytest.mark.parametrize("rows", [0, 1, 9, 5000])
+@pytest.mark.parametrize("k", [0, 1, 4])
+@pytest.mark.parametrize("board", [False, True])
+def test_segment_nearest_to_matches_the_reference_and_the_keys(rng, rows, k, board):
+    counts = rng.integers(0, 20, rows)
+    offsets = np.concatenate(([0], np.cumsum(counts))).astype(np.int64)
+    origins = rng.uniform(-3, 3, (rows, 2))
+    # Points on a coarse lattice: equal distances are common, the first of equals comes first.
+    points = rng.integers(-6, 7, (300 if board else offsets[-1], 2)) * 0.5
+    points[rng.random(len(points)) < 0.1, 0] = np.nan
+    index = rng.integers(0, len(points), offsets[-1]) if board else None
+    got = _core.segment_nearest_to(points, offsets, origins, k, index)
+    assert got.shape == (rows, k)
+    assert_array_equal(got, _reference.segment_nearest_to(points, offsets, origins, k, index))
+    at = points if index is None else points[index]
+    d = at - np.repeat(origins, counts, axis=0)
+    assert_array_equal(got, _core.segment_nearest(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1], offsets, k))
+
+
 @pytest.mark.parametrize(
     ("call", "message"),
     [
@@ -119,6 +138,10 @@ def test_segment_nearest_k_matches_the_reference_and_a_stable_sort(rng, rows, k)
         (lambda: kernels.segment_reduce([1.0, 2.0], [0, 1], "sum", [0.5]), "`index` must be integer rows"),
         (lambda: _core.segment_reduce(np.zeros((2, 1)), np.array([0, 1]), "sum", np.array([-1])), "`index` holds -1"),
         (lambda: _core.segment_reduce(np.zeros((2, 1)), np.array([0, 2]), "avg"), "`op` must be"),
+        (lambda: kernels.segment_nearest_to(np.zeros((2, 3)), [0, 2], np.zeros((1, 2)), 1), "`points` must have"),
+        (lambda: kernels.segment_nearest_to(np.zeros((2, 2)), [0, 2], np.zeros((2, 2)), 1), "`origins` must have"),
+        (lambda: kernels.segment_nearest_to(np.zeros((2, 2)), [0, 1], np.zeros((1, 2)), 1, [2]), "`index` holds 2"),
+        (lambda: kernels.segment_nearest_to(np.zeros((2, 2)), [0, 2], np.zeros((1, 2)), -1), "`k` must be"),
     ],
 )
 def test_bad_input_is_named(call, message):

@@ -136,3 +136,24 @@ def test_board_fields_reduced_together_equal_field_by_field(op):
     assert together.shape == (30, 3)
     np.testing.assert_array_equal(together, apart)
     np.testing.assert_array_equal(together, copied)
+
+
+def test_nearest_messages_read_on_the_board_equal_those_copied_out():
+    """The k messages nearest each robot, ranked with their positions read on the board in place,
+    and their fields picked there, are those the fields copied out give."""
+    rng = np.random.default_rng(11)
+    n, e = 60, 500
+    board = {"x": rng.normal(size=n), "y": rng.normal(size=n), "k": rng.integers(-5, 5, n)}
+    senders = rng.integers(0, n, e)
+    offsets = np.concatenate(([0], np.sort(rng.integers(0, e, 39)), [e]))
+    origins = rng.normal(size=(40, 2))
+    on_board = Neighbourhood(offsets, {"sender": senders}, (senders, board))
+    copied = Neighbourhood(offsets, {name: board[name][senders] for name in board})
+    entries = on_board.nearest_to(["x", "y"], origins, 3)
+    np.testing.assert_array_equal(entries, copied.nearest_to(["x", "y"], origins, 3))
+    assert entries.shape == (40, 3) and (entries[np.diff(offsets) == 0] == -1).all()
+    for name in board:
+        picked = on_board.pick(name, entries)
+        np.testing.assert_array_equal(picked, copied.pick(name, entries))
+        assert np.isnan(picked[entries < 0]).all()
+    assert "x" not in on_board.columns  # read in place, never copied out whole

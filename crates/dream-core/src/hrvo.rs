@@ -31,7 +31,7 @@ use crate::csr::{check_csr, check_offsets};
 use crate::error::{check_finite, check_len, GeomError, Result};
 use crate::geom::{Arena, Vec2};
 use crate::neighbours::Near;
-use crate::parallel::{map_range, PARALLEL_ITEMS};
+use crate::parallel::{first_where, map_range};
 
 /// Rows below this count run on one thread.
 const PARALLEL_ROBOTS: usize = 256;
@@ -523,12 +523,9 @@ fn check_neighbours(neighbours: &[Neighbour]) -> Result<()> {
         !values.iter().all(|v| v.is_finite()) || b.distance < 0.0
     };
     // The first bad one, found on every core for many.
-    let first = if neighbours.len() >= PARALLEL_ITEMS {
-        neighbours.par_iter().position_first(bad)
-    } else {
-        neighbours.iter().position(bad)
+    let Some(k) = first_where(neighbours.len(), |k| bad(&neighbours[k])) else {
+        return Ok(());
     };
-    let Some(k) = first else { return Ok(()) };
     let b = &neighbours[k];
     if b.distance.is_finite() && b.direction.iter().chain(&b.velocity).all(|v| v.is_finite()) {
         Err(GeomError::InvalidParameter {

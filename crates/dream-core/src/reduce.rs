@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use crate::csr::check_offsets;
 use crate::error::{GeomError, Result};
-use crate::parallel::{map_range, PARALLEL_ITEMS};
+use crate::parallel::{first_where, map_range, PARALLEL_ITEMS};
 
 /// Entries from which the nearest of each row are picked on every thread: the messages of a few
 /// thousand robots, a few dozen each (their rows alone stay under [`map_range`]'s threshold).
@@ -126,17 +126,11 @@ impl<At: Fn(usize) -> usize> Fold<'_, At> {
 
 /// Every entry of `index` must name one of `rows` rows.
 fn check_indices(arg: &'static str, index: &[i64], rows: usize) -> Result<()> {
-    let bad = |&&i: &&i64| i < 0 || i as usize >= rows;
     // On every core for many: a million robots' inboxes hold millions of messages.
-    let first = if index.len() >= PARALLEL_ENTRIES {
-        index.par_iter().find_first(bad)
-    } else {
-        index.iter().find(bad)
-    };
-    match first {
-        Some(&i) => Err(GeomError::IndexOutOfBounds {
+    match first_where(index.len(), |k| index[k] < 0 || index[k] as usize >= rows) {
+        Some(k) => Err(GeomError::IndexOutOfBounds {
             arg,
-            index: i,
+            index: index[k],
             len: rows,
         }),
         None => Ok(()),
@@ -172,8 +166,51 @@ pub fn nearest(keys: &[f64], offsets: &[i64]) -> Result<Vec<i64>> {
 /// An invalid CSR.
 pub fn nearest_k(keys: &[f64], offsets: &[i64], k: usize) -> Result<Vec<i64>> {
     check_offsets("offsets", offsets, keys.len(), "keys")?;
+    Ok(pick_nearest(offsets, k, keys.len(), |_, e| keys[e]))
+}
+
+/// [`nearest_k`] with each entry's key its point's squared distance to its row's origin: the `k`
+/// entries of row r whose `points` lie nearest `origins[r]` (a robot's nearest messages, by
+/// the positions they give). With `index`, entry e's point is `points[index[e]]` (read from a
+/// per-robot array in place), else `points[e]`. The squares are `dx * dx + dy * dy`, as NumPy
+/// computes them from `dx = x - ox` and `dy = y - oy`: the same ranking on both paths.
+///
+/// # Errors
+/// An invalid CSR, an origin per row missing, or an index out of bounds.
+pub fn nearest_k_to(
+    points: &[[f64; 2]],
+    offsets: &[i64],
+    origins: &[[f64; 2]],
+    index: Option<&[i64]>,
+    k: usize,
+) -> Result<Vec<i64>> {
+    let entries = match index {
+        Some(index) => {
+            check_indices("index", index, points.len())?;
+            index.len()
+        }
+        None => points.len(),
+    };
+    check_offsets("offsets", offsets, entries, "points")?;
+    if origins.len() + 1 != offsets.len() {
+        return Err(GeomError::LengthMismatch {
+            arg: "origins",
+            expected: offsets.len() - 1,
+            got: origins.len(),
+        });
+    }
+    Ok(pick_nearest(offsets, k, entries, |r, e| {
+        let q = points[index.map_or(e, |index| index[e] as usize)];
+        let (dx, dy) = (q[0] - origins[r][0], q[1] - origins[r][1]);
+        dx * dx + dy * dy
+    }))
+}
+
+/// The `k` entries of smallest `key(row, entry)` of each row (checked CSR over `entries`), as
+/// [`nearest_k`] gives them.
+fn pick_nearest(offsets: &[i64], k: usize, entries: usize, key: impl Fn(usize, usize) -> f64 + Sync) -> Vec<i64> {
     if k == 0 {
-        return Ok(Vec::new());
+        return Vec::new();
     }
     // Each row's slots are filled where they lie in the output, with one buffer of the kept keys
     // per task: no vector per row to allocate and then copy out.
@@ -181,9 +218,8 @@ pub fn nearest_k(keys: &[f64], offsets: &[i64], k: usize) -> Result<Vec<i64>> {
         least.clear();
         least.resize(k, f64::INFINITY);
         let mut filled = 0;
-        let start = offsets[r] as usize;
-        for (e, &key) in keys[start..offsets[r + 1] as usize].iter().enumerate() {
-            let e = start + e;
+        for e in offsets[r] as usize..offsets[r + 1] as usize {
+            let key = key(r, e);
             // Not kept: NaN, or no nearer than the k kept (a tie keeps the earlier entry).
             if key.is_nan() || (filled == k && key >= least[k - 1]) {
                 continue;
@@ -200,7 +236,7 @@ pub fn nearest_k(keys: &[f64], offsets: &[i64], k: usize) -> Result<Vec<i64>> {
     };
     let rows = offsets.len() - 1;
     let mut picked = vec![-1_i64; rows * k];
-    if keys.len() >= PARALLEL_ENTRIES || rows >= PARALLEL_ITEMS {
+    if entries >= PARALLEL_ENTRIES || rows >= PARALLEL_ITEMS {
         picked
             .par_chunks_mut(k)
             .enumerate()
@@ -213,7 +249,7 @@ pub fn nearest_k(keys: &[f64], offsets: &[i64], k: usize) -> Result<Vec<i64>> {
             .enumerate()
             .for_each(|slots| row(&mut least, slots));
     }
-    Ok(picked)
+    picked
 }
 
 #[cfg(test)]
@@ -253,6 +289,25 @@ mod tests {
             vec![5, 1, 3, 2, 0, 6, -1, -1, -1]
         );
         assert!(nearest_k(&keys, &[0, 8], 1).is_err());
+    }
+
+    #[test]
+    fn the_nearest_points_are_the_nearest_keys() {
+        let points = [[0.0, 0.0], [3.0, 0.0], [1.0, 1.0], [f64::NAN, 0.0], [0.5, 0.0]];
+        let offsets = [0, 3, 5];
+        let origins = [[1.0, 0.0], [0.0, 0.0]];
+        let keys = [1.0, 4.0, 1.0, f64::NAN, 0.25];
+        assert_eq!(
+            nearest_k_to(&points, &offsets, &origins, None, 2).unwrap(),
+            nearest_k(&keys, &offsets, 2).unwrap()
+        );
+        let index = [4, 0, 1];
+        assert_eq!(
+            nearest_k_to(&points, &[0, 3], &[[0.0, 0.0]], Some(&index), 2).unwrap(),
+            vec![1, 0]
+        );
+        assert!(nearest_k_to(&points, &offsets, &origins[..1], None, 2).is_err());
+        assert!(nearest_k_to(&points, &[0, 1], &[[0.0, 0.0]], Some(&[5]), 1).is_err());
     }
 
     #[test]

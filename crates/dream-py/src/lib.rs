@@ -45,6 +45,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(reduce::segment_reduce, m)?)?;
     m.add_function(wrap_pyfunction!(reduce::segment_any, m)?)?;
     m.add_function(wrap_pyfunction!(reduce::segment_nearest, m)?)?;
+    m.add_function(wrap_pyfunction!(reduce::segment_nearest_to, m)?)?;
     m.add_function(wrap_pyfunction!(guard::motion_guard, m)?)?;
     Ok(())
 }

@@ -4,7 +4,7 @@ use dream_core::reduce::{self as core, Reduce};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
-use crate::arrays::{flags_of, indices_of, matrix_of, vector_of};
+use crate::arrays::{flags_of, indices_of, matrix_of, points_of, vector_of};
 use crate::errors::{value_error, PyDreamResult};
 
 /// `op` ("sum", "mean", "min" or "max") of each row's entries of `values` `(k, w)`: `(m, w)`;
@@ -72,4 +72,26 @@ pub fn segment_nearest<'py>(
     let out = py.detach(|| core::nearest_k(&keys, &offsets, k))?;
     let rows = offsets.len().saturating_sub(1);
     Ok(out.into_pyarray(py).reshape([rows, k])?.into_any())
+}
+
+/// Each row's `k` entries whose point of `points` `(e, 2)` lies nearest the row's origin of
+/// `origins` `(m, 2)`, nearest first, -1 in the slots left: `(m, k)`; with `index` `(e,)`, entry
+/// e's point is row `index[e]` of `points`.
+#[pyfunction]
+#[pyo3(signature = (points, offsets, origins, k, index=None))]
+pub fn segment_nearest_to<'py>(
+    py: Python<'py>,
+    points: Bound<'py, PyAny>,
+    offsets: Bound<'py, PyAny>,
+    origins: Bound<'py, PyAny>,
+    k: usize,
+    index: Option<Bound<'py, PyAny>>,
+) -> PyDreamResult<Bound<'py, PyArray2<i64>>> {
+    let points = points_of::<2>("points", &points)?;
+    let offsets = indices_of("offsets", &offsets)?;
+    let origins = points_of::<2>("origins", &origins)?;
+    let index = index.map(|index| indices_of("index", &index)).transpose()?;
+    let out = py.detach(|| core::nearest_k_to(&points, &offsets, &origins, index.as_deref(), k))?;
+    let rows = offsets.len().saturating_sub(1);
+    Ok(out.into_pyarray(py).reshape([rows, k])?)
 }

@@ -67,3 +67,19 @@ def segment_nearest(keys: FloatArray, offsets: np.ndarray, k: int | None = None)
         best = kept[np.argsort(row[kept], kind="stable")][:slots]
         out[r, : len(best)] = offsets[r] + best
     return out[:, 0] if k is None else out
+
+
+def segment_nearest_to(
+    points: FloatArray, offsets: np.ndarray, origins: FloatArray, k: int, index: np.ndarray | None = None
+) -> np.ndarray:
+    """Each row's ``k`` entries whose point (``points[e]``, or ``points[index[e]]``) lies nearest
+    the row's origin: :func:`segment_nearest` of the squared distances ``dx * dx + dy * dy``."""
+    if index is not None:
+        check_rows(index, "index", len(points))
+        points = points[index]
+    if len(origins) != len(offsets) - 1:
+        raise ValueError(f"`origins` must hold one point per row, {len(offsets) - 1}, got {len(origins)}")
+    count = np.diff(offsets)
+    dx = points[:, 0] - np.repeat(origins[:, 0], count)
+    dy = points[:, 1] - np.repeat(origins[:, 1], count)
+    return segment_nearest(dx * dx + dy * dy, offsets, k)

@@ -35,7 +35,7 @@ from dream.kernels._length import hypot
 from dream.kernels._neighbours import far_from, neighbours, neighbours_of, perceive
 from dream.kernels._obstacles import obstacle_agents, virtual_agents
 from dream.kernels._raycast import distance_rays
-from dream.kernels._reduce import segment_any, segment_nearest, segment_reduce
+from dream.kernels._reduce import segment_any, segment_nearest, segment_nearest_to, segment_reduce
 from dream.kernels._voronoi import VoronoiCells, heard_cells, voronoi_cell, voronoi_cells
 
 Bounds = _checks.Bounds
@@ -73,5 +73,6 @@ __all__ = [
     "segment_reduce",
     "segment_any",
     "segment_nearest",
+    "segment_nearest_to",
     "motion_guard",
 ]

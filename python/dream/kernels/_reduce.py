@@ -69,3 +69,26 @@ def segment_nearest(keys: Any, offsets: Any, k: int | None = None) -> np.ndarray
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 0:
         raise ValueError(f"`k` must be a whole number >= 0, got {k!r}")
     return implementation("segment_nearest")(array, cuts, int(k))
+
+
+def segment_nearest_to(points: Any, offsets: Any, origins: Any, k: int, index: Any = None) -> np.ndarray:
+    """Each row's ``k`` entries whose point lies nearest the row's origin, nearest first (of
+    equals, the first entry first; NaN points skipped), -1 in the slots the row cannot fill:
+    ``(m, k)`` int64 (the ``k`` nearest messages of each robot by the positions they give, say).
+
+    ``points`` ``(e, 2)`` hold one point per entry; with ``index`` ``(e,)``, entry e's point is
+    row ``index[e]`` of ``points`` ``(n, 2)`` (a per-robot array, read in place). ``origins`` are
+    ``(m, 2)``, one per row. The ranking is by ``dx * dx + dy * dy``, what
+    :func:`segment_nearest` gives with those squares for keys, to the bit.
+    """
+    p = _values(points, "points")
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise ValueError(f"`points` must have shape (e, 2), got {p.shape}")
+    o = _values(origins, "origins")
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 0:
+        raise ValueError(f"`k` must be a whole number >= 0, got {k!r}")
+    at = None if index is None else as_index(index, "index")
+    cuts = as_offsets(offsets, "offsets", len(p) if at is None else len(at))
+    if o.shape != (len(cuts) - 1, 2):
+        raise ValueError(f"`origins` must have shape ({len(cuts) - 1}, 2), one per row, got {o.shape}")
+    return implementation("segment_nearest_to")(p, cuts, o, int(k), at)

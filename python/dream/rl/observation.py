@@ -17,8 +17,9 @@ part           shape       what
 Nearest means by detected distance, and for messages by the distance between the position a
 message gives and the robot's odometry (of equal distances, the first detection or message the
 robot got comes first): all of it is what the robot knows, nothing the world alone knows. The
-``k`` nearest of each robot are picked in one pass over its entries
-(:func:`dream.kernels.segment_nearest` with ``k``, in Rust).
+``k`` nearest of each robot are picked in one pass over its entries, in Rust
+(:func:`dream.kernels.segment_nearest` with ``k``; for messages,
+:func:`dream.kernels.segment_nearest_to`, which reads their positions where they lie).
 """
 
 from __future__ import annotations
@@ -100,26 +101,24 @@ class Layout:
         if not k:
             return out
         seen = view.seen
-        self._fill(out, "seen", kernels.segment_nearest(seen["distance"], seen.offsets, k), [seen[c] for c in SEEN])
+        entries = kernels.segment_nearest(seen["distance"], seen.offsets, k)
+        self._fill(out, "seen", entries, [seen.pick(c, entries) for c in SEEN])
         heard = view.heard
         if "x" in heard.names and heard.offsets[-1]:
-            # Each message's position less the robot's odometry, column by column (no (e, 2)
-            # copies), ranked by the squared distance: the distances' order, without a square
-            # root (a slow one, np.hypot) per message.
-            count = heard.count
-            dx = heard["x"] - np.repeat(pose[:, 0], count)
-            dy = heard["y"] - np.repeat(pose[:, 1], count)
-            self._fill(out, "heard", kernels.segment_nearest(dx * dx + dy * dy, heard.offsets, k), [dx, dy])
+            # Ranked in Rust by each message's squared distance from the robot's odometry, the
+            # fields read on the board in place, and only the k picked taken less the odometry.
+            entries = heard.nearest_to(["x", "y"], pose[:, :2], k)
+            here = [pose[:, 0, None], pose[:, 1, None]]
+            self._fill(out, "heard", entries, [heard.pick(c, entries) - at for c, at in zip("xy", here)])
         return out
 
-    def _fill(self, out: np.ndarray, part: str, entries: np.ndarray, columns: list[np.ndarray]) -> None:
-        """Write ``columns`` (each ``(e,)``) at ``entries`` ``(m, k)`` (-1: an empty slot, left zero)
+    def _fill(self, out: np.ndarray, part: str, entries: np.ndarray, values: list[np.ndarray]) -> None:
+        """Write ``values`` (each ``(m, k)``, picked at ``entries``; -1: an empty slot, left zero)
         into the slots of ``part`` of the rows ``out``, and the slots' mask."""
         m, k = entries.shape
         filled = entries >= 0
-        slots = np.zeros((m, k, len(columns)), dtype=np.float32)
-        for c, column in enumerate(columns):
-            if len(column):
-                slots[..., c] = np.where(filled, column[entries], 0.0)
+        slots = np.zeros((m, k, len(values)), dtype=np.float32)
+        for c, value in enumerate(values):
+            slots[..., c] = np.where(filled, value, 0.0)
         out[:, self.slices[part]] = slots.reshape(m, -1)
         out[:, self.slices[f"{part}_mask"]] = filled

@@ -87,14 +87,21 @@ class Neighbourhood:
             return what
         return np.column_stack([self[name] for name in what]).reshape(-1, len(what))
 
+    def _board(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray] | None:
+        """The fields ``names`` side by side on the board ``(n, w)`` with the index that reads them
+        (each entry's sender), if all of them are still there: read in place, in one pass over
+        the senders (each a memory access anywhere in the board: at a million robots, cache
+        misses), with no ``(e, w)`` copy of them."""
+        if self.index is None or not names or any(name in self.columns or name not in self.sources for name in names):
+            return None
+        return np.column_stack([self.sources[name] for name in names]), self.index
+
     def _reduce(self, what: str | Sequence[str] | np.ndarray, op: str) -> FloatArray:
         if not isinstance(what, (str, np.ndarray)):
             names = list(what)
-            if names and all(name not in self.columns and name in self.sources for name in names):
-                # Fields of the senders' messages side by side, read in one pass over the senders
-                # (each a memory access anywhere in the board: at a million robots, cache misses).
-                fields = np.column_stack([self.sources[name] for name in names])
-                return kernels.segment_reduce(fields, self.offsets, op, self.index)
+            board = self._board(names)
+            if board is not None:
+                return kernels.segment_reduce(board[0], self.offsets, op, board[1])
             # Column by column: no (e, w) copy of them.
             return np.column_stack([self._reduce(name, op) for name in names]).reshape(len(self), len(names))
         if isinstance(what, str) and what not in self.columns and what in self.sources:
@@ -146,12 +153,27 @@ class Neighbourhood:
         ``(e,)``), -1 for an empty row; use it with :meth:`pick`."""
         return kernels.segment_nearest(self._values(key), self.offsets)
 
+    def nearest_to(self, names: Sequence[str], origins: Any, k: int) -> np.ndarray:
+        """``(m, k)`` int: each row's ``k`` entries whose point (the two columns ``names``: the
+        position a message gives, say) lies nearest the row's origin of ``origins`` ``(m, 2)``,
+        nearest first, -1 in the slots a row cannot fill; use them with :meth:`pick`. Message
+        fields are read on the board, in place."""
+        board = self._board(list(names))
+        points, index = board if board is not None else (self._values(names), None)
+        return kernels.segment_nearest_to(points, self.offsets, origins, k, index)
+
     def pick(self, what: str | Sequence[str] | np.ndarray, entries: np.ndarray, fill: float = np.nan) -> FloatArray:
-        """The values at ``entries`` ``(k,)`` (from :meth:`nearest`), ``fill`` where it is -1."""
-        values = np.asarray(self._values(what), dtype=np.float64)
-        out = np.full((len(entries), *values.shape[1:]), fill)
+        """The values at ``entries`` (from :meth:`nearest` ``(k,)`` or :meth:`nearest_to` ``(m, k)``),
+        ``fill`` where it is -1. A message field is read on the board at the entries picked only."""
+        entries = np.asarray(entries)
         found = entries >= 0
-        out[found] = values[entries[found]]
+        if isinstance(what, str) and what not in self.columns and what in self.sources:
+            assert self.index is not None  # sources come with their index
+            values, chosen = self.sources[what], self.index[entries[found]]
+        else:
+            values, chosen = np.asarray(self._values(what), dtype=np.float64), entries[found]
+        out = np.full((*entries.shape, *values.shape[1:]), fill)
+        out[found] = values[chosen]
         return out
 
     def where(self, keep: np.ndarray) -> Neighbourhood:
