@@ -162,9 +162,7 @@ def segment_reduce(values: _Floats, offsets: _Ints, op: str, index: _Ints | None
 def segment_any(flags: NDArray[np.bool_], offsets: _Ints) -> NDArray[np.bool_]:
     """(m,) bool: whether any entry of each row is set."""
 
-def segment_nearest_to(
-    points: _Floats, offsets: _Ints, origins: _Floats, k: int, index: _Ints | None = None
-) -> _Ints:
+def segment_nearest_to(points: _Floats, offsets: _Ints, origins: _Floats, k: int, index: _Ints | None = None) -> _Ints:
     """Each row's k entries whose point is nearest its origin (m, k), -1 in the slots left."""
 
 def segment_nearest(keys: _Floats, offsets: _Ints, k: int | None = None) -> _Ints:
