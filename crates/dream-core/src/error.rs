@@ -2,6 +2,8 @@
 //! and the buffers whose size follows from the input (neighbour pairs, say) are allocated
 //! fallibly, so that a query too large for the memory fails instead of aborting.
 
+use crate::parallel::first_where;
+
 /// Invalid input to a kernel. The message names the argument and what was expected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -50,9 +52,10 @@ pub enum GeomError {
 /// Result of a core kernel.
 pub type Result<T> = std::result::Result<T, GeomError>;
 
-/// Fails with [`GeomError::NonFinite`] at the first NaN or infinite value of `values`.
+/// Fails with [`GeomError::NonFinite`] at the first NaN or infinite value of `values` (looked
+/// for on every core for many: a million robots' coordinates, several arrays a kernel).
 pub fn check_finite(arg: &'static str, values: &[f64]) -> Result<()> {
-    match values.iter().position(|v| !v.is_finite()) {
+    match first_where(values.len(), |i| !values[i].is_finite()) {
         Some(index) => Err(GeomError::NonFinite { arg, index }),
         None => Ok(()),
     }
