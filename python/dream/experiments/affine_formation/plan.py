@@ -69,8 +69,11 @@ def follower_targets(leaders: np.ndarray, weights: np.ndarray = WEIGHTS) -> np.n
     """Where the followers converge ``(..., 4, 2)`` for leaders at ``leaders`` ``(..., 3, 2)`` (one
     formation, or a stack of them): ``-Omega_ff^-1 Omega_fl p_l``."""
     omega = stress_matrix(weights)
-    pulled = omega[LEADERS:, :LEADERS] @ leaders
-    return -np.linalg.solve(np.broadcast_to(omega[LEADERS:, LEADERS:], (*pulled.shape[:-2], 4, 4)), pulled)
+    # One 4x3 map for every formation (they share Omega), applied to all of them in one product.
+    pull = -np.linalg.solve(omega[LEADERS:, LEADERS:], omega[LEADERS:, :LEADERS])
+    points = np.asarray(leaders, dtype=np.float64)
+    stacked = np.moveaxis(points, -2, 0).reshape(LEADERS, -1)  # (3, ... * 2)
+    return np.moveaxis((pull @ stacked).reshape(len(pull), *points.shape[:-2], 2), 0, -2)
 
 
 def formation(shape: str) -> np.ndarray:
