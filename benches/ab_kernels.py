@@ -1,0 +1,149 @@
+"""Two builds of the Rust kernels side by side in one process: before and after a change.
+
+Whole runs on a shared machine wander by a third from minute to minute; two builds loaded in one
+process and called in turns on the same inputs see the same machine. Each scene runs both builds
+alternately twelve times, three calls a turn, and prints the medians, their ratio and whether the
+two answers are the same, to the bit.
+
+Scenes: the rendezvous example's inbox sums (``segment_reduce`` with an index) and HRVO
+(``hrvo_rows``), captured from a swarm run of ``--robots`` robots, and ``validate`` on robots
+0.3 m apart, uniformly at random, at that count and at ten times it.
+
+Run: ``python benches/ab_kernels.py BEFORE.so AFTER.so [--robots N]``, where each ``.so`` is a
+build's ``dream/_core.abi3.so`` (``git worktree add`` the older commit and build it there).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+import dream
+import dream.kernels._hrvo as hrvo_kernels
+import dream.kernels._reduce as reduce_kernels
+
+sys.path.insert(0, str(Path(__file__).parent))
+from harness import machine, table  # noqa: E402
+
+RENDEZVOUS = str(Path(__file__).parents[1] / "examples" / "rendezvous.py")
+#: validate's arguments: rps 0.0.0's criteria, an arena wider than any scene
+CHECKS = {
+    "diameter": 0.11,
+    "wheel_radius": 0.016,
+    "base_length": 0.105,
+    "max_wheel": 12.5,
+    "collider_offset": 0.0,
+    "boundary_per_iteration": False,
+}
+BOUNDS = (-1e9, 1e9, -1e9, 1e9)
+ROUNDS = 12  #: turns of each build per scene
+
+
+def build(path: str) -> ModuleType:
+    """The ``_core`` extension at ``path``, loaded as a module of its own."""
+    spec = importlib.util.spec_from_file_location("_core", path)
+    if spec is None or spec.loader is None:
+        raise SystemExit(f"{path}: not an extension module")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def captured(n: int) -> dict[str, tuple[tuple[Any, ...], dict[str, Any]]]:
+    """The last ``segment_reduce`` (with an index) and ``hrvo_rows`` calls of a swarm run of the
+    rendezvous example, past its robots' staggered start."""
+    calls: dict[str, tuple[tuple[Any, ...], dict[str, Any]]] = {}
+
+    def spy(module: ModuleType, name: str, keep: Callable[[tuple[Any, ...]], bool]) -> None:
+        chosen = module.implementation  # type: ignore[attr-defined]
+
+        def implementation(asked: str) -> Callable[..., Any]:
+            kernel = chosen(asked)
+            if asked != name:
+                return kernel
+
+            def call(*args: Any, **kwargs: Any) -> Any:
+                if keep(args):
+                    calls[name] = (args, kwargs)
+                return kernel(*args, **kwargs)
+
+            return call
+
+        module.implementation = implementation  # type: ignore[attr-defined]
+
+    spy(reduce_kernels, "segment_reduce", lambda args: len(args) > 3 and args[3] is not None)
+    spy(hrvo_kernels, "hrvo_rows", lambda args: True)
+    dream.run(RENDEZVOUS, n=n, swarm=True, backend="fast", steps=36)
+    return calls
+
+
+def scattered(n: int, rng: np.random.Generator) -> np.ndarray:
+    """Poses ``(3, n)`` of robots 0.3 m apart on average, uniformly at random."""
+    side = np.sqrt(n) * 0.3
+    xy = rng.uniform(-side / 2, side / 2, (2, n))
+    return np.ascontiguousarray(np.vstack((xy, rng.uniform(-np.pi, np.pi, n))))
+
+
+def same(a: Any, b: Any) -> bool:
+    if isinstance(a, tuple):
+        return len(a) == len(b) and all(same(x, y) for x, y in zip(a, b))
+    return bool(np.array_equal(np.asarray(a), np.asarray(b)))
+
+
+def compare(before: ModuleType, after: ModuleType, call: Callable[[ModuleType], Any]) -> list[str]:
+    """Median ms of each build, alternating, their ratio and whether the answers agree."""
+    times: dict[str, list[float]] = {"before": [], "after": []}
+    for _ in range(ROUNDS):
+        for label, module in (("before", before), ("after", after)):
+            samples = []
+            for _ in range(3):
+                start = time.perf_counter()
+                call(module)
+                samples.append(time.perf_counter() - start)
+            times[label].append(float(np.median(samples)) * 1e3)
+    old, new = np.median(times["before"]), np.median(times["after"])
+    return [f"{old:.2f}", f"{new:.2f}", f"{old / new:.2f}x", "yes" if same(call(before), call(after)) else "NO"]
+
+
+def main(argv: list[str]) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("before", help="the older build's _core.abi3.so")
+    parser.add_argument("after", help="the newer build's _core.abi3.so")
+    parser.add_argument("--robots", type=int, default=100_000)
+    args = parser.parse_args(argv)
+    before, after = build(args.before), build(args.after)
+    print(machine())
+    calls = captured(args.robots)
+    rng = np.random.default_rng(0)
+    scenes: list[tuple[str, Callable[[ModuleType], Any]]] = []
+    for name in ("segment_reduce", "hrvo_rows"):
+        positional, keywords = calls[name]
+        scenes.append(
+            (f"`{name}`: the rendezvous example, {args.robots:,} robots", partial_call(name, positional, keywords))
+        )
+    for n in (args.robots, 10 * args.robots):
+        poses, commands = scattered(n, rng), np.zeros((2, n))
+        scenes.append(
+            (
+                f"`validate`: {n:,} robots 0.3 m apart",
+                lambda m, p=poses, u=commands: m.validate(p, u, BOUNDS, **CHECKS),
+            )
+        )
+    rows = [[label, *compare(before, after, call)] for label, call in scenes]
+    print(table(["kernel, scene", "before (ms)", "after (ms)", "speed-up", "same answer"], rows))
+
+
+def partial_call(name: str, positional: tuple[Any, ...], keywords: dict[str, Any]) -> Callable[[ModuleType], Any]:
+    return lambda module: getattr(module, name)(*positional, **keywords)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
