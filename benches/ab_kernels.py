@@ -16,7 +16,6 @@ build's ``dream/_core.abi3.so`` (``git worktree add`` the older commit and build
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import sys
 import time
 from collections.abc import Callable
@@ -31,7 +30,7 @@ import dream.kernels._hrvo as hrvo_kernels
 import dream.kernels._reduce as reduce_kernels
 
 sys.path.insert(0, str(Path(__file__).parent))
-from harness import machine, table  # noqa: E402
+from harness import extension, machine, table  # noqa: E402
 
 RENDEZVOUS = str(Path(__file__).parents[1] / "examples" / "rendezvous.py")
 #: validate's arguments: rps 0.0.0's criteria, an arena wider than any scene
@@ -45,16 +44,6 @@ CHECKS = {
 }
 BOUNDS = (-1e9, 1e9, -1e9, 1e9)
 ROUNDS = 12  #: turns of each build per scene
-
-
-def build(path: str) -> ModuleType:
-    """The ``_core`` extension at ``path``, loaded as a module of its own."""
-    spec = importlib.util.spec_from_file_location("_core", path)
-    if spec is None or spec.loader is None:
-        raise SystemExit(f"{path}: not an extension module")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def captured(n: int) -> dict[str, tuple[tuple[Any, ...], dict[str, Any]]]:
@@ -119,7 +108,7 @@ def main(argv: list[str]) -> None:
     parser.add_argument("after", help="the newer build's _core.abi3.so")
     parser.add_argument("--robots", type=int, default=100_000)
     args = parser.parse_args(argv)
-    before, after = build(args.before), build(args.after)
+    before, after = extension(args.before), extension(args.after)
     print(machine())
     calls = captured(args.robots)
     rng = np.random.default_rng(0)

@@ -16,7 +16,6 @@ smaller size (the cell says which) and the speed-up compares the time per robot.
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import math
 from collections.abc import Callable
 from types import ModuleType
@@ -28,7 +27,7 @@ from dream._csr import spans
 from dream.experiments.hrvo_circle import circle_layout
 from dream.kernels import _dispatch
 from dream.specs import RPS, ArenaSpec
-from harness import machine, median_seconds, show, table
+from harness import extension, machine, median_seconds, show, table
 from original_hrvo import original_style_hrvo
 from scenes import RANGE, SCENES, lattice
 
@@ -40,16 +39,6 @@ WHEELS = {
 }
 #: Another build of ``dream._core`` to time beside this one (``--baseline``), or None.
 BASELINE: ModuleType | None = None
-
-
-def load_baseline(path: str) -> ModuleType:
-    """The extension module in ``path`` (e.g. an older build), loaded beside ``dream._core``."""
-    spec = importlib.util.spec_from_file_location("_core", path)
-    if spec is None or spec.loader is None:
-        raise SystemExit(f"cannot load a baseline extension from {path}")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def on_baseline(call: Callable[[], object]) -> Callable[[], object]:
@@ -330,7 +319,7 @@ if __name__ == "__main__":
     parser.add_argument("--baseline", metavar="SO", help="another build of dream._core to time beside this one")
     args = parser.parse_args()
     if args.baseline:
-        BASELINE = load_baseline(args.baseline)
+        BASELINE = extension(args.baseline)
     print(machine())
     print(f"kernels: {kernels.IMPLEMENTATION}, {_core.__version__}, medians of >= 7 samples\n")
     quick = args.quick

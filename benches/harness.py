@@ -7,11 +7,13 @@ judged, and times with :func:`median_seconds` (at least :data:`REPEAT` samples).
 from __future__ import annotations
 
 import datetime
+import importlib.util
 import os
 import platform
 import statistics
 import time
 from collections.abc import Callable, Sequence
+from types import ModuleType
 
 #: Fewest samples a median is taken over.
 REPEAT = 7
@@ -68,3 +70,14 @@ def table(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
     lines += ["| " + " | ".join(str(cell) for cell in row) + " |" for row in rows]
     return "\n".join(lines)
+
+
+def extension(path: str) -> ModuleType:
+    """The ``dream._core`` build at ``path`` (an older one, say), loaded as a module of its own
+    beside the installed one."""
+    spec = importlib.util.spec_from_file_location("_core", path)
+    if spec is None or spec.loader is None:
+        raise SystemExit(f"cannot load an extension module from {path}")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
