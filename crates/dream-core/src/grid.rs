@@ -400,8 +400,8 @@ fn bucket_on_one_thread(slots: &[usize], cells: usize) -> (Vec<usize>, Vec<usize
 }
 
 /// Points from which [`bucket`] sorts on every core: one thread's counting sort of a million
-/// points scatters them over millions of cells, a cache miss each (about half of `validate` on
-/// 16 threads).
+/// points scatters them over millions of cells, a cache miss each (by estimate, about half of
+/// `validate` on 16 threads).
 const PARALLEL_BUCKET: usize = 1 << 17;
 
 /// Points a task of [`bucket_in_bands`] takes apart by band.
