@@ -4,18 +4,27 @@ use rayon::prelude::*;
 
 use crate::error::{try_room, Result};
 
-/// Items from which [`map_range`] runs on every thread (below, the thread pool costs more than
-/// it saves: per-robot kernels are called with a handful of items, thousands of times a step).
-pub(crate) const PARALLEL_ITEMS: usize = 4096;
+/// Serial work, in nanoseconds, from which a loop is spread over the threads. Between kernel
+/// calls rayon's threads sleep, and waking them costs tens of microseconds (a median of 19-94 µs,
+/// a tail of 280, on a 2-core VM, where a check of 65,536 values takes 17 µs on one thread): work
+/// shorter than a fifth of a millisecond is done sooner by the calling thread alone.
+const PARALLEL_WORK_NS: usize = 200_000;
 
-/// `value(i)` for every `i < n`, in order: in parallel for many items.
-pub fn map_range<T: Send>(n: usize, value: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
-    if n >= PARALLEL_ITEMS {
-        (0..n)
-            .into_par_iter()
-            .with_min_len(PARALLEL_ITEMS / 4)
-            .map(value)
-            .collect()
+/// Whether `n` items of about `ns` nanoseconds each are worth spreading over the threads. `ns`
+/// is a rough figure: 1 for a copy or a comparison, 3 for a division and a rounding, 10 for a
+/// square root or a `hypot`, 20 for a sine and a cosine.
+pub(crate) fn worth_spreading(n: usize, ns: usize) -> bool {
+    n.saturating_mul(ns) >= PARALLEL_WORK_NS
+}
+
+/// Items one task takes at least, where a loop is spread over the threads.
+pub(crate) const TASK_ITEMS: usize = 1024;
+
+/// `value(i)` for every `i < n`, in order, each taking about `ns` nanoseconds (see
+/// [`worth_spreading`]): on every thread for much work.
+pub fn map_range<T: Send>(n: usize, ns: usize, value: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
+    if worth_spreading(n, ns) {
+        (0..n).into_par_iter().with_min_len(TASK_ITEMS).map(value).collect()
     } else {
         (0..n).map(value).collect()
     }
@@ -31,7 +40,7 @@ const CHECK_ITEMS: usize = 8192;
 /// message indices that took 4-6 times as long as the reduction they guarded.)
 pub(crate) fn first_where(n: usize, bad: impl Fn(usize) -> bool + Sync) -> Option<usize> {
     let any_bad = |items: std::ops::Range<usize>| items.fold(false, |found, i| found | bad(i));
-    let found = if n >= PARALLEL_ITEMS {
+    let found = if worth_spreading(n, 1) {
         (0..n.div_ceil(CHECK_ITEMS))
             .into_par_iter()
             .any(|chunk| any_bad(chunk * CHECK_ITEMS..n.min((chunk + 1) * CHECK_ITEMS)))
@@ -73,7 +82,7 @@ pub(crate) fn gather_rows<'a, T: Copy + Default + Send + Sync + 'a>(
         out.par_extend(
             (0..total)
                 .into_par_iter()
-                .with_min_len(PARALLEL_ITEMS)
+                .with_min_len(TASK_ITEMS)
                 .map(|_| T::default()),
         );
     } else {
@@ -110,7 +119,7 @@ mod tests {
 
     #[test]
     fn the_first_bad_item_whatever_the_count() {
-        for n in [0, 1, 100, PARALLEL_ITEMS, 3 * CHECK_ITEMS + 7] {
+        for n in [0, 1, 100, PARALLEL_WORK_NS, PARALLEL_WORK_NS + 3 * CHECK_ITEMS + 7] {
             assert_eq!(first_where(n, |_| false), None);
             for bad in [0, n / 2, n.saturating_sub(1)] {
                 if bad < n {

@@ -16,7 +16,7 @@ use rayon::prelude::*;
 use crate::error::{check_finite, check_len, try_filled, try_room, GeomError, Result};
 use crate::grid::Grid;
 use crate::neighbours::{length, radius_squared, wrap_angle};
-use crate::parallel::{gather_rows, map_range, PARALLEL_ITEMS};
+use crate::parallel::{gather_rows, map_range, worth_spreading, TASK_ITEMS};
 
 /// A movement sensor's reach: range (m), full aperture `fov` (rad) about the heading turned by
 /// `direction` (rad).
@@ -140,12 +140,13 @@ pub fn perceive(
         for (r, &i) in rows.iter().enumerate() {
             row_of[i as usize] = r as u32;
         }
+        let asked = |&i: &usize| (row_of[i] != u32::MAX).then(|| (i, row_of[i]));
         let members = grid.members();
-        let order: Vec<(usize, u32)> = members
-            .par_iter()
-            .with_min_len(PARALLEL_ITEMS)
-            .filter_map(|&i| (row_of[i] != u32::MAX).then(|| (i, row_of[i])))
-            .collect();
+        let order: Vec<(usize, u32)> = if worth_spreading(n, 1) {
+            members.par_iter().with_min_len(TASK_ITEMS).filter_map(asked).collect()
+        } else {
+            members.iter().filter_map(asked).collect()
+        };
         drop(row_of);
         order
             .par_chunks(TASK_ROWS)
@@ -158,7 +159,7 @@ pub fn perceive(
     let (mut seen, heard) = in_row_order(&parts, rows.len())?;
     seen.carried = carried
         .iter()
-        .map(|values| map_range(seen.ids.len(), |e| values[seen.ids[e] as usize]))
+        .map(|values| map_range(seen.ids.len(), 1, |e| values[seen.ids[e] as usize]))
         .collect();
     Ok((seen, heard))
 }

@@ -12,11 +12,7 @@ use rayon::prelude::*;
 
 use crate::csr::check_offsets;
 use crate::error::{GeomError, Result};
-use crate::parallel::{first_where, map_range, PARALLEL_ITEMS};
-
-/// Entries from which the nearest of each row are picked on every thread: the messages of a few
-/// thousand robots, a few dozen each (their rows alone stay under [`map_range`]'s threshold).
-const PARALLEL_ENTRIES: usize = 32_768;
+use crate::parallel::{first_where, map_range, worth_spreading};
 
 /// What a row's entries become.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -77,7 +73,8 @@ pub fn reduce(values: &[f64], width: usize, offsets: &[i64], index: Option<&[i64
     };
     let m = offsets.len() - 1;
     let mut out = vec![0.0; m * width];
-    if m >= PARALLEL_ITEMS || entries >= PARALLEL_ENTRIES {
+    // About a nanosecond a value added, a few a row.
+    if worth_spreading(entries * width + 4 * m, 1) {
         out.par_chunks_mut(width).enumerate().with_min_len(64).for_each(row);
     } else {
         out.chunks_mut(width).enumerate().for_each(row);
@@ -143,7 +140,8 @@ fn check_indices(arg: &'static str, index: &[i64], rows: usize) -> Result<()> {
 /// An invalid CSR.
 pub fn any(flags: &[bool], offsets: &[i64]) -> Result<Vec<bool>> {
     check_offsets("offsets", offsets, flags.len(), "flags")?;
-    Ok(map_range(offsets.len() - 1, |r| {
+    let rows = offsets.len() - 1;
+    Ok(map_range(rows, 1 + flags.len() / rows.max(1), |r| {
         flags[offsets[r] as usize..offsets[r + 1] as usize].iter().any(|&f| f)
     }))
 }
@@ -236,7 +234,8 @@ fn pick_nearest(offsets: &[i64], k: usize, entries: usize, key: impl Fn(usize, u
     };
     let rows = offsets.len() - 1;
     let mut picked = vec![-1_i64; rows * k];
-    if entries >= PARALLEL_ENTRIES || rows >= PARALLEL_ITEMS {
+    // A few nanoseconds an entry ranked (the messages of a few thousand robots, a few dozen each).
+    if worth_spreading(entries + rows, 4) {
         picked
             .par_chunks_mut(k)
             .enumerate()
