@@ -90,8 +90,10 @@ def unicycle_step(poses: FloatArray, velocities: FloatArray, dt: float) -> Float
     out = np.array(poses, dtype=np.float64)
     out[0] = out[0] + dt * np.cos(out[2]) * velocities[0]
     out[1] = out[1] + dt * np.sin(out[2]) * velocities[0]
-    out[2] = out[2] + dt * velocities[1]
-    out[2] = np.arctan2(np.sin(out[2]), np.cos(out[2]))
+    turned = out[2] + dt * velocities[1]
+    # rps's atan2(sin, cos) gives a heading already in (-pi, pi] back to within a rounding: kept as it is.
+    inside = (-np.pi < turned) & (turned <= np.pi)
+    out[2] = np.where(inside, turned, np.arctan2(np.sin(turned), np.cos(turned)))
     return out
 
 
