@@ -333,27 +333,36 @@ fn in_row_order(parts: &[Part], rows: usize) -> Result<(Perceived, Perceived)> {
         seen_offsets[r + 1] += seen_offsets[r];
         heard_offsets[r + 1] += heard_offsets[r];
     }
-    let seen_column = |of: fn(&Perceived) -> &Vec<f64>| {
-        gather_rows(&seen_offsets, |r| (&of(&parts[at[r].0].seen)[..], at[r].1), WHAT)
+    let seen = || -> Result<Perceived> {
+        let row = |r: usize| (&parts[at[r].0].seen, at[r].1);
+        let column =
+            |of: fn(&Perceived) -> &Vec<f64>| gather_rows(&seen_offsets, |r| (&of(row(r).0)[..], row(r).1), WHAT);
+        Ok(Perceived {
+            ids: gather_rows(&seen_offsets, |r| (&row(r).0.ids[..], row(r).1), WHAT)?,
+            distances: column(|p| &p.distances)?,
+            bearings: column(|p| &p.bearings)?,
+            dxs: column(|p| &p.dxs)?,
+            dys: column(|p| &p.dys)?,
+            ..Perceived::default()
+        })
     };
-    let heard_column = |of: fn(&Perceived) -> &Vec<f64>| {
-        gather_rows(&heard_offsets, |r| (&of(&parts[at[r].0].heard)[..], at[r].2), WHAT)
+    let heard = || -> Result<Perceived> {
+        let row = |r: usize| (&parts[at[r].0].heard, at[r].2);
+        Ok(Perceived {
+            ids: gather_rows(&heard_offsets, |r| (&row(r).0.ids[..], row(r).1), WHAT)?,
+            distances: gather_rows(&heard_offsets, |r| (&row(r).0.distances[..], row(r).1), WHAT)?,
+            ..Perceived::default()
+        })
     };
-    let seen = Perceived {
-        ids: gather_rows(&seen_offsets, |r| (&parts[at[r].0].seen.ids[..], at[r].1), WHAT)?,
-        distances: seen_column(|p| &p.distances)?,
-        bearings: seen_column(|p| &p.bearings)?,
-        dxs: seen_column(|p| &p.dxs)?,
-        dys: seen_column(|p| &p.dys)?,
-        offsets: seen_offsets.clone(),
-        carried: Vec::new(),
+    // The seen and the heard copied side by side where there is much to copy.
+    let values = 5 * seen_offsets[rows] as usize + 2 * heard_offsets[rows] as usize;
+    let (seen, heard) = if worth_spreading(values, 1) {
+        rayon::join(seen, heard)
+    } else {
+        (seen(), heard())
     };
-    let heard = Perceived {
-        ids: gather_rows(&heard_offsets, |r| (&parts[at[r].0].heard.ids[..], at[r].2), WHAT)?,
-        distances: heard_column(|p| &p.distances)?,
-        offsets: heard_offsets.clone(),
-        ..Perceived::default()
-    };
+    let (mut seen, mut heard) = (seen?, heard?);
+    (seen.offsets, heard.offsets) = (seen_offsets, heard_offsets);
     Ok((seen, heard))
 }
 
