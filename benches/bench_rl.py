@@ -7,15 +7,22 @@ their observations, the policy, the engine's drive, the simulator with its valid
 rewards), as agent-steps per second (N per step), with and without the HRVO safety layer.
 The issue's target: 1,000,000 agent-steps/s at N = 10,000 on 2 cores.
 
+``--baseline OTHER.so`` times the step instead with the installed kernels and with another build
+of them (``dream/_core.abi3.so`` of an older commit), in turns on one world: whole runs on a
+shared machine wander by a third from minute to minute, turns within one process see the same
+machine.
+
 ``--parts`` prints instead where a step's time goes (without HRVO): the process's CPU time in
 each part, over 60 steps. CPU time, unlike wall time, hardly grows when other jobs share the
 cores; with ``RAYON_NUM_THREADS=1`` it is the step's cost on one core.
 
-Run: ``python benches/bench_rl.py [--parts] [N ...]`` (default 1,000 and 10,000).
+Run: ``python benches/bench_rl.py [--parts | --baseline OTHER.so] [N ...]`` (default 1,000 and
+10,000).
 """
 
 from __future__ import annotations
 
+import statistics
 import sys
 import time
 from collections import defaultdict
@@ -25,10 +32,11 @@ from typing import Any
 
 import numpy as np
 
+import dream.kernels._dispatch as dispatch
 from dream.rl import BatchEnv, LinearPolicy, batch_env
 
 sys.path.insert(0, str(Path(__file__).parent))
-from harness import machine, median_seconds, show, table  # noqa: E402
+from harness import extension, machine, median_seconds, show, table  # noqa: E402
 
 RENDEZVOUS = str(Path(__file__).parents[1] / "examples" / "rendezvous.py")
 
@@ -83,9 +91,40 @@ def parts(n: int, steps: int = 60) -> None:
     print(table(["part", "CPU a step"], rows))
 
 
+TURNS = 12  #: turns of each build in --baseline
+STEPS_A_TURN = 8  #: steps timed a turn, after one untimed (it wakes that build's threads)
+
+
+def versus(sizes: list[int], baseline: str) -> None:
+    """Print the step's median with another build of the kernels and with the installed one."""
+    if dispatch._core is None:
+        raise SystemExit("--baseline compares two builds of the Rust kernels; DREAM runs the NumPy reference here")
+    builds = {"baseline": extension(baseline), "this build": dispatch._core}
+    rows = []
+    for n in sizes:
+        one = started(n, avoid=False)[1]
+        times: dict[str, list[float]] = {label: [] for label in builds}
+        for _ in range(TURNS):
+            for label, build in builds.items():
+                dispatch._core = build
+                one()
+                for _ in range(STEPS_A_TURN):
+                    start = time.perf_counter()
+                    one()
+                    times[label].append(time.perf_counter() - start)
+        dispatch._core = builds["this build"]
+        before, after = (statistics.median(times[label]) for label in builds)
+        rows.append([f"{n:,}", show(before), show(after), f"{before / after:.2f}x"])
+    print(table(["N", "baseline step", "this build's step", "speed-up"], rows))
+
+
 def main(argv: list[str]) -> None:
     print(machine())
-    sizes = [int(arg) for arg in argv if arg != "--parts"] or [1000, 10000]
+    baseline = argv[argv.index("--baseline") + 1] if "--baseline" in argv else None
+    sizes = [int(arg) for arg in argv if arg not in ("--parts", "--baseline", baseline)] or [1000, 10000]
+    if baseline is not None:
+        versus(sizes, baseline)
+        return
     if "--parts" in argv:
         for n in sizes:
             parts(n)
