@@ -21,6 +21,7 @@ __all__ = [
     "neighbours",
     "far_from",
     "perceive",
+    "linked",
     "hrvo",
     "hrvo_rows",
     "HrvoPlanner",
@@ -142,6 +143,12 @@ def hrvo_rows(
     towards: bool = False,
 ) -> _Floats:
     """HRVO velocities (m, 2) of the deciding robots, each from its own detections (k, 4) or their four columns, cut by offsets (m+1,)."""
+
+def linked(
+    rows: _Ints, indptr: _Ints, indices: _Ints, talking: NDArray[np.bool_], positions: _Floats | None = None
+) -> tuple[_Ints, _Ints, _Floats]:
+    """(offsets, ids, distances) of what the robots `rows` hear over the graph (indptr, indices) among the
+    talking; distances NaN without positions."""
 
 def perceive(
     positions: _Floats,

@@ -310,6 +310,58 @@ def test_perceive_bad_input_is_named(options, message):
         kernels.perceive(np.zeros((3, 2)), np.zeros(3), **options)
 
 
+def random_graph(rng, n, most):
+    """A communication graph over n robots: up to `most` links each, some to itself, some twice."""
+    counts = rng.integers(0, most + 1, n)
+    indptr = np.concatenate(([0], np.cumsum(counts))).astype(np.int64)
+    return indptr, rng.integers(0, n, indptr[-1]).astype(np.int64)
+
+
+@pytest.mark.parametrize("n", [1, 5, 300, 20000])
+def test_linked_matches_the_reference(rng, n):
+    positions = rng.uniform(-50, 50, (n, 2))
+    graph, talking = random_graph(rng, n, 8), rng.random(n) < 0.7
+    rows = np.sort(rng.choice(n, size=max(n // 3, 1), replace=False))
+    got = _core.linked(rows, *graph, talking, positions=positions)
+    want = _reference.linked(rows, *graph, talking, positions=positions)
+    for mine, theirs in zip(got, want, strict=True):
+        assert_array_equal(mine, theirs)  # the same ids in the same order, the same hypot
+    offsets, ids, distances = got
+    assert len(offsets) == len(rows) + 1 and talking[ids].all()
+    owner = np.repeat(rows, np.diff(offsets))
+    assert (ids != owner).all()
+    assert_array_equal(distances, np.hypot(*(positions[ids] - positions[owner]).T))
+    unmeasured = kernels.linked(rows, graph, talking)  # no positions: no distances
+    assert_array_equal(unmeasured[0], offsets)
+    assert_array_equal(unmeasured[1], ids)
+    assert np.isnan(unmeasured[2]).all() and len(unmeasured[2]) == len(ids)
+
+
+def test_linked_reads_only_the_rows_asked_for():
+    graph, talking = ([0, 1, 2, 2], [7, 0]), np.ones(3, dtype=bool)  # row 0 links robot 7, which is none
+    positions = np.array([[0.0, 0.0], [3.0, 4.0], [1.0, 1.0]])
+    offsets, ids, distances = kernels.linked([1, 2], graph, talking, positions=positions)
+    assert_array_equal(offsets, [0, 1, 1])
+    assert_array_equal(ids, [0])
+    assert_array_equal(distances, [5.0])
+
+
+@pytest.mark.parametrize(
+    ("graph", "rows", "message"),
+    [
+        (([0, 1, 1, 1], [3]), [0], r"`graph` is not a valid CSR of 3 rows: row 0 links 3, which is not a robot id"),
+        (([0, 1, 1, 1], [-1]), [0], "row 0 links -1, which is not a robot id"),
+        (([0, 2, 1, 1], [0, 1]), [1], "row 1's links run from 2 to 1, not within the 2 indices"),
+        (([0, 1, 1], [2]), [0], r"`graph` indptr must have shape \(4,\)"),
+        (([0, 1, 1, 1], [0.5]), [0], "`graph` indices must be integers"),
+        (([0, 1, 1, 1], [2]), [2, 1], "`rows` must be increasing robot ids"),
+    ],
+)
+def test_linked_bad_input_is_named(graph, rows, message):
+    with pytest.raises(ValueError, match=message):
+        kernels.linked(rows, graph, np.ones(3, dtype=bool), positions=np.zeros((3, 2)))
+
+
 # -- the motion guard ------------------------------------------------------------------------------
 @pytest.mark.parametrize("rows", [0, 1, 30, 5000])
 def test_motion_guard_matches_the_reference(rng, rows):

@@ -8,6 +8,9 @@
 //! robots can be perceived for one at a time or all at once. Distances are the neighbour
 //! query's, to the bit. Per-robot values `carried` (the velocities a movement sensor reports,
 //! say) are read at each robot seen, on every core.
+//!
+//! A radio over a communication graph ([`linked`]) is heard by its links instead, whatever the
+//! distance.
 
 use std::f64::consts::TAU;
 
@@ -110,15 +113,7 @@ pub fn perceive(
         check_range("radio range", range)?;
         check_len("talking", n, talking.len())?;
     }
-    for (r, &i) in rows.iter().enumerate() {
-        if i < 0 || i as usize >= n || (r > 0 && i <= rows[r - 1]) || r >= u32::MAX as usize {
-            return Err(GeomError::InvalidCsr {
-                arg: "rows",
-                rows: rows.len(),
-                reason: format!("row {r} is {i}: rows must be increasing robot ids below {n}"),
-            });
-        }
-    }
+    check_rows(rows, n)?;
     let reach = sight.map_or(0.0, |s| s.range).max(radio.map_or(0.0, |r| r.0));
     // Any cell >= reach finds every robot in reach; reach 0 only needs identical points together.
     let grid = Grid::new(xs, ys, if reach > 0.0 { reach } else { 1.0 });
@@ -162,6 +157,98 @@ pub fn perceive(
         .map(|values| map_range(seen.ids.len(), 1, |e| values[seen.ids[e] as usize]))
         .collect();
     Ok((seen, heard))
+}
+
+/// Fails unless `rows` are increasing ids of the `n` robots (fewer than `u32::MAX`).
+fn check_rows(rows: &[i64], n: usize) -> Result<()> {
+    for (r, &i) in rows.iter().enumerate() {
+        if i < 0 || i as usize >= n || (r > 0 && i <= rows[r - 1]) || r >= u32::MAX as usize {
+            return Err(GeomError::InvalidCsr {
+                arg: "rows",
+                rows: rows.len(),
+                reason: format!("row {r} is {i}: rows must be increasing robot ids below {n}"),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// What the robots `rows` (ids, increasing) hear over the communication `graph` `(indptr,
+/// indices)` (robot i is linked to the robots `indices[indptr[i]..indptr[i + 1]]`), `talking[j]`
+/// those of the `n` robots with a message out: each row's links that are talking, not the robot
+/// itself, in the graph's order, and, given the robots' `positions` `(xs, ys)`, the distance to
+/// each (`hypot`, as NumPy's; NaN without). Only the rows asked for are read (and checked) of
+/// the graph, whose links are most of a step's radio; the distances only matter to a loss that
+/// grows with distance, and cost more than the rest.
+///
+/// # Errors
+/// Length mismatches, non-finite positions, rows that are not increasing robot ids, or a row
+/// asked for whose links are not robot ids within `indices`.
+pub fn linked(
+    positions: Option<(&[f64], &[f64])>,
+    graph: (&[i64], &[i64]),
+    rows: &[i64],
+    talking: &[bool],
+) -> Result<Perceived> {
+    const WHAT: &str = "heard robots";
+    let n = talking.len();
+    if let Some((xs, ys)) = positions {
+        check_len("positions", n, xs.len())?;
+        check_len("positions", n, ys.len())?;
+        check_finite("positions", xs)?;
+        check_finite("positions", ys)?;
+    }
+    let (indptr, indices) = graph;
+    check_len("graph", n + 1, indptr.len())?;
+    check_rows(rows, n)?;
+    let bad = |reason: String| GeomError::InvalidCsr {
+        arg: "graph",
+        rows: n,
+        reason,
+    };
+    let mut links = Vec::new();
+    try_room(&mut links, rows.len(), WHAT)?;
+    for &i in rows {
+        let (first, last) = (indptr[i as usize], indptr[i as usize + 1]);
+        if first < 0 || first > last || last > indices.len() as i64 {
+            let len = indices.len();
+            return Err(bad(format!(
+                "row {i}'s links run from {first} to {last}, not within the {len} indices"
+            )));
+        }
+        links.push(&indices[first as usize..last as usize]);
+    }
+    let most = links.iter().map(|row| row.len()).sum();
+    let mut offsets = try_filled(rows.len() + 1, 0_i64, WHAT)?;
+    let (mut ids, mut owners) = (Vec::new(), Vec::new());
+    try_room(&mut ids, most, WHAT)?;
+    try_room(&mut owners, most, WHAT)?;
+    // The ids and their rows in one pass; the distances, a hypot each, on every core for many.
+    for (r, (&i, row)) in rows.iter().zip(&links).enumerate() {
+        for &j in *row {
+            if j < 0 || j >= n as i64 {
+                return Err(bad(format!("row {i} links {j}, which is not a robot id in [0, {n})")));
+            }
+            if talking[j as usize] && j != i {
+                ids.push(j);
+                owners.push(i as usize);
+            }
+        }
+        offsets[r + 1] = ids.len() as i64;
+    }
+    let distances = match positions {
+        Some((xs, ys)) => map_range(ids.len(), 20, |e| {
+            let (i, j) = (owners[e], ids[e] as usize);
+            (xs[j] - xs[i]).hypot(ys[j] - ys[i])
+        }),
+        None => try_filled(ids.len(), f64::NAN, WHAT)?,
+    };
+    Ok(Perceived {
+        offsets,
+        ids,
+        distances,
+        ..Perceived::default()
+    })
 }
 
 /// One perception's inputs, shared by every task.
@@ -397,6 +484,20 @@ mod tests {
         assert_eq!(heard.ids, vec![1, 3, 0, 1]); // robot 2 is silent; 0 and 3 are 0.9 apart
         assert!(heard.carried.is_empty());
         assert!(perceive(&xs, &ys, &headings, &[4], Some(sight), None, &[]).is_err());
+        // Over a graph: robot 0 is linked to 3 (0.9 away), to itself and to the silent 2.
+        let graph: (&[i64], &[i64]) = (&[0, 3, 3, 3, 4], &[3, 0, 2, 0]);
+        let at = Some((&xs[..], &ys[..]));
+        let heard = linked(at, graph, &[0, 1, 3], &talking).unwrap();
+        assert_eq!(heard.offsets, vec![0, 1, 1, 2]);
+        assert_eq!(heard.ids, vec![3, 0]);
+        assert_eq!(heard.distances, vec![0.9, 0.9]);
+        let unmeasured = linked(None, graph, &[0, 1, 3], &talking).unwrap();
+        assert_eq!(unmeasured.ids, heard.ids);
+        assert!(unmeasured.distances.iter().all(|d| d.is_nan()));
+        assert!(linked(at, (&[0, 1, 1, 1, 1], &[4]), &[0], &talking).is_err()); // 4 is no robot
+        assert!(linked(at, (&[0, 1, 1, 1, 1], &[4]), &[1], &talking).is_ok()); // row 0 not asked
+        assert!(linked(at, (&[0, 2, 1, 1, 1], &[0, 1]), &[1], &talking).is_err());
+        assert!(linked(at, graph, &[1, 0], &talking).is_err());
         assert!(perceive(&xs, &ys, &headings, &[0], Some(sight), None, &[&speeds[1..]]).is_err());
     }
 }

@@ -88,6 +88,21 @@ pub fn indices_of(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<Vec<i64
     Ok(values)
 }
 
+/// `read(values)` on a 1-D int64 array, borrowed where it is C-ordered (a large graph, read in
+/// part), copied otherwise.
+pub fn with_indices<R>(
+    arg: &str,
+    object: &Bound<'_, PyAny>,
+    read: impl FnOnce(&[i64]) -> PyDreamResult<R>,
+) -> PyDreamResult<R> {
+    with_values(arg, object, "int64", |values, shape| {
+        if shape.len() != 1 {
+            return Err(shape_error(arg, "(n,)", shape));
+        }
+        read(values)
+    })
+}
+
 /// Copies a `(len,)` bool array (which robots to answer for).
 pub fn flags_of(arg: &str, object: &Bound<'_, PyAny>, len: usize) -> PyDreamResult<Vec<bool>> {
     let (values, shape) = values_of::<bool>(arg, object, "bool")?;

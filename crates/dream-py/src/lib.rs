@@ -34,6 +34,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(neighbours::neighbours, m)?)?;
     m.add_function(wrap_pyfunction!(neighbours::far_from, m)?)?;
     m.add_function(wrap_pyfunction!(neighbours::perceive, m)?)?;
+    m.add_function(wrap_pyfunction!(neighbours::linked, m)?)?;
     m.add_function(wrap_pyfunction!(hrvo::hrvo, m)?)?;
     m.add_function(wrap_pyfunction!(hrvo::hrvo_rows, m)?)?;
     m.add_class::<hrvo::PyHrvoPlanner>()?;

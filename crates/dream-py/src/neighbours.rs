@@ -1,12 +1,12 @@
 //! Bindings of `dream_core::neighbours`: range and field-of-view queries as CSR arrays.
 
 use dream_core::neighbours::{self as core, FieldOfView, RowsOf};
-use dream_core::perceive::{perceive as core_perceive, Perceived, Sight};
+use dream_core::perceive::{linked as core_linked, perceive as core_perceive, Perceived, Sight};
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
-use crate::arrays::{count_of, flags_of, indices_of, points_of, vector_of};
+use crate::arrays::{count_of, flags_of, indices_of, points_of, vector_of, with_indices};
 use crate::errors::{value_error, PyDreamResult};
 
 type CsrArrays<'py> = (
@@ -138,5 +138,40 @@ pub fn perceive<'py>(
             heard.ids.into_pyarray(py),
             heard.distances.into_pyarray(py),
         ),
+    ))
+}
+
+/// What the robots `rows` (increasing ids) hear over the communication graph `(indptr, indices)`
+/// among the `talking` robots: `(offsets, ids, distances)` over those rows, the distances NaN
+/// without `positions`. The graph is read in place (a swarm's links are most of a step's
+/// radio), not copied.
+#[pyfunction]
+#[pyo3(signature = (rows, indptr, indices, talking, positions=None))]
+pub fn linked<'py>(
+    py: Python<'py>,
+    rows: Bound<'py, PyAny>,
+    indptr: Bound<'py, PyAny>,
+    indices: Bound<'py, PyAny>,
+    talking: Bound<'py, PyAny>,
+    positions: Option<Bound<'py, PyAny>>,
+) -> PyDreamResult<CsrArrays<'py>> {
+    let rows = indices_of("rows", &rows)?;
+    let coordinates = positions
+        .map(|p| -> PyDreamResult<(Vec<f64>, Vec<f64>)> {
+            Ok(points_of::<2>("positions", &p)?.iter().map(|q| (q[0], q[1])).unzip())
+        })
+        .transpose()?;
+    let n = coordinates.as_ref().map_or(talking.len()?, |(xs, _)| xs.len());
+    let talking = flags_of("talking", &talking, n)?;
+    let at = coordinates.as_ref().map(|(xs, ys)| (&xs[..], &ys[..]));
+    let heard = with_indices("indptr", &indptr, |indptr| {
+        with_indices("indices", &indices, |indices| {
+            Ok(py.detach(|| core_linked(at, (indptr, indices), &rows, &talking))?)
+        })
+    })?;
+    Ok((
+        heard.offsets.into_pyarray(py),
+        heard.ids.into_pyarray(py),
+        heard.distances.into_pyarray(py),
     ))
 }

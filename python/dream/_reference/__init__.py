@@ -29,7 +29,7 @@ from dream._reference.hrvo import (
     unit_directions,
 )
 from dream._reference.length import hypot
-from dream._reference.neighbours import far_from, neighbours, neighbours_of, perceive
+from dream._reference.neighbours import far_from, linked, neighbours, neighbours_of, perceive
 from dream._reference.obstacles import agents_from_closest, mirrored, virtual_agents
 from dream._reference.raycast import distance_rays
 from dream._reference.reduce import segment_any, segment_nearest, segment_nearest_to, segment_reduce
@@ -37,6 +37,7 @@ from dream._reference.voronoi import heard_cells, voronoi_cell, voronoi_cells
 
 __all__ = [
     "perceive",
+    "linked",
     "motion_guard",
     "segment_any",
     "segment_nearest",

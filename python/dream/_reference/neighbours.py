@@ -7,6 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from dream._checks import FloatArray
+from dream._csr import spans
 
 
 def neighbours_of(
@@ -145,3 +146,39 @@ def perceive(
     seen_csr = csr(seen, 5)
     ids = seen_csr[1]
     return (*seen_csr, *(np.asarray(values, dtype=np.float64)[ids] for values in carried or ())), csr(heard, 2)
+
+
+def linked(
+    rows: np.ndarray,
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    talking: np.ndarray,
+    positions: FloatArray | None = None,
+) -> tuple[np.ndarray, ...]:
+    """What the robots ``rows`` hear over the graph ``(indptr, indices)`` among the ``talking``:
+    ``(offsets, ids, distances)``, each row's talking links but itself in the graph's order, the
+    distances NaN without ``positions``."""
+    n = len(talking)
+    first, last = indptr[rows], indptr[rows + 1]
+    wrong = (first < 0) | (first > last) | (last > len(indices))
+    if wrong.any():
+        i, a, b = rows[wrong][0], first[wrong][0], last[wrong][0]
+        raise ValueError(
+            f"`graph` is not a valid CSR of {n} rows: row {i}'s links run from {a} to {b}, "
+            f"not within the {len(indices)} indices"
+        )
+    counts = last - first
+    me, others = np.repeat(rows, counts), indices[spans(first, counts)]
+    outside = (others < 0) | (others >= n)
+    if outside.any():
+        i, j = me[outside][0], others[outside][0]
+        raise ValueError(
+            f"`graph` is not a valid CSR of {n} rows: row {i} links {j}, which is not a robot id in [0, {n})"
+        )
+    heard = talking[others] & (others != me)
+    offsets = np.concatenate(([0], np.cumsum(heard)))[np.concatenate(([0], np.cumsum(counts)))].astype(np.int64)
+    me, others = me[heard], others[heard]
+    if positions is None:
+        return offsets, others.astype(np.int64), np.full(len(others), np.nan)
+    gaps = positions[others] - positions[me]
+    return offsets, others.astype(np.int64), np.hypot(gaps[:, 0], gaps[:, 1])

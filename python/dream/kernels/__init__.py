@@ -32,7 +32,7 @@ from dream.kernels._dynamics import (
 from dream.kernels._guard import motion_guard
 from dream.kernels._hrvo import HrvoPlanner, hrvo, hrvo_rows
 from dream.kernels._length import hypot
-from dream.kernels._neighbours import far_from, neighbours, neighbours_of, perceive
+from dream.kernels._neighbours import far_from, linked, neighbours, neighbours_of, perceive
 from dream.kernels._obstacles import obstacle_agents, virtual_agents
 from dream.kernels._raycast import distance_rays
 from dream.kernels._reduce import segment_any, segment_nearest, segment_nearest_to, segment_reduce
@@ -60,6 +60,7 @@ __all__ = [
     "neighbours_of",
     "far_from",
     "perceive",
+    "linked",
     "HrvoPlanner",
     "hrvo",
     "hrvo_rows",

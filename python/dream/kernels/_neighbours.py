@@ -141,12 +141,7 @@ def perceive(
     p = as_array(positions, "positions", (None, 2))
     n = p.shape[0]
     h = as_array(headings, "headings", (n,))
-    array = np.asarray(rows)
-    if array.size and array.dtype.kind not in "iu":
-        raise ValueError(f"`rows` must hold integer robot ids, got dtype {array.dtype}")
-    asked = np.ascontiguousarray(array, dtype=np.int64)
-    if asked.ndim != 1 or (len(asked) and (asked[0] < 0 or asked[-1] >= n or np.any(np.diff(asked) <= 0))):
-        raise ValueError(f"`rows` must be increasing robot ids in [0, {n}), shape (m,)")
+    asked = _asked(rows, n)
     if sight is not None:
         check_nonnegative(sight[0], "sensor range")
         check_nonnegative(sight[1], "fov")
@@ -160,6 +155,46 @@ def perceive(
     return implementation("perceive")(
         p, h, asked, sight=sight, radio_range=radio_range, talking=flags, carried=columns or None
     )
+
+
+def linked(rows: Any, graph: tuple[Any, Any], talking: Any, *, positions: Any = None) -> Heard:
+    """What the robots ``rows`` ``(m,)`` (increasing ids) hear over a communication ``graph``
+    ``(indptr (n + 1,), indices)``, robot i linked to ``indices[indptr[i]:indptr[i + 1]]``
+    whatever the distance: each row's links that are ``talking`` ``(n,)`` (bool), not the robot
+    itself, in the graph's order. Returns ``(offsets (m + 1,), ids, distances)`` over those rows,
+    as :func:`perceive` gives a range radio's: the distances (``hypot``) from the robots'
+    ``positions`` ``(n, 2)``, NaN without (they matter only to a loss that grows with distance,
+    and cost more than the rest). Only the rows asked for are read of the graph, and checked: a
+    swarm's links are most of a step's radio."""
+    flags = np.asarray(talking)
+    p = None if positions is None else as_array(positions, "positions", (None, 2))
+    n = len(flags) if p is None else p.shape[0]
+    asked = _asked(rows, n)
+    if len(graph) != 2:
+        raise ValueError(f"`graph` must be a pair (indptr, indices), got {len(graph)} arrays")
+    indptr, indices = (_integers(part, f"`graph` {name}") for part, name in zip(graph, ("indptr", "indices")))
+    if indptr.shape != (n + 1,):
+        raise ValueError(f"`graph` indptr must have shape ({n + 1},), one row a robot, got {indptr.shape}")
+    return implementation("linked")(asked, indptr, indices, as_flags(flags, "talking", n), positions=p)
+
+
+def _integers(value: Any, what: str) -> np.ndarray:
+    """``value`` as a 1-D int64 array (``what``: how an error names it)."""
+    array = np.asarray(value)
+    if array.ndim != 1 or (array.size and array.dtype.kind not in "iu"):
+        raise ValueError(f"{what} must be integers of shape (k,), got dtype {array.dtype} shape {array.shape}")
+    return np.ascontiguousarray(array, dtype=np.int64)
+
+
+def _asked(rows: Any, n: int) -> np.ndarray:
+    """``rows`` as the int64 ids ``(m,)`` of robots among ``n``, increasing."""
+    array = np.asarray(rows)
+    if array.size and array.dtype.kind not in "iu":
+        raise ValueError(f"`rows` must hold integer robot ids, got dtype {array.dtype}")
+    asked = np.ascontiguousarray(array, dtype=np.int64)
+    if asked.ndim != 1 or (len(asked) and (asked[0] < 0 or asked[-1] >= n or np.any(np.diff(asked) <= 0))):
+        raise ValueError(f"`rows` must be increasing robot ids in [0, {n}), shape (m,)")
+    return asked
 
 
 def _carried(values: Any, n: int) -> FloatArray:

@@ -31,7 +31,6 @@ import numpy as np
 
 from dream import kernels
 from dream._checks import all_finite, per_robot
-from dream._csr import spans
 from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
 from dream.kernels import VoronoiCells
 from dream.kernels._neighbours import Heard, Perceived
@@ -208,7 +207,9 @@ class Engine:
             carried=velocities,  # read at the robots seen, in the same pass
         )
         if radio is not None and radio.graph is not None:
-            heard = _linked(radio.graph, rows, x, talking)
+            heard = _linked(
+                radio.graph, rows, x, talking, measured=faults is not None and faults.faults.distance_loss > 0
+            )
         inbox: Neighbourhood
         if deferred:
             assert radio is not None
@@ -427,7 +428,9 @@ class Engine:
         f = None if faults is None else faults.faults
         keep: float | np.ndarray = 1.0 - radio.loss
         if f is not None:
-            keep = keep * (1.0 - f.loss) * np.maximum(1.0 - f.distance_loss * gaps, 0.0)
+            keep = keep * (1.0 - f.loss)
+            if f.distance_loss > 0:  # a graph radio measures the distances for this loss only
+                keep = keep * np.maximum(1.0 - f.distance_loss * gaps, 0.0)
         lossy = np.broadcast_to(keep < 1.0, senders.shape)
         if not lossy.any() and (f is None or f.burst is None):
             if self.count_traffic:
@@ -594,15 +597,11 @@ def _blocks(values: np.ndarray, width: int) -> np.ndarray:
     return values.reshape(len(values), -1).view(np.dtype((np.void, width))).reshape(len(values))
 
 
-def _linked(graph: tuple[np.ndarray, np.ndarray], rows: np.ndarray, x: np.ndarray, talking: np.ndarray) -> Heard:
-    """What ``rows`` hear over the communication ``graph``: their links that are talking, with
-    the distances (for the distance loss), as :func:`dream.kernels.perceive` gives a range radio's."""
-    indptr, indices = graph
-    if len(indptr) - 1 != x.shape[1]:
-        raise ValueError(f"the radio's graph links {len(indptr) - 1} robots, but the run has {x.shape[1]}")
-    counts = indptr[rows + 1] - indptr[rows]
-    me, linked = np.repeat(rows, counts), indices[spans(indptr[rows], counts)]
-    heard = talking[linked] & (linked != me)
-    offsets = np.concatenate(([0], np.cumsum(heard)))[np.concatenate(([0], np.cumsum(counts)))]
-    me, linked = me[heard], linked[heard]
-    return offsets, linked, np.hypot(x[0, linked] - x[0, me], x[1, linked] - x[1, me])
+def _linked(
+    graph: tuple[np.ndarray, np.ndarray], rows: np.ndarray, x: np.ndarray, talking: np.ndarray, measured: bool
+) -> Heard:
+    """What ``rows`` hear over the communication ``graph`` (:func:`dream.kernels.linked`), as
+    :func:`dream.kernels.perceive` gives a range radio's; the distances only if ``measured``."""
+    if len(graph[0]) - 1 != x.shape[1]:
+        raise ValueError(f"the radio's graph links {len(graph[0]) - 1} robots, but the run has {x.shape[1]}")
+    return kernels.linked(rows, graph, talking, positions=x[:2].T if measured else None)
