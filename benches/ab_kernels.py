@@ -27,6 +27,7 @@ import numpy as np
 
 import dream
 import dream.kernels._hrvo as hrvo_kernels
+import dream.kernels._neighbours as neighbour_kernels
 import dream.kernels._reduce as reduce_kernels
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -44,11 +45,12 @@ CHECKS = {
 }
 BOUNDS = (-1e9, 1e9, -1e9, 1e9)
 ROUNDS = 12  #: turns of each build per scene
+PAUSE = 2e-4  #: seconds before each call (a run's Python between two kernels)
 
 
 def captured(n: int) -> dict[str, tuple[tuple[Any, ...], dict[str, Any]]]:
-    """The last ``segment_reduce`` (with an index) and ``hrvo_rows`` calls of a swarm run of the
-    rendezvous example, past its robots' staggered start."""
+    """The last ``perceive``, ``segment_reduce`` (with an index) and ``hrvo_rows`` calls of a swarm
+    run of the rendezvous example, past its robots' staggered start."""
     calls: dict[str, tuple[tuple[Any, ...], dict[str, Any]]] = {}
 
     def spy(module: ModuleType, name: str, keep: Callable[[tuple[Any, ...]], bool]) -> None:
@@ -68,6 +70,7 @@ def captured(n: int) -> dict[str, tuple[tuple[Any, ...], dict[str, Any]]]:
 
         module.implementation = implementation  # type: ignore[attr-defined]
 
+    spy(neighbour_kernels, "perceive", lambda args: True)
     spy(reduce_kernels, "segment_reduce", lambda args: len(args) > 3 and args[3] is not None)
     spy(hrvo_kernels, "hrvo_rows", lambda args: True)
     dream.run(RENDEZVOUS, n=n, swarm=True, backend="fast", steps=36)
@@ -94,6 +97,7 @@ def compare(before: ModuleType, after: ModuleType, call: Callable[[ModuleType], 
         for label, module in (("before", before), ("after", after)):
             samples = []
             for _ in range(3):
+                time.sleep(PAUSE)
                 start = time.perf_counter()
                 call(module)
                 samples.append(time.perf_counter() - start)
@@ -113,7 +117,7 @@ def main(argv: list[str]) -> None:
     calls = captured(args.robots)
     rng = np.random.default_rng(0)
     scenes: list[tuple[str, Callable[[ModuleType], Any]]] = []
-    for name in ("segment_reduce", "hrvo_rows"):
+    for name in ("perceive", "segment_reduce", "hrvo_rows"):
         positional, keywords = calls[name]
         scenes.append(
             (f"`{name}`: the rendezvous example, {args.robots:,} robots", partial_call(name, positional, keywords))
@@ -126,6 +130,9 @@ def main(argv: list[str]) -> None:
                 lambda m, p=poses, u=commands: m.validate(p, u, BOUNDS, **CHECKS),
             )
         )
+    poses = scattered(args.robots, rng)
+    commands = np.vstack((rng.uniform(-0.2, 0.2, args.robots), rng.uniform(-3.0, 3.0, args.robots)))
+    scenes.append((f"`unicycle_step`: {args.robots:,} robots", lambda m: m.unicycle_step(poses, commands, 0.033)))
     rows = [[label, *compare(before, after, call)] for label, call in scenes]
     print(table(["kernel, scene", "before (ms)", "after (ms)", "speed-up", "same answer"], rows))
 

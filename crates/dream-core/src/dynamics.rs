@@ -121,7 +121,7 @@ pub fn threshold_velocities(velocities: &mut [f64], n: usize, max_linear: f64, m
     check_positive("max_angular", max_angular)?;
     rows("velocities", velocities, 2, n)?;
     let (v, w) = velocities.split_at_mut(n);
-    for_each_robot(v, w, 2, |_, v, w| {
+    for_each_robot(v, w, 2.0, |_, v, w| {
         if v.abs() > max_linear {
             *v = max_linear * v.signum();
         }
@@ -134,7 +134,7 @@ pub fn threshold_velocities(velocities: &mut [f64], n: usize, max_linear: f64, m
 
 /// `update(i, &mut v[i], &mut w[i])` for every robot i, each taking about `ns` nanoseconds: on
 /// every core for a large swarm (see [`worth_spreading`]).
-fn for_each_robot(v: &mut [f64], w: &mut [f64], ns: usize, update: impl Fn(usize, &mut f64, &mut f64) + Sync + Send) {
+fn for_each_robot(v: &mut [f64], w: &mut [f64], ns: f64, update: impl Fn(usize, &mut f64, &mut f64) + Sync + Send) {
     if worth_spreading(v.len(), ns) {
         v.par_iter_mut()
             .zip(w.par_iter_mut())
@@ -206,7 +206,7 @@ pub fn validate_each(
     let (xs, ys) = (p[0], p[1]);
 
     let out = |i: usize| !arena.contains(xs[i], ys[i]);
-    let outside = if worth_spreading(n, 2) {
+    let outside = if worth_spreading(n, 2.0) {
         (0..n).into_par_iter().filter(|&i| out(i)).count()
     } else {
         (0..n).filter(|&i| out(i)).count()
@@ -217,7 +217,7 @@ pub fn validate_each(
     };
     let pairs = collision_pairs(&p, n, checks);
     let fast = |i: usize| wheels.exceeded_by(u[0][i], u[1][i]);
-    let actuator = u64::from(if worth_spreading(n, 2) {
+    let actuator = u64::from(if worth_spreading(n, 2.0) {
         (0..n).into_par_iter().any(fast)
     } else {
         (0..n).any(fast)
@@ -259,7 +259,7 @@ fn collision_pairs(p: &[&[f64]], n: usize, checks: &Checks) -> Vec<(usize, usize
         pairs_in(&grid, &cell, checks.diameter, |i, j| found.push((i, j)));
         found
     };
-    if worth_spreading(n, 50) {
+    if worth_spreading(n, 50.0) {
         grid.par_cell_runs(PARALLEL_CELLS).flat_map_iter(pairs).collect()
     } else {
         grid.cell_runs().flat_map(pairs).collect()
@@ -272,8 +272,8 @@ fn colliders(p: &[&[f64]], n: usize, checks: &Checks) -> Grid {
     if offset == 0.0 {
         return Grid::loose(xs, ys, checks.diameter);
     }
-    let cx = map_range(n, 20, |i| xs[i] + offset * p[2][i].cos());
-    let cy = map_range(n, 20, |i| ys[i] + offset * p[2][i].sin());
+    let cx = map_range(n, 20.0, |i| xs[i] + offset * p[2][i].cos());
+    let cy = map_range(n, 20.0, |i| ys[i] + offset * p[2][i].sin());
     Grid::loose(&cx, &cy, checks.diameter)
 }
 
@@ -331,7 +331,7 @@ pub fn unicycle_step(poses: &mut [f64], velocities: &[f64], n: usize, dt: f64) -
             turned.sin().atan2(turned.cos())
         };
     };
-    if worth_spreading(n, 60) {
+    if worth_spreading(n, 60.0) {
         // Five calls of libm a robot.
         let robots = xs.par_iter_mut().zip(ys.par_iter_mut()).zip(thetas.par_iter_mut());
         robots
@@ -358,7 +358,7 @@ pub fn dxi_to_dxu(dxi: &[f64], poses: &[f64], n: usize, vel_gain: f64, ang_gain:
     let p = rows("poses", poses, 3, n)?;
     let mut dxu = vec![0.0; 2 * n];
     let (v, w) = dxu.split_at_mut(n);
-    for_each_robot(v, w, 50, |i, v, w| {
+    for_each_robot(v, w, 50.0, |i, v, w| {
         let (c, s) = (p[2][i].cos(), p[2][i].sin());
         *v = vel_gain * (c * d[0][i] + s * d[1][i]);
         *w = ang_gain * (-s * d[0][i] + c * d[1][i]).atan2(*v) / std::f64::consts::FRAC_PI_2;
@@ -379,7 +379,7 @@ pub fn dxu_to_dxi(dxu: &[f64], headings: &[f64], n: usize, projection: f64) -> R
     let theta = rows("headings", headings, 1, n)?[0];
     let mut dxi = vec![0.0; 2 * n];
     let (dx, dy) = dxi.split_at_mut(n);
-    for_each_robot(dx, dy, 20, |i, dx, dy| {
+    for_each_robot(dx, dy, 20.0, |i, dx, dy| {
         let (c, s, ahead) = (theta[i].cos(), theta[i].sin(), projection * u[1][i]);
         *dx = u[0][i] * c - ahead * s;
         *dy = u[0][i] * s + ahead * c;
@@ -398,7 +398,7 @@ pub fn actuator_limit(dxu: &mut [f64], n: usize, max_linear: f64, max_angular: f
     threshold_velocities(dxu, n, max_linear, max_angular)?;
     let (v, w) = dxu.split_at_mut(n);
     let (r, half_l) = (wheels.radius, wheels.base_length / 2.0);
-    for_each_robot(v, w, 2, |_, v, w| {
+    for_each_robot(v, w, 2.0, |_, v, w| {
         if v.abs() / r + w.abs() * half_l / r > wheels.max_speed {
             let speed = (wheels.max_speed * r - half_l * w.abs()).max(0.0);
             *v = if *v > 0.0 { speed } else { -speed };

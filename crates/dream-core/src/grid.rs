@@ -70,7 +70,7 @@ impl Grid {
     }
 
     fn build(xs: &[f64], ys: &[f64], cell: f64, loose: bool) -> Self {
-        let keys: Vec<(i64, i64)> = map_range(xs.len(), 3, |i| cell_of(xs[i], ys[i], cell));
+        let keys: Vec<(i64, i64)> = map_range(xs.len(), 3.0, |i| cell_of(xs[i], ys[i], cell));
         let (mut x0, mut y0, mut x1, mut y1) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
         for &(cx, cy) in &keys {
             x0 = x0.min(cx);
@@ -89,21 +89,23 @@ impl Grid {
         }
         let (table, starts, members) =
             if !keys.is_empty() && columns <= budget && rows <= budget && columns * rows <= budget {
-                let slots = map_range(keys.len(), 1, |i| ((keys[i].0 - x0) * rows + (keys[i].1 - y0)) as usize);
+                let slots = map_range(keys.len(), 1.0, |i| {
+                    ((keys[i].0 - x0) * rows + (keys[i].1 - y0)) as usize
+                });
                 let (starts, members) = bucket(&slots, (columns * rows) as usize);
                 (CellTable::Dense { x0, y0, columns, rows }, starts, members)
             } else if !keys.is_empty() && columns <= budget {
                 // A swarm spread thin over a wide arena (a ring hundreds of metres across): too
                 // many cells for a table of them all, few columns.
                 let (by_column, order) = bucket(
-                    &map_range(keys.len(), 1, |i| (keys[i].0 - x0) as usize),
+                    &map_range(keys.len(), 1.0, |i| (keys[i].0 - x0) as usize),
                     columns as usize,
                 );
                 // (row, point) in column order, then runs of columns of about COLUMN_POINTS
                 // points each, one task a run (a million robots on a ring or a line make a
                 // million columns): each column sorted by row (stable: increasing index per
                 // cell) and its cells listed.
-                let mut entries: Vec<(i64, usize)> = map_range(order.len(), 1, |k| (keys[order[k]].1, order[k]));
+                let mut entries: Vec<(i64, usize)> = map_range(order.len(), 1.0, |k| (keys[order[k]].1, order[k]));
                 let mut runs = vec![0];
                 for (c, &first) in by_column.iter().enumerate().skip(1) {
                     if first - by_column[runs[runs.len() - 1]] >= COLUMN_POINTS || c == columns as usize {
@@ -141,7 +143,7 @@ impl Grid {
                 }
                 firsts.push(rows_of.len());
                 starts.push(keys.len());
-                let members = map_range(entries.len(), 1, |k| entries[k].1);
+                let members = map_range(entries.len(), 1.0, |k| entries[k].1);
                 (CellTable::Columns { x0, firsts, rows_of }, starts, members)
             } else {
                 let mut index: FxHashMap<(i64, i64), usize> =
@@ -156,8 +158,8 @@ impl Grid {
                 let (starts, members) = bucket(&slots, index.len());
                 (CellTable::Sparse(index), starts, members)
             };
-        let sorted_xs = map_range(members.len(), 1, |k| xs[members[k]]);
-        let sorted_ys = map_range(members.len(), 1, |k| ys[members[k]]);
+        let sorted_xs = map_range(members.len(), 1.0, |k| xs[members[k]]);
+        let sorted_ys = map_range(members.len(), 1.0, |k| ys[members[k]]);
         Self {
             cell,
             table,

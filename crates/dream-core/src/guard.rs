@@ -33,7 +33,7 @@ pub fn stopping(
     check_positive("near", near)?;
     check_positive("horizon", horizon)?;
     // A row costs a sine and a cosine, and a few nanoseconds an entry.
-    let ns = 20 + 3 * dx.len() / m.max(1);
+    let ns = 20.0 + 3.0 * (dx.len() / m.max(1)) as f64;
     Ok(map_range(m, ns, |r| {
         let speed = speeds[r];
         // The reach test first (as the NumPy reference filters): farther robots cannot be hit.

@@ -568,7 +568,7 @@ pub fn hrvo_rows(
     check_vec2s("positions", positions)?;
     check_vec2s("candidates", grid)?;
     // On every core: a million robots see millions of others, each a cosine and a sine.
-    let around = map_range(detections.len(), 20, |e| Neighbour::from_detection(detections[e]));
+    let around = map_range(detections.len(), 20.0, |e| Neighbour::from_detection(detections[e]));
     check_neighbours(&around)?;
     let robot = |scratch: &mut Scratch, r: usize| {
         scratch.cones.clear();

@@ -82,7 +82,7 @@ pub fn hypot(x: f64, y: f64) -> f64 {
 /// [`hypot`] of each pair `(xs[i], ys[i])`, on every core for many; `xs` and `ys` have one length.
 pub fn hypots(xs: &[f64], ys: &[f64]) -> Vec<f64> {
     debug_assert_eq!(xs.len(), ys.len());
-    map_range(xs.len().min(ys.len()), 10, |i| hypot(xs[i], ys[i]))
+    map_range(xs.len().min(ys.len()), 10.0, |i| hypot(xs[i], ys[i]))
 }
 
 #[cfg(test)]

@@ -5,16 +5,17 @@ use rayon::prelude::*;
 use crate::error::{try_room, Result};
 
 /// Serial work, in nanoseconds, from which a loop is spread over the threads. Between kernel
-/// calls rayon's threads sleep, and waking them costs tens of microseconds (a median of 19-94 µs,
-/// a tail of 280, on a 2-core VM, where a check of 65,536 values takes 17 µs on one thread): work
-/// shorter than a fifth of a millisecond is done sooner by the calling thread alone.
-const PARALLEL_WORK_NS: usize = 200_000;
+/// calls rayon's threads sleep, and waking them costs tens of microseconds: on a 2-core VM
+/// (`cargo run --release -p dream-core --example wake`), checking 65,536 values took 18 µs on the
+/// calling thread and 72 µs on the pool, 262,144 values 70 and 122 µs, a million 275 and 238 µs.
+/// Work shorter than a fifth of a millisecond is done sooner by the calling thread alone.
+const PARALLEL_WORK_NS: f64 = 200_000.0;
 
 /// Whether `n` items of about `ns` nanoseconds each are worth spreading over the threads. `ns`
-/// is a rough figure: 1 for a copy or a comparison, 3 for a division and a rounding, 10 for a
-/// square root or a `hypot`, 20 for a sine and a cosine.
-pub(crate) fn worth_spreading(n: usize, ns: usize) -> bool {
-    n.saturating_mul(ns) >= PARALLEL_WORK_NS
+/// is a rough figure: a quarter for a check the compiler vectorises, 1 for a copy, 3 for a
+/// division and a rounding, 10 for a square root or a `hypot`, 20 for a sine and a cosine.
+pub(crate) fn worth_spreading(n: usize, ns: f64) -> bool {
+    n as f64 * ns >= PARALLEL_WORK_NS
 }
 
 /// Items one task takes at least, where a loop is spread over the threads.
@@ -22,7 +23,7 @@ pub(crate) const TASK_ITEMS: usize = 1024;
 
 /// `value(i)` for every `i < n`, in order, each taking about `ns` nanoseconds (see
 /// [`worth_spreading`]): on every thread for much work.
-pub fn map_range<T: Send>(n: usize, ns: usize, value: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
+pub fn map_range<T: Send>(n: usize, ns: f64, value: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {
     if worth_spreading(n, ns) {
         (0..n).into_par_iter().with_min_len(TASK_ITEMS).map(value).collect()
     } else {
@@ -40,7 +41,7 @@ const CHECK_ITEMS: usize = 8192;
 /// message indices that took 4-6 times as long as the reduction they guarded.)
 pub(crate) fn first_where(n: usize, bad: impl Fn(usize) -> bool + Sync) -> Option<usize> {
     let any_bad = |items: std::ops::Range<usize>| items.fold(false, |found, i| found | bad(i));
-    let found = if worth_spreading(n, 1) {
+    let found = if worth_spreading(n, 0.25) {
         (0..n.div_ceil(CHECK_ITEMS))
             .into_par_iter()
             .any(|chunk| any_bad(chunk * CHECK_ITEMS..n.min((chunk + 1) * CHECK_ITEMS)))
@@ -119,7 +120,7 @@ mod tests {
 
     #[test]
     fn the_first_bad_item_whatever_the_count() {
-        for n in [0, 1, 100, PARALLEL_WORK_NS, PARALLEL_WORK_NS + 3 * CHECK_ITEMS + 7] {
+        for n in [0, 1, 100, 1 << 20, (1 << 20) + 3 * CHECK_ITEMS + 7] {
             assert_eq!(first_where(n, |_| false), None);
             for bad in [0, n / 2, n.saturating_sub(1)] {
                 if bad < n {

@@ -137,7 +137,7 @@ pub fn perceive(
         }
         let asked = |&i: &usize| (row_of[i] != u32::MAX).then(|| (i, row_of[i]));
         let members = grid.members();
-        let order: Vec<(usize, u32)> = if worth_spreading(n, 1) {
+        let order: Vec<(usize, u32)> = if worth_spreading(n, 1.0) {
             members.par_iter().with_min_len(TASK_ITEMS).filter_map(asked).collect()
         } else {
             members.iter().filter_map(asked).collect()
@@ -154,7 +154,7 @@ pub fn perceive(
     let (mut seen, heard) = in_row_order(&parts, rows.len())?;
     seen.carried = carried
         .iter()
-        .map(|values| map_range(seen.ids.len(), 1, |e| values[seen.ids[e] as usize]))
+        .map(|values| map_range(seen.ids.len(), 1.0, |e| values[seen.ids[e] as usize]))
         .collect();
     Ok((seen, heard))
 }
@@ -237,7 +237,7 @@ pub fn linked(
         offsets[r + 1] = ids.len() as i64;
     }
     let distances = match positions {
-        Some((xs, ys)) => map_range(ids.len(), 20, |e| {
+        Some((xs, ys)) => map_range(ids.len(), 20.0, |e| {
             let (i, j) = (owners[e], ids[e] as usize);
             (xs[j] - xs[i]).hypot(ys[j] - ys[i])
         }),
@@ -443,7 +443,7 @@ fn in_row_order(parts: &[Part], rows: usize) -> Result<(Perceived, Perceived)> {
     };
     // The seen and the heard copied side by side where there is much to copy.
     let values = 5 * seen_offsets[rows] as usize + 2 * heard_offsets[rows] as usize;
-    let (seen, heard) = if worth_spreading(values, 1) {
+    let (seen, heard) = if worth_spreading(values, 1.0) {
         rayon::join(seen, heard)
     } else {
         (seen(), heard())

@@ -74,7 +74,7 @@ pub fn reduce(values: &[f64], width: usize, offsets: &[i64], index: Option<&[i64
     let m = offsets.len() - 1;
     let mut out = vec![0.0; m * width];
     // About a nanosecond a value added, a few a row.
-    if worth_spreading(entries * width + 4 * m, 1) {
+    if worth_spreading(entries * width + 4 * m, 1.0) {
         out.par_chunks_mut(width).enumerate().with_min_len(64).for_each(row);
     } else {
         out.chunks_mut(width).enumerate().for_each(row);
@@ -141,7 +141,7 @@ fn check_indices(arg: &'static str, index: &[i64], rows: usize) -> Result<()> {
 pub fn any(flags: &[bool], offsets: &[i64]) -> Result<Vec<bool>> {
     check_offsets("offsets", offsets, flags.len(), "flags")?;
     let rows = offsets.len() - 1;
-    Ok(map_range(rows, 1 + flags.len() / rows.max(1), |r| {
+    Ok(map_range(rows, 1.0 + (flags.len() / rows.max(1)) as f64, |r| {
         flags[offsets[r] as usize..offsets[r + 1] as usize].iter().any(|&f| f)
     }))
 }
@@ -235,7 +235,7 @@ fn pick_nearest(offsets: &[i64], k: usize, entries: usize, key: impl Fn(usize, u
     let rows = offsets.len() - 1;
     let mut picked = vec![-1_i64; rows * k];
     // A few nanoseconds an entry ranked (the messages of a few thousand robots, a few dozen each).
-    if worth_spreading(entries + rows, 4) {
+    if worth_spreading(entries + rows, 4.0) {
         picked
             .par_chunks_mut(k)
             .enumerate()

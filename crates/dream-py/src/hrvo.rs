@@ -95,7 +95,7 @@ pub fn hrvo_rows<'py>(
     if towards {
         // Bearings towards the detected robots, as the movement sensor's angles from them: the
         // reference's flip, to the bit.
-        seen = map_range(seen.len(), 1, |e| {
+        seen = map_range(seen.len(), 1.0, |e| {
             let [distance, bearing, vx, vy] = seen[e];
             [
                 distance,
@@ -128,7 +128,7 @@ fn detections_of(object: &Bound<'_, PyAny>) -> PyDreamResult<Vec<[f64; 4]>> {
     let rest: Vec<Vec<f64>> = (1..4)
         .map(|c| vector_of("detections", &columns.get_item(c)?, Some(distance.len())))
         .collect::<PyDreamResult<_>>()?;
-    Ok(map_range(distance.len(), 1, |e| {
+    Ok(map_range(distance.len(), 1.0, |e| {
         [distance[e], rest[0][e], rest[1][e], rest[2][e]]
     }))
 }
