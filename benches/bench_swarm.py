@@ -16,6 +16,13 @@ Run::
     python benches/bench_swarm.py                                  # 1,000 and 10,000 robots
     python benches/bench_swarm.py -n 1000 10000 100000 1000000 --threads 1 2 4 8 16
     python benches/bench_swarm.py -e hrvo-circle examples/rendezvous.py --steps 30
+    python benches/bench_swarm.py -n 100000 --steps 112 --baseline OLDER/_core.abi3.so
+
+``--baseline`` times instead each run's steps with the installed kernels and with another build of
+them (an older commit's ``dream/_core.abi3.so``; a kernel it lacks is taken from this build), in
+turns of :data:`BLOCK` steps within one run: whole runs on a shared machine wander by a third from
+minute to minute, turns within one run see the same machine. A build's step is the mean over its
+turns past ``--warm-up``.
 """
 
 from __future__ import annotations
@@ -66,16 +73,65 @@ print(json.dumps({
 """
 
 
+BLOCK = 5  #: steps of a turn in --baseline: the built-ins' decision period, so that turns do alike work
+
+# One run whose steps alternate between this build of the kernels and another, BLOCK steps a turn.
+AB_RUN = """
+import json, statistics, sys, time
+sys.path.insert(0, "benches")
+import dream
+import dream.kernels._dispatch as dispatch
+from dream.experiments import find
+from harness import extension
+
+name, baseline = sys.argv[1], sys.argv[5]
+n, steps, warm_up, block = (int(arg) for arg in (*sys.argv[2:5], sys.argv[6]))
+class Older:  # the baseline's kernels, and this build's for those it lacks (added since)
+    def __init__(self, older, newer):
+        self.older, self.newer = older, newer
+
+    def __getattr__(self, name):
+        return getattr(self.older, name, None) or getattr(self.newer, name)
+
+builds = [dispatch._core, Older(extension(baseline), dispatch._core)]
+spent = [[], []]
+state = {"last": None, "turn": 0}
+
+def progress(step, cap):
+    now = time.perf_counter()
+    done = step - warm_up  # steps past the warm-up, this one included
+    if state["last"] is not None and done > 0:
+        spent[state["turn"]].append(now - state["last"])
+        if done % block == 0:
+            state["turn"] = 1 - state["turn"]
+            dispatch._core = builds[state["turn"]]
+    state["last"] = now
+
+dream.run(find(name), n=n, steps=steps, backend="fast", swarm=True, progress=progress)
+print(json.dumps({"this": statistics.mean(spent[0]), "baseline": statistics.mean(spent[1])}))
+"""
+
+
+def ab_run(name: str, n: int, steps: int, warm_up: int, baseline: str, timeout: float) -> dict[str, Any] | str:
+    """This build's and the baseline's mean step in one run, or why there are none."""
+    return _child([AB_RUN, name, str(n), str(steps), str(warm_up), baseline, str(BLOCK)], None, timeout)
+
+
 def one_run(
     name: str, n: int, steps: int, warm_up: int, threads: int | None, timeout: float, top: int = 0
 ) -> dict[str, Any] | str:
     """The figures of one run, or why there are none."""
+    return _child([ONE_RUN, name, str(n), str(steps), str(warm_up), str(top)], threads, timeout)
+
+
+def _child(script: list[str], threads: int | None, timeout: float) -> dict[str, Any] | str:
+    """What a script run in a process of its own printed last (JSON), or why it printed nothing."""
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     if threads is not None:
         env["RAYON_NUM_THREADS"] = str(threads)
     try:
         done = subprocess.run(
-            [sys.executable, "-c", ONE_RUN, name, str(n), str(steps), str(warm_up), str(top)],
+            [sys.executable, "-c", *script],
             capture_output=True,
             text=True,
             env=env,
@@ -98,6 +154,23 @@ def short(function: str) -> str:
     return function.removeprefix("<").removesuffix(">")
 
 
+def versus(args: argparse.Namespace, baseline: str) -> None:
+    """Print each run's mean step with the baseline's kernels and with this build's, in turns."""
+    if args.steps < args.warm_up + 4 * BLOCK:
+        raise SystemExit(f"--baseline needs --steps of at least --warm-up + {4 * BLOCK}: two turns of each build")
+    print(f"{args.steps} steps a run, turns of {BLOCK} steps past the first {args.warm_up}; swarm mode on Fast")
+    print("| experiment | robots | baseline step (ms) | this build's step (ms) | speed-up |\n|---|---|---|---|---|")
+    for name in args.experiments:
+        for asked in args.robots:
+            n = asked - asked % GROUPS.get(name, 1)
+            got = ab_run(name, n, args.steps, args.warm_up, baseline, args.timeout)
+            if isinstance(got, str):
+                print(f"| {name} | {n:,} | {got} | | |", flush=True)
+                continue
+            before, after = got["baseline"], got["this"]
+            print(f"| {name} | {n:,} | {before * 1e3:,.1f} | {after * 1e3:,.1f} | {before / after:.2f}x |", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("-e", "--experiments", nargs="+", default=EXPERIMENTS)
@@ -115,11 +188,15 @@ def main() -> None:
         metavar="K",
         help="also profile the steps the mean covers (cProfile) and print the K functions of most own time",
     )
+    parser.add_argument("--baseline", metavar="SO", help="another build's _core.abi3.so, timed in turns with this one")
     args = parser.parse_args()
     print(machine())
     threads: list[int | None] = list(args.threads) if args.threads else [None]
     if args.steps < args.warm_up + 2:
         parser.error(f"--steps must be at least --warm-up + 2 = {args.warm_up + 2}")
+    if args.baseline:
+        versus(args, args.baseline)
+        return
     print(
         f"{args.steps} steps a run, the mean step past the first {args.warm_up}, swarm mode on Fast; "
         f"threads: {'all' if threads == [None] else threads}"
