@@ -70,6 +70,7 @@ def test_every_public_kernel_goes_through_the_dispatch(monkeypatch):
     kernels.perceive(
         points, np.zeros(2), np.array([0, 1]), sight=(1.0, 6.0, 0.0), radio_range=1.0, talking=[True, True]
     )
+    kernels.linked(np.array([0, 1]), (np.array([0, 1, 2]), np.array([1, 0])), np.array([True, True]))
     kernels.hrvo_rows(points, points, points, np.array([0, 0, 0]), np.zeros((0, 4)))
     kernels.segment_reduce(points, offsets, "sum")
     kernels.segment_any(np.array([True, False]), offsets)
