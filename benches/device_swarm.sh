@@ -3,6 +3,9 @@
 # table into $OUT when that is set): every built-in and the rendezvous example in swarm mode at
 # 100,000 robots on 1-16 threads and at 1,000,000 robots on 1 and 16, each with where its step's
 # time goes (cProfile), and hrvo-circle's 100 steps at 1,000,000 robots with its peak RSS.
+# First, when WHEEL_DIR holds the `wake` example (`cargo build --release -p dream-core --example
+# wake && cp target/release/examples/wake .device/`), what waking the kernels' threads costs on 2-16
+# of them: the figure behind `parallel::worth_spreading`'s threshold (0.2 ms of work, set on 2 cores).
 #   bash benches/device_swarm.sh [WHEEL_DIR]   # installs DREAM's wheel from WHEEL_DIR first, if any
 #   N1=1000 N2=10000 bash benches/device_swarm.sh   # a quick try of the script at small sizes
 set -u
@@ -14,6 +17,9 @@ if ls "$wheels"/*.whl >/dev/null 2>&1; then
 fi
 export PYTHONUNBUFFERED=1
 echo "cores $(nproc); $(uptime); $(python3 --version); $(date -u +%FT%TZ)"
+if [ -x "$wheels/wake" ]; then
+    for threads in 2 4 16; do RAYON_NUM_THREADS=$threads "$wheels/wake"; done | tee "$out/wake.md"
+fi
 python3 benches/bench_swarm.py -n ${N1:-100000} --threads 1 2 4 8 16 --steps 44 --warm-up 32 --timeout 120 --breakdown 6 | tee "$out/swarm-100k.md"
 python3 benches/bench_swarm.py -n ${N2:-1000000} --threads 1 16 --steps 38 --warm-up 32 --timeout 240 --breakdown 10 | tee "$out/swarm-1m.md"
 echo "== hrvo-circle --swarm -n 1000000 --steps 100, every core"
