@@ -231,21 +231,28 @@ impl Search<'_> {
             });
     }
 
+    /// Whether robot `i` hears a message within `same` of the robot it sees at `s`. The search
+    /// stops at the first such message: most robots seen are heard, near where they are.
+    fn accounted(&self, i: usize, s: Vec2) -> bool {
+        let members = self.grid.members();
+        let mut found = false;
+        self.grid
+            .for_each_run_within(s[0], s[1], self.hearers.same + self.drift, |run| {
+                found = found
+                    || members[run]
+                        .iter()
+                        .any(|&j| self.heard(i, j).is_some_and(|q| self.close.within(s, q)));
+            });
+        found
+    }
+
     /// Row `r`'s polygon, area and centroid.
     fn cell(&self, r: usize, candidates: &mut Vec<Candidate>) -> (Vec<Vec2>, f64, Vec2) {
         let h = self.hearers;
         let (i, p) = (h.ids[r] as usize, h.here[r]);
         let seen = &h.seen[h.seen_offsets[r] as usize..h.seen_offsets[r + 1] as usize];
         let agents = &h.agents[h.agents_offsets[r] as usize..h.agents_offsets[r + 1] as usize];
-        let silent: Vec<Vec2> = seen
-            .iter()
-            .copied()
-            .filter(|&s| {
-                let mut accounted = false;
-                self.heard_near(i, s, h.same, |_, q| accounted |= self.close.within(s, q));
-                !accounted
-            })
-            .collect();
+        let silent: Vec<Vec2> = seen.iter().copied().filter(|&s| !self.accounted(i, s)).collect();
         let extras = || {
             let ranked = |rank: u8| move |(k, &q): (usize, &Vec2)| (rank, k, q);
             silent
