@@ -217,33 +217,39 @@ impl Search<'_> {
         (!q[0].is_nan()).then_some(q)
     }
 
+    /// Calls `visit(j)` for the robots `j` in the square of half-width `half` about `at`, until
+    /// one returns true; returns whether one did. The grid's runs cover more (whole cells); the
+    /// coordinates in cell order rule those out before anything else of them is read.
+    fn robots_near(&self, at: Vec2, half: f64, mut visit: impl FnMut(usize) -> bool) -> bool {
+        let (members, (xs, ys)) = (self.grid.members(), self.grid.sorted());
+        let pad = half * (1.0 + 1e-9); // above the rounding of the differences
+        let mut found = false;
+        self.grid.for_each_run_within(at[0], at[1], half, |run| {
+            found = found
+                || run
+                    .into_iter()
+                    .any(|m| (xs[m] - at[0]).abs() <= pad && (ys[m] - at[1]).abs() <= pad && visit(members[m]));
+        });
+        found
+    }
+
     /// Calls `visit(q)` for what robot `i` hears from robots near `at`: every message within
-    /// `distance` of it, and maybe more.
+    /// `distance` of it (said by a robot within `distance + drift`), and maybe more.
     fn heard_near(&self, i: usize, at: Vec2, distance: f64, mut visit: impl FnMut(usize, Vec2)) {
-        let members = self.grid.members();
-        self.grid
-            .for_each_run_within(at[0], at[1], distance + self.drift, |run| {
-                for &j in &members[run] {
-                    if let Some(q) = self.heard(i, j) {
-                        visit(j, q);
-                    }
-                }
-            });
+        self.robots_near(at, distance + self.drift, |j| {
+            if let Some(q) = self.heard(i, j) {
+                visit(j, q);
+            }
+            false
+        });
     }
 
     /// Whether robot `i` hears a message within `same` of the robot it sees at `s`. The search
     /// stops at the first such message: most robots seen are heard, near where they are.
     fn accounted(&self, i: usize, s: Vec2) -> bool {
-        let members = self.grid.members();
-        let mut found = false;
-        self.grid
-            .for_each_run_within(s[0], s[1], self.hearers.same + self.drift, |run| {
-                found = found
-                    || members[run]
-                        .iter()
-                        .any(|&j| self.heard(i, j).is_some_and(|q| self.close.within(s, q)));
-            });
-        found
+        self.robots_near(s, self.hearers.same + self.drift, |j| {
+            self.heard(i, j).is_some_and(|q| self.close.within(s, q))
+        })
     }
 
     /// Row `r`'s polygon, area and centroid.
