@@ -157,3 +157,17 @@ def test_nearest_messages_read_on_the_board_equal_those_copied_out():
         np.testing.assert_array_equal(picked, copied.pick(name, entries))
         assert np.isnan(picked[entries < 0]).all()
     assert "x" not in on_board.columns  # read in place, never copied out whole
+
+
+def test_broadcast_gives_each_entry_its_rows_values():
+    """A row's values at each of its entries, empty rows included, as indexing by ``owner`` gives
+    them; values of the wrong length are refused, naming both sizes."""
+    rng = np.random.default_rng(5)
+    offsets, _, _ = ragged(rng, 40)
+    rows = Neighbourhood(offsets, {})
+    here, flags = rng.normal(size=(40, 2)), rng.random(40) < 0.5
+    np.testing.assert_array_equal(rows.broadcast(here), here[rows.owner])
+    np.testing.assert_array_equal(rows.broadcast(flags), flags[rows.owner])
+    assert rows.broadcast(rng.normal(size=(40, 7, 2))).shape == (offsets[-1], 7, 2)
+    with pytest.raises(ValueError, match=r"values of shape \(39, 2\) for a neighbourhood of 40 rows"):
+        rows.broadcast(here[1:])

@@ -340,7 +340,7 @@ class CircleRobot(SwarmRobot):
         right = desired[:, 1] * outwards[:, 0] - desired[:, 0] * outwards[:, 1]
         view.aside(np.where(band & ~near, np.where(right <= 0.0, 1.0, -1.0), 0.0), stop=near)
         clearance = guard_distance(self.spec.diameter, layout.safety)
-        others = np.column_stack((seen["dx"], seen["dy"])) + here[seen.owner]
+        others = np.column_stack((seen["dx"], seen["dy"])) + seen.broadcast(here)
         clear = near & rules.clear_way(here, goal, others, clearance, seen.offsets)
         parked = view.memory["unreached"] == 0  # neighbours dock beside a robot that keeps its place
         view.direct(clear | parked)

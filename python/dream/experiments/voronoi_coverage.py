@@ -185,10 +185,10 @@ class CoverageRobot(SwarmRobot):
         moving = memory["moving"].astype(bool)
         said = here + rules.momentum(here, last, moving, LEAD)
         view.send(x=said[:, 0], y=said[:, 1])
-        sighted = here[seen.owner] + np.column_stack((seen["dx"], seen["dy"]))
-        owners = sensed.owner
-        points = here[owners] + np.column_stack((sensed["dx"], sensed["dy"]))
-        agents = kernels.obstacle_agents(here[owners], points, robot_radius=self.spec.radius, margin=MARGIN)
+        sighted = seen.broadcast(here) + np.column_stack((seen["dx"], seen["dy"]))
+        near = sensed.broadcast(here)
+        points = near + np.column_stack((sensed["dx"], sensed["dy"]))
+        agents = kernels.obstacle_agents(near, points, robot_radius=self.spec.radius, margin=MARGIN)
         real = ~np.isnan(agents[:, 0])  # none for an obstacle the robot touches
         cells = view.cells(
             seen=(seen.offsets, sighted),

@@ -80,6 +80,15 @@ class Neighbourhood:
         """``(e,)`` int: the row of each entry (to broadcast a robot's own values to its entries)."""
         return np.repeat(np.arange(len(self)), self.count)
 
+    def broadcast(self, values: Any) -> np.ndarray:
+        """Each row's value of ``values`` ``(k, ...)`` at each of its entries ``(e, ...)``: what
+        ``values[owner]`` gives, several times faster for rows of several values (NumPy copies
+        an indexed row value by value): ``here`` ``(k, 2)`` at each robot seen, say."""
+        values = np.asarray(values)
+        if values.ndim == 0 or len(values) != len(self):
+            raise ValueError(f"values of shape {values.shape} for a neighbourhood of {len(self)} rows")
+        return np.repeat(values, self.count, axis=0)
+
     def _values(self, what: str | Sequence[str] | np.ndarray) -> np.ndarray:
         if isinstance(what, str):
             return self[what]

@@ -110,7 +110,7 @@ class FormationRobot(SwarmRobot):
         alive = (memory["news"] == 0) | (memory["rounds"][:, None] - memory["news"] <= SILENCE)
         lead = place < LEADERS
         seen = view.seen
-        spotted = here[seen.owner] + np.column_stack((seen["dx"], seen["dy"]))  # where it sees each robot
+        spotted = seen.broadcast(here) + np.column_stack((seen["dx"], seen["dy"]))  # where it sees each robot
         desired, heeded = np.zeros((len(view), 2)), seen["distance"] <= RANGE
         rows = np.flatnonzero(lead)
         aims = np.zeros((0, LEADERS, 2))
@@ -128,7 +128,7 @@ class FormationRobot(SwarmRobot):
             # A leader heeds only the robots it takes for crashed, where they were heard last.
             heeded = heeded & ~lead[seen.owner]
             if memory["silent"][rows].any():
-                crashed = np.where(memory["silent"][:, :, None] > 0, memory["heard"], np.nan)[seen.owner]
+                crashed = seen.broadcast(np.where(memory["silent"][:, :, None] > 0, memory["heard"], np.nan))
                 heeded |= lead[seen.owner] & (_gaps(spotted, crashed) <= MATCH).any(axis=1)
         if (~lead).any():
             rows = np.flatnonzero(~lead)
@@ -200,7 +200,7 @@ class FormationRobot(SwarmRobot):
         # Robots beyond its tile belong to other formations: neither claimed nor liars.
         mine = np.full(len(view), -1)
         mine[rows] = np.arange(len(rows))
-        keep = (mine[owner] >= 0) & in_tile(spotted, bounds[np.maximum(mine[owner], 0)])
+        keep = (mine[owner] >= 0) & in_tile(spotted, np.take(bounds, np.maximum(mine[owner], 0), axis=0))
         counts = np.bincount(mine[owner][keep], minlength=len(rows))
         hood = Neighbourhood(np.concatenate(([0], np.cumsum(counts))), {})
         state = {key: memory[key][rows] for key in ("heard", "plans", "strikes", "liar", "liar_at")}
@@ -268,17 +268,17 @@ def judge(
     ``state`` (``heard``, ``plans``, ``strikes``, ``liar``, ``liar_at``) and returns which liars it
     sees now ``(f, 7)`` (at ``liar_at``)."""
     heard, liar, liar_at = state["heard"], state["liar"].astype(bool), state["liar_at"]
-    owner, members = hood.owner, np.arange(MEMBERS)
+    members = np.arange(MEMBERS)
     trusted = np.isfinite(heard[..., 0]) & ~liar & (members != me[:, None])
     checkable = trusted & (np.hypot(*(heard - here[:, None]).transpose(2, 0, 1)) < VERIFY - MATCH)
-    matched = hood.min(_gaps(spotted, heard[owner])) <= MATCH
+    matched = hood.min(_gaps(spotted, hood.broadcast(heard))) <= MATCH
     missed = (checkable & ~matched) | (trusted & implausible(heard, alive, state["plans"], liar, bounds))
     located = ~(liar & np.isnan(liar_at[..., 0])).any(axis=1)
     lone = ~missed.any(axis=1) & ((trusted & ~checkable).sum(axis=1) == 1) & located
     if lone.any():
         accounted = np.where((trusted | liar)[..., None], np.where(liar[..., None], liar_at, heard), np.nan)
-        unaccounted = ~(_gaps(spotted, accounted[owner]) <= MATCH).any(axis=1)
-        close = np.hypot(*(spotted - here[owner]).T) <= RANGE
+        unaccounted = ~(_gaps(spotted, hood.broadcast(accounted)) <= MATCH).any(axis=1)
+        close = np.hypot(*(spotted - hood.broadcast(here)).T) <= RANGE
         lone &= hood.any(close & unaccounted)
         missed = np.where(lone[:, None], trusted & ~checkable, missed)
     state["strikes"] = np.where(trusted, np.where(missed, state["strikes"] + 1, 0), state["strikes"])
@@ -286,7 +286,7 @@ def judge(
     sensed = np.zeros(liar.shape, dtype=bool)
     if liar.any():
         claims = np.where((~liar & np.isfinite(heard[..., 0]))[..., None], heard, np.nan)
-        unclaimed = np.asarray(~(_gaps(spotted, claims[owner]) <= MATCH).any(axis=1))
+        unclaimed = np.asarray(~(_gaps(spotted, hood.broadcast(claims)) <= MATCH).any(axis=1))
         count, rows = hood.where(unclaimed).count, np.arange(len(here))
         tracked = liar & np.isfinite(liar_at[..., 0])
         one = np.argmax(liar, axis=1)
@@ -297,7 +297,7 @@ def judge(
         for j in range(MEMBERS):  # a liar seen before: the same robot, moved on a little
             following = tracked[:, j] & (count > 0)
             if following.any():
-                gap = np.where(unclaimed, np.hypot(*(spotted - liar_at[owner, j]).T), np.inf)
+                gap = np.where(unclaimed, np.hypot(*(spotted - hood.broadcast(liar_at[:, j])).T), np.inf)
                 entry = hood.nearest(gap)
                 near = following & (hood.pick(gap, entry) < 2 * MATCH)
                 liar_at[near, j] = spotted[entry[near]]
