@@ -22,6 +22,7 @@ Run: ``python benches/bench_rl.py [--parts | --baseline OTHER.so] [N ...]`` (def
 
 from __future__ import annotations
 
+import argparse
 import statistics
 import sys
 import time
@@ -119,18 +120,22 @@ def versus(sizes: list[int], baseline: str) -> None:
 
 
 def main(argv: list[str]) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("sizes", type=int, nargs="*", default=[1000, 10000], help="robots in the world (N)")
+    what = parser.add_mutually_exclusive_group()
+    what.add_argument("--parts", action="store_true", help="the CPU time of each part of a step")
+    what.add_argument("--baseline", metavar="SO", help="another build's _core.abi3.so, timed in turns with this one")
+    args = parser.parse_args(argv)
     print(machine())
-    baseline = argv[argv.index("--baseline") + 1] if "--baseline" in argv else None
-    sizes = [int(arg) for arg in argv if arg not in ("--parts", "--baseline", baseline)] or [1000, 10000]
-    if baseline is not None:
-        versus(sizes, baseline)
+    if args.baseline is not None:
+        versus(args.sizes, args.baseline)
         return
-    if "--parts" in argv:
-        for n in sizes:
+    if args.parts:
+        for n in args.sizes:
             parts(n)
         return
     rows = []
-    for n in sizes:
+    for n in args.sizes:
         for avoid in (False, True):
             seconds = median_seconds(started(n, avoid)[1], min_time=0.2)
             rows.append([f"{n:,}", "yes" if avoid else "no", show(seconds), f"{n / seconds:,.0f}"])
