@@ -21,8 +21,11 @@ Run::
 ``--baseline`` times instead each run's steps with the installed kernels and with another build of
 them (an older commit's ``dream/_core.abi3.so``; a kernel it lacks is taken from this build), in
 turns of :data:`BLOCK` steps within one run: whole runs on a shared machine wander by a third from
-minute to minute, turns within one run see the same machine. A build's step is the mean over its
-turns past ``--warm-up``.
+minute to minute, turns within one run see the same machine. The turns come in pairs, one of each
+build, in an order drawn at random for each pair: experiments do some work every so many steps
+(voronoi-coverage's cost every 30), and turns that simply alternated gave it all to one build
+(identical builds then differed by up to 1.18x). A build's step is the median of its steps past
+``--warm-up``.
 """
 
 from __future__ import annotations
@@ -77,7 +80,7 @@ BLOCK = 5  #: steps of a turn in --baseline: the built-ins' decision period, so 
 
 # One run whose steps alternate between this build of the kernels and another, BLOCK steps a turn.
 AB_RUN = """
-import json, statistics, sys, time
+import json, random, statistics, sys, time
 sys.path.insert(0, "benches")
 import dream
 import dream.kernels._dispatch as dispatch
@@ -95,20 +98,28 @@ class Older:  # the baseline's kernels, and this build's for those it lacks (add
 
 builds = [dispatch._core, Older(extension(baseline), dispatch._core)]
 spent = [[], []]
+flips = random.Random(0)  # the order of each pair of turns
+order = []
 state = {"last": None, "turn": 0}
+
+def turn(block):  # the build of turn `block` (0, 1, ...): one of each a pair, in the drawn order
+    pair, second = divmod(block, 2)
+    while len(order) <= pair:
+        order.append(flips.random() < 0.5)
+    return int(second != order[pair])
 
 def progress(step, cap):
     now = time.perf_counter()
     done = step - warm_up  # steps past the warm-up, this one included
     if state["last"] is not None and done > 0:
         spent[state["turn"]].append(now - state["last"])
-        if done % block == 0:
-            state["turn"] = 1 - state["turn"]
-            dispatch._core = builds[state["turn"]]
+    if done >= 0:  # the build of the next step
+        state["turn"] = turn(done // block)
+        dispatch._core = builds[state["turn"]]
     state["last"] = now
 
 dream.run(find(name), n=n, steps=steps, backend="fast", swarm=True, progress=progress)
-print(json.dumps({"this": statistics.mean(spent[0]), "baseline": statistics.mean(spent[1])}))
+print(json.dumps({"this": statistics.median(spent[0]), "baseline": statistics.median(spent[1])}))
 """
 
 
