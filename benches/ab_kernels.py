@@ -5,9 +5,10 @@ process and called in turns on the same inputs see the same machine. Each scene 
 alternately twelve times, three calls a turn, and prints the medians, their ratio and whether the
 two answers are the same, to the bit.
 
-Scenes: the rendezvous example's inbox sums (``segment_reduce`` with an index) and HRVO
-(``hrvo_rows``), captured from a swarm run of ``--robots`` robots, and ``validate`` on robots
-0.3 m apart, uniformly at random, at that count and at ten times it.
+Scenes: the rendezvous example's perception (``perceive``), inbox sums (``segment_reduce`` with an
+index) and HRVO (``hrvo_rows``), and voronoi-coverage's cells from the radio (``heard_cells``),
+captured from swarm runs of ``--robots`` robots; ``validate`` on robots 0.3 m apart, uniformly at
+random, at that count and at ten times it; ``unicycle_step``.
 
 Run: ``python benches/ab_kernels.py BEFORE.so AFTER.so [--robots N]``, where each ``.so`` is a
 build's ``dream/_core.abi3.so`` (``git worktree add`` the older commit and build it there).
@@ -29,6 +30,7 @@ import dream
 import dream.kernels._hrvo as hrvo_kernels
 import dream.kernels._neighbours as neighbour_kernels
 import dream.kernels._reduce as reduce_kernels
+import dream.kernels._voronoi as voronoi_kernels
 
 sys.path.insert(0, str(Path(__file__).parent))
 from harness import extension, machine, table  # noqa: E402
@@ -45,12 +47,14 @@ CHECKS = {
 }
 BOUNDS = (-1e9, 1e9, -1e9, 1e9)
 ROUNDS = 12  #: turns of each build per scene
+RENDEZVOUS_KERNELS = ("perceive", "segment_reduce", "hrvo_rows")  #: timed on the rendezvous example's calls
 PAUSE = 2e-4  #: seconds before each call (a run's Python between two kernels)
 
 
 def captured(n: int) -> dict[str, tuple[tuple[Any, ...], dict[str, Any]]]:
     """The last ``perceive``, ``segment_reduce`` (with an index) and ``hrvo_rows`` calls of a swarm
-    run of the rendezvous example, past its robots' staggered start."""
+    run of the rendezvous example, and the last ``heard_cells`` call of one of voronoi-coverage,
+    past their robots' staggered start."""
     calls: dict[str, tuple[tuple[Any, ...], dict[str, Any]]] = {}
 
     def spy(module: ModuleType, name: str, keep: Callable[[tuple[Any, ...]], bool]) -> None:
@@ -73,7 +77,9 @@ def captured(n: int) -> dict[str, tuple[tuple[Any, ...], dict[str, Any]]]:
     spy(neighbour_kernels, "perceive", lambda args: True)
     spy(reduce_kernels, "segment_reduce", lambda args: len(args) > 3 and args[3] is not None)
     spy(hrvo_kernels, "hrvo_rows", lambda args: True)
+    spy(voronoi_kernels, "heard_cells", lambda args: True)
     dream.run(RENDEZVOUS, n=n, swarm=True, backend="fast", steps=36)
+    dream.run("voronoi-coverage", n=n, swarm=True, backend="fast", steps=36)
     return calls
 
 
@@ -117,11 +123,12 @@ def main(argv: list[str]) -> None:
     calls = captured(args.robots)
     rng = np.random.default_rng(0)
     scenes: list[tuple[str, Callable[[ModuleType], Any]]] = []
-    for name in ("perceive", "segment_reduce", "hrvo_rows"):
+    for name, scene in [
+        *((name, "the rendezvous example") for name in RENDEZVOUS_KERNELS),
+        ("heard_cells", "voronoi-coverage"),
+    ]:
         positional, keywords = calls[name]
-        scenes.append(
-            (f"`{name}`: the rendezvous example, {args.robots:,} robots", partial_call(name, positional, keywords))
-        )
+        scenes.append((f"`{name}`: {scene}, {args.robots:,} robots", partial_call(name, positional, keywords)))
     for n in (args.robots, 10 * args.robots):
         poses, commands = scattered(n, rng), np.zeros((2, n))
         scenes.append(

@@ -189,6 +189,18 @@ def test_set_velocities_on_a_subset_keeps_the_others(backend):
     assert moved[0, 2] == pytest.approx(start[0, 2] + 0.033 * np.cos(np.pi) * 0.02)
 
 
+def test_set_velocities_of_every_robot_in_any_order_goes_by_id(backend):
+    """Every robot in id order (a swarm's step) and the same robots in another order command each
+    robot by its id; the caller's array is not kept."""
+    commands = np.array([[0.1, 0.05, -0.1], [0.5, -0.5, 1.0]])
+    backend.set_velocities(np.arange(3), commands)
+    assert_allclose(backend.velocities, commands)
+    commands[0, 0] = 0.0  # changed after the call: not the backend's
+    assert backend.velocities[0, 0] == 0.1
+    backend.set_velocities(np.array([2, 0, 1]), np.array([[0.02, 0.03, 0.04], [0.0, 0.2, 0.3]]))
+    assert_allclose(backend.velocities, [[0.03, 0.04, 0.02], [0.2, 0.3, 0.0]])
+
+
 def test_set_velocities_clips_commands_beyond_the_limits(backend):
     commands = np.array([[1.0, -0.25, 0.1], [10.0, 0.5, -4.0]])
     backend.set_velocities(np.arange(3), commands)

@@ -202,7 +202,7 @@ class CoverageRobot(SwarmRobot):
             self.cells.update(zip(view.ids.tolist(), np.split(cells.vertices, cells.offsets[1:-1]), strict=True))
         carry = rules.momentum(here, last, moving, MOMENTUM)
         wished = rules.approach(here, cells.centroids, GAIN, self.spec.v_max, self.arrival, carry)
-        memory["moving"] = np.any(wished, axis=1)
+        memory["moving"] = rules.nonzero(wished)
         memory["last_x"], memory["last_y"] = here[:, 0], here[:, 1]
         memory["goal_x"], memory["goal_y"] = cells.centroids[:, 0], cells.centroids[:, 1]
         return wished

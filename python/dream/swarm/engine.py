@@ -351,13 +351,13 @@ class Engine:
         """Read the odometry of ``rows`` into :attr:`belief`; a dropped reading leaves the belief as
         it was. Returns which of ``rows`` know their pose (``(k,)`` bool)."""
         at = at_rows(rows, self.n)
-        reading = x[:, at].T
+        reading = x[:, at].T if isinstance(at, slice) else np.take(x, at, axis=1).T
         sigma = math.hypot(self.robot.odometry_noise, 0.0 if faults is None else faults.faults.sensor_noise)
         if sigma > 0:
             reading = reading + sigma * draws.normal(self.seed, draws.ODOMETRY_NOISE, t, rows[:, None], np.arange(3))
         kept = self._kept(t, rows, np.full(len(rows), -1), faults)
         if kept.all():
-            self.belief[at] = reading
+            _put(self.belief, at, reading)
         else:
             self.belief[rows[kept]] = reading[kept]
         return np.isfinite(self.belief[at, 0])
@@ -594,7 +594,9 @@ def _put(values: np.ndarray, at: slice | np.ndarray, rows: np.ndarray) -> None:
 
 def _blocks(values: np.ndarray, width: int) -> np.ndarray:
     """The C-contiguous ``values`` ``(k, ...)`` as ``(k,)`` blocks of ``width`` bytes (a view)."""
-    return values.reshape(len(values), -1).view(np.dtype((np.void, width))).reshape(len(values))
+    return (
+        values.reshape(len(values), math.prod(values.shape[1:])).view(np.dtype((np.void, width))).reshape(len(values))
+    )
 
 
 def _linked(

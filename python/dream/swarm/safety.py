@@ -127,7 +127,7 @@ def _drive_apart(
     engine.dxi[at_rows(rows, n)] = chosen
     out = kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain)
     if robot.halts:  # no wish, no command (the conversion alone turns some robots at full speed)
-        out[:, ~chosen.any(axis=1)] = 0.0
+        out[:, ~rules.nonzero(chosen)] = 0.0
     out = kernels.actuator_limit(out, engine.limits)
     near = None
     if robot.guard is not None:
