@@ -151,6 +151,23 @@ def test_poses_property_does_not_count_as_get_poses(backend):
     backend.step()
 
 
+def test_poses_property_is_a_read_only_snapshot(backend):
+    """``poses`` cannot be written, and a step leaves the poses it gave as they were."""
+    before = backend.poses
+    kept = before.copy()
+    with pytest.raises(ValueError, match="read-only"):
+        before[0, 0] = 1.0
+    backend.get_poses()
+    backend.set_velocities(np.arange(3), np.array([[0.1, 0.1, 0.1], [0.5, 0.5, 0.5]]))
+    backend.step()
+    assert_array_equal(before, kept)
+    assert not np.array_equal(backend.poses, kept)
+    writable = backend.get_poses()  # the Robotarium's call gives an array of the caller's own
+    writable[0, 0] = 9.0
+    assert backend.poses[0, 0] != 9.0
+    backend.step()
+
+
 @pytest.mark.parametrize("bad", [3, 7, -1])
 def test_set_velocities_rejects_ids_out_of_range(backend, bad):
     with pytest.raises(IndexError, match=f"robot id {bad}"):
