@@ -67,11 +67,13 @@ result = dream.run(find(name), n=n, steps=steps, backend="fast", swarm=True, pro
 profile.disable()
 gaps = [b - a for a, b in zip(stamps, stamps[1:])]
 own = sorted(((row[2], f[2]) for f, row in pstats.Stats(profile).stats.items()), reverse=True) if top else []
+rust = sum(seconds for seconds, what in own if what.startswith("<built-in method dream._core."))
 print(json.dumps({
     "n": result.n, "steps": result.steps, "step_s": statistics.mean(gaps[warm_up:]),
     "setup_s": stamps[0] - start - gaps[0],
     "rss": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, "collisions": result.collisions,
     "own": [(what, seconds / len(gaps[warm_up:])) for seconds, what in own[:top]],
+    "rust_s": rust / len(gaps[warm_up:]), "rest_s": (sum(seconds for seconds, _ in own) - rust) / len(gaps[warm_up:]),
 }))
 """
 
@@ -197,7 +199,8 @@ def main() -> None:
         type=int,
         default=0,
         metavar="K",
-        help="also profile the steps the mean covers (cProfile) and print the K functions of most own time",
+        help="also profile the steps the mean covers (cProfile): the Rust kernels' own time and the rest's, and "
+        "the K functions of most own time",
     )
     parser.add_argument("--baseline", metavar="SO", help="another build's _core.abi3.so, timed in turns with this one")
     args = parser.parse_args()
@@ -238,9 +241,13 @@ def main() -> None:
                 )
                 if args.breakdown:
                     parts = ", ".join(f"{short(what)} {seconds * 1e3:,.1f}" for what, seconds in got["own"])
-                    breakdowns.append(f"- {name}, {n:,} robots, {shown} threads: {parts}")
+                    totals = f"Rust kernels {got['rust_s'] * 1e3:,.1f}, the rest {got['rest_s'] * 1e3:,.1f}"
+                    breakdowns.append(f"- {name}, {n:,} robots, {shown} threads ({totals}): {parts}")
     if breakdowns:
-        print("\nOwn time per step (ms, cProfile of the steps the mean covers):")
+        print(
+            "\nOwn time per step (ms, cProfile of the steps the mean covers; the rest, Python and NumPy, runs"
+            " on one core whatever the threads: it bounds the speed-up on many):"
+        )
         print("\n".join(breakdowns))
 
 
