@@ -3,51 +3,103 @@
 //! Bindings take arrays as plain Python objects and convert them here, so that a wrong
 //! dtype or dimensionality is a `ValueError` naming the argument, like a wrong shape.
 
-use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
 use crate::errors::{shape_error, value_error, PyDreamResult};
 
-/// `read(values, shape)` on the float64 (or int64, via `T`) values of `object` in row-major
-/// order: borrowed from a C-ordered array (no copy), copied from any other.
-fn with_values<T: numpy::Element + Copy, R>(
+/// An array's values in row-major order: borrowed from a C-ordered array for as long as this
+/// lives (no copy: a million robots' columns are megabytes a call, copied on one core), copied
+/// from any other. Dereferences to the values.
+pub struct Values<'py, T: numpy::Element> {
+    borrowed: Option<PyReadonlyArrayDyn<'py, T>>,
+    copied: Vec<T>,
+}
+
+impl<T: numpy::Element + Copy> Values<'_, T> {
+    /// The values as a vector of their own (copied if borrowed).
+    pub fn into_vec(self) -> Vec<T> {
+        match self.borrowed {
+            Some(_) => self.to_vec(),
+            None => self.copied,
+        }
+    }
+}
+
+impl<T: numpy::Element> std::ops::Deref for Values<'_, T> {
+    type Target = [T];
+
+    fn deref(&self) -> &[T] {
+        match &self.borrowed {
+            // Borrowed only where `as_slice` succeeded (see `borrow_values`).
+            Some(array) => array.as_slice().unwrap_or_default(),
+            None => &self.copied,
+        }
+    }
+}
+
+/// The float64 (or int64, bool, via `T`) values of `object` in row-major order, with its shape.
+fn borrow_values<'py, T: numpy::Element + Copy>(
     arg: &str,
-    object: &Bound<'_, PyAny>,
+    object: &Bound<'py, PyAny>,
     kind: &str,
-    read: impl FnOnce(&[T], &[usize]) -> PyDreamResult<R>,
-) -> PyDreamResult<R> {
+) -> PyDreamResult<(Values<'py, T>, Vec<usize>)> {
     let array = object
         .cast::<PyArrayDyn<T>>()
         .map_err(|_| value_error(format!("`{arg}` must be a NumPy array of {kind}")))?;
     let readonly = array.try_readonly().map_err(|e| value_error(format!("`{arg}`: {e}")))?;
     let shape = readonly.shape().to_vec();
     // `as_slice` also accepts Fortran order, whose memory is not row-major: only trust C order.
-    match readonly.as_slice() {
-        Ok(slice) if readonly.is_c_contiguous() => read(slice, &shape),
-        _ => read(&readonly.as_array().iter().copied().collect::<Vec<T>>(), &shape),
-    }
+    let values = if readonly.is_c_contiguous() && readonly.as_slice().is_ok() {
+        Values {
+            borrowed: Some(readonly),
+            copied: Vec::new(),
+        }
+    } else {
+        let copied = readonly.as_array().iter().copied().collect();
+        Values { borrowed: None, copied }
+    };
+    Ok((values, shape))
 }
 
-/// The values of `object` in row-major order, with its shape.
+/// `read(values, shape)` on the values of `object` (see [`borrow_values`]).
+fn with_values<T: numpy::Element + Copy, R>(
+    arg: &str,
+    object: &Bound<'_, PyAny>,
+    kind: &str,
+    read: impl FnOnce(&[T], &[usize]) -> PyDreamResult<R>,
+) -> PyDreamResult<R> {
+    let (values, shape) = borrow_values(arg, object, kind)?;
+    read(&values, &shape)
+}
+
+/// The values of `object` in row-major order, copied, with its shape.
 fn values_of<T: numpy::Element + Copy>(
     arg: &str,
     object: &Bound<'_, PyAny>,
     kind: &str,
 ) -> PyDreamResult<(Vec<T>, Vec<usize>)> {
-    with_values(arg, object, kind, |values, shape| Ok((values.to_vec(), shape.to_vec())))
+    let (values, shape) = borrow_values(arg, object, kind)?;
+    Ok((values.into_vec(), shape))
 }
 
 fn float_values(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<(Vec<f64>, Vec<usize>)> {
     values_of::<f64>(arg, object, "float64")
 }
 
-/// Copies a `(rows, n)` float64 array into a row-major vector; returns it with `n`.
-pub fn rows_of(arg: &str, object: &Bound<'_, PyAny>, rows: usize) -> PyDreamResult<(Vec<f64>, usize)> {
-    let (values, shape) = float_values(arg, object)?;
+/// A `(rows, n)` float64 array's values, row-major and borrowed where it can be (see
+/// [`Values`]), with `n`.
+pub fn rows_in<'py>(arg: &str, object: &Bound<'py, PyAny>, rows: usize) -> PyDreamResult<(Values<'py, f64>, usize)> {
+    let (values, shape) = borrow_values(arg, object, "float64")?;
     if shape.len() != 2 || shape[0] != rows {
         return Err(shape_error(arg, &format!("({rows}, n)"), &shape));
     }
     Ok((values, shape[1]))
+}
+
+/// Copies a `(rows, n)` float64 array into a row-major vector; returns it with `n`.
+pub fn rows_of(arg: &str, object: &Bound<'_, PyAny>, rows: usize) -> PyDreamResult<(Vec<f64>, usize)> {
+    rows_in(arg, object, rows).map(|(values, n)| (values.into_vec(), n))
 }
 
 /// Copies a `(k, w)` float64 array into a row-major vector; returns it with `w`.
@@ -69,14 +121,37 @@ pub fn points_of<const W: usize>(arg: &str, object: &Bound<'_, PyAny>) -> PyDrea
     })
 }
 
-/// Copies a 1-D float64 array, checking its length when `len` is given.
-pub fn vector_of(arg: &str, object: &Bound<'_, PyAny>, len: Option<usize>) -> PyDreamResult<Vec<f64>> {
-    let (values, shape) = float_values(arg, object)?;
+/// The `W` columns of an `(n, W)` float64 array, each a vector (one pass over the array, read in
+/// place where it can be).
+pub fn columns_of<const W: usize>(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<[Vec<f64>; W]> {
+    with_values(arg, object, "float64", |values: &[f64], shape| {
+        if shape.len() != 2 || shape[1] != W {
+            return Err(shape_error(arg, &format!("(n, {W})"), shape));
+        }
+        let mut columns: [Vec<f64>; W] = std::array::from_fn(|_| Vec::with_capacity(shape[0]));
+        for row in values.chunks_exact(W) {
+            for (column, &value) in columns.iter_mut().zip(row) {
+                column.push(value);
+            }
+        }
+        Ok(columns)
+    })
+}
+
+/// A 1-D float64 array's values, borrowed where it can be (see [`Values`]), checking its length
+/// when `len` is given.
+pub fn vector_in<'py>(arg: &str, object: &Bound<'py, PyAny>, len: Option<usize>) -> PyDreamResult<Values<'py, f64>> {
+    let (values, shape) = borrow_values(arg, object, "float64")?;
     if shape.len() != 1 || len.is_some_and(|want| shape[0] != want) {
         let expected = len.map_or("(n,)".to_string(), |want| format!("({want},)"));
         return Err(shape_error(arg, &expected, &shape));
     }
     Ok(values)
+}
+
+/// Copies a 1-D float64 array, checking its length when `len` is given.
+pub fn vector_of(arg: &str, object: &Bound<'_, PyAny>, len: Option<usize>) -> PyDreamResult<Vec<f64>> {
+    vector_in(arg, object, len).map(Values::into_vec)
 }
 
 /// Copies a 1-D int64 array (CSR offsets and indices).

@@ -5,7 +5,7 @@ use dream_core::geom::Arena;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
-use crate::arrays::{rows_of, same_count, vector_of};
+use crate::arrays::{rows_in, rows_of, same_count, vector_in};
 use crate::errors::PyDreamResult;
 
 fn into_rows<'py>(py: Python<'py>, values: Vec<f64>, rows: usize, n: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
@@ -20,10 +20,11 @@ pub fn unicycle_step<'py>(
     velocities: Bound<'py, PyAny>,
     dt: f64,
 ) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
-    let (mut p, n) = rows_of("poses", &poses, 3)?;
-    let (u, m) = rows_of("velocities", &velocities, 2)?;
+    let (mut p, n) = rows_of("poses", &poses, 3)?; // a copy: the new poses
+    let (u, m) = rows_in("velocities", &velocities, 2)?;
     same_count("velocities", n, m, 2)?;
-    py.detach(|| dynamics::unicycle_step(&mut p, &u, n, dt))?;
+    let u: &[f64] = &u;
+    py.detach(|| dynamics::unicycle_step(&mut p, u, n, dt))?;
     Ok(into_rows(py, p, 3, n)?)
 }
 
@@ -77,9 +78,10 @@ pub fn validate<'py>(
     collider_offset: f64,
     boundary_per_iteration: bool,
 ) -> PyDreamResult<(u64, u64, u64, Bound<'py, PyArray1<i64>>)> {
-    let (p, n) = rows_of("poses", &poses, 3)?;
-    let (u, m) = rows_of("velocities", &velocities, 2)?;
+    let (p, n) = rows_in("poses", &poses, 3)?;
+    let (u, m) = rows_in("velocities", &velocities, 2)?;
     same_count("velocities", n, m, 2)?;
+    let (p, u): (&[f64], &[f64]) = (&p, &u);
     let arena = Arena::new(bounds.0, bounds.1, bounds.2, bounds.3)?;
     let wheels = Wheels::new(wheel_radius, base_length, max_wheel)?;
     let boundary = if boundary_per_iteration {
@@ -88,7 +90,7 @@ pub fn validate<'py>(
         BoundaryCount::Robots
     };
     let checks = Checks::new(diameter, collider_offset, boundary)?;
-    let (counts, robots) = py.detach(|| dynamics::validate_each(&p, &u, n, &arena, &checks, &wheels))?;
+    let (counts, robots) = py.detach(|| dynamics::validate_each(p, u, n, &arena, &checks, &wheels))?;
     let robots: Vec<i64> = robots.into_iter().map(|i| i as i64).collect();
     Ok((
         counts.boundary,
@@ -138,9 +140,10 @@ pub fn dxu_to_dxi<'py>(
     headings: Bound<'py, PyAny>,
     projection: f64,
 ) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
-    let (u, n) = rows_of("dxu", &dxu, 2)?;
-    let theta = vector_of("headings", &headings, Some(n))?;
-    let dxi = py.detach(|| dynamics::dxu_to_dxi(&u, &theta, n, projection))?;
+    let (u, n) = rows_in("dxu", &dxu, 2)?;
+    let theta = vector_in("headings", &headings, Some(n))?;
+    let (u, theta): (&[f64], &[f64]) = (&u, &theta);
+    let dxi = py.detach(|| dynamics::dxu_to_dxi(u, theta, n, projection))?;
     Ok(into_rows(py, dxi, 2, n)?)
 }
 

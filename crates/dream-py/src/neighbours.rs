@@ -6,7 +6,7 @@ use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
-use crate::arrays::{count_of, flags_of, indices_of, points_of, vector_of, with_indices};
+use crate::arrays::{columns_of, count_of, flags_of, indices_of, points_of, vector_in, vector_of, with_indices};
 use crate::errors::{value_error, PyDreamResult};
 
 type CsrArrays<'py> = (
@@ -100,13 +100,13 @@ pub fn perceive<'py>(
     talking: Option<Bound<'py, PyAny>>,
     carried: Option<Vec<Bound<'py, PyAny>>>,
 ) -> PyDreamResult<(Bound<'py, PyTuple>, CsrArrays<'py>)> {
-    let p = points_of::<2>("positions", &positions)?;
-    let n = p.len();
-    let headings = vector_of("headings", &headings, Some(n))?;
+    let (xs, ys) = columns_of::<2>("positions", &positions).map(|[xs, ys]| (xs, ys))?;
+    let n = xs.len();
+    let headings = vector_in("headings", &headings, Some(n))?;
+    let carried = carried.unwrap_or_default();
     let carried = carried
-        .unwrap_or_default()
         .iter()
-        .map(|column| vector_of("carried", column, Some(n)))
+        .map(|column| vector_in("carried", column, Some(n)))
         .collect::<PyDreamResult<Vec<_>>>()?;
     let rows = indices_of("rows", &rows)?;
     let talking = talking.map(|t| flags_of("talking", &t, n)).transpose()?;
@@ -116,9 +116,9 @@ pub fn perceive<'py>(
         _ => return Err(value_error("give both `radio_range` and `talking`, or neither".into())),
     };
     let sight = sight.map(|(range, fov, direction)| Sight { range, fov, direction });
-    let (xs, ys): (Vec<f64>, Vec<f64>) = p.iter().map(|q| (q[0], q[1])).unzip();
     let columns: Vec<&[f64]> = carried.iter().map(|c| &c[..]).collect();
-    let (seen, heard) = py.detach(|| core_perceive(&xs, &ys, &headings, &rows, sight, radio, &columns))?;
+    let headings: &[f64] = &headings;
+    let (seen, heard) = py.detach(|| core_perceive(&xs, &ys, headings, &rows, sight, radio, &columns))?;
     let Perceived {
         offsets,
         ids,
