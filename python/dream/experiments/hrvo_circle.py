@@ -247,7 +247,7 @@ class CircleRobot(SwarmRobot):
 
     def goals(self, ids: np.ndarray, heading: np.ndarray) -> np.ndarray:
         """The goals ``(k, 2)`` robots ``ids`` head for (``heading``: 0, 1 or 2; see :func:`circle_goals`)."""
-        return self.layout.goals[ids] * np.where(heading == 1, -1.0, 1.0)[:, None]
+        return np.take(self.layout.goals, ids, axis=0) * np.where(heading == 1, -1.0, 1.0)[:, None]
 
     def decide(self, view: View) -> np.ndarray:
         ids, here, memory, seen, layout = view.ids, view.pose[:, :2], view.memory, view.seen, self.layout

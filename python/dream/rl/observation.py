@@ -97,7 +97,7 @@ class Layout:
         pose = view.pose
         out[:, at["pose"]] = np.column_stack((pose[:, :2], np.cos(pose[:, 2]), np.sin(pose[:, 2])))
         if goals is not None:
-            out[:, at["goal"]] = goals[view.ids] - pose[:, :2]
+            out[:, at["goal"]] = np.take(goals, view.ids, axis=0) - pose[:, :2]
         if not k:
             return out
         seen = view.seen

@@ -158,13 +158,16 @@ def roundabout_aim(positions: Any, goals: Any, semi_axes: tuple[float, float], i
     t = -(qx * wx + qy * wy) / length2
     closest = q + np.clip(t, 0.0, 1.0)[..., None] * way
     crosses = (t > 0.0) & (np.hypot(closest[..., 0], closest[..., 1]) < island)
-    # The trigonometry only for the robots that go round (element by element, as for one robot).
-    q = q[crosses]
-    radii = np.hypot(q[..., 0], q[..., 1])
+    # The trigonometry only for the robots that go round (element by element, as for one robot),
+    # their coordinates read and written one column at a time (NumPy moves a masked row of two
+    # values one call a row).
+    x, y = q[..., 0][crosses], q[..., 1][crosses]
+    radii = np.hypot(x, y)
     # The counter-clockwise tangent point from q is acos(island / r) past q's own angle.
     turns = np.arccos(np.minimum(island / np.maximum(radii, 1e-300), 1.0)) + ROUNDABOUT_LEAD
-    angles = np.arctan2(q[..., 1], q[..., 0]) + turns
-    g[crosses] = island * np.stack((np.cos(angles), np.sin(angles)), axis=-1)
+    angles = np.arctan2(y, x) + turns
+    g[..., 0][crosses] = island * np.cos(angles)
+    g[..., 1][crosses] = island * np.sin(angles)
     return g * scale
 
 

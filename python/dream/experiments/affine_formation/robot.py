@@ -154,7 +154,7 @@ class FormationRobot(SwarmRobot):
         """The points ``(k, 3, 2)`` (m) where the plan has the formation's leaders head now, for the
         leaders ``ids`` ``(k,)`` whose memory rows ``memory`` holds (before its first plan: their
         nominal places)."""
-        nominal = self.nominal[:LEADERS] + self.centres[ids // MEMBERS][:, None, :]
+        nominal = self.nominal[:LEADERS] + np.take(self.centres, ids // MEMBERS, axis=0)[:, None, :]
         start = np.where(np.isnan(memory["start"]), nominal, memory["start"])
         goals = np.where(np.isnan(memory["goals"]), nominal, memory["goals"])
         return rules.morph(start, goals, memory["decisions"], MORPH)
@@ -168,7 +168,10 @@ class FormationRobot(SwarmRobot):
         moved = phase > memory["phase"][rows]
         changed = (silent != memory["silent"][rows]).any(axis=1)
         memory["phase"][rows], memory["silent"][rows] = np.maximum(phase, memory["phase"][rows]), silent
-        places = self.plan_places[memory["phase"][rows]] + self.centres[ids // MEMBERS][:, None, :]
+        places = (
+            np.take(self.plan_places, memory["phase"][rows], axis=0)
+            + np.take(self.centres, ids // MEMBERS, axis=0)[:, None, :]
+        )
         shift = np.where(moved | changed, 0.0, memory["shift"][rows])
         for r in np.flatnonzero((moved | changed) & silent.any(axis=1)):
             shift[r] = self.clearing(places[r], silent[r].astype(bool), memory["heard"][rows[r]])
@@ -195,7 +198,7 @@ class FormationRobot(SwarmRobot):
         formation to be, after checking what they hear against what they see."""
         memory, ids = view.memory, view.ids[rows]
         here = view.pose[rows, :2]
-        bounds = self.tiles[ids // MEMBERS]
+        bounds = np.take(self.tiles, ids // MEMBERS, axis=0)
         seen = view.seen
         owner = seen.owner
         # Robots beyond its tile belong to other formations: neither claimed nor liars.
@@ -209,7 +212,7 @@ class FormationRobot(SwarmRobot):
         for key, value in state.items():
             memory[key][rows] = value
         known = positions(state["heard"], alive, state["plans"], state["liar"].astype(bool), state["liar_at"], sensed)
-        pull = rules.stress(here, known, WEIGHTS[ids % MEMBERS])
+        pull = rules.stress(here, known, np.take(WEIGHTS, ids % MEMBERS, axis=0))
         return rules.capped(-GAIN * pull, self.spec.v_max)
 
 
