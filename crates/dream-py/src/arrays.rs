@@ -1,7 +1,8 @@
-//! Checked copies of NumPy arrays into Rust values: the only place that looks at shapes.
+//! Checked reads of NumPy arrays into Rust values: the only place that looks at shapes.
 //!
-//! Bindings take arrays as plain Python objects and convert them here, so that a wrong
-//! dtype or dimensionality is a `ValueError` naming the argument, like a wrong shape.
+//! Bindings take arrays as plain Python objects and read them here, so that a wrong dtype or
+//! dimensionality is a `ValueError` naming the argument, like a wrong shape. The `*_in` readers
+//! borrow a C-ordered array's values in place ([`Values`]); the `*_of` readers copy them.
 
 use numpy::{PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
