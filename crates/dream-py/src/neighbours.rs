@@ -30,14 +30,13 @@ pub fn neighbours<'py>(
     max_neighbours: Option<i64>,
     rows: Option<Bound<'py, PyAny>>,
 ) -> PyDreamResult<CsrArrays<'py>> {
-    let points = points_of::<2>("positions", &positions)?;
+    let [xs, ys] = columns_of::<2>("positions", &positions)?;
     let max_neighbours = max_neighbours.map(|k| count_of("max_neighbours", k)).transpose()?;
     let headings = headings
-        .map(|h| vector_of("headings", &h, Some(points.len())))
+        .map(|h| vector_of("headings", &h, Some(xs.len())))
         .transpose()?;
-    let rows = rows.map(|r| flags_of("rows", &r, points.len())).transpose()?;
+    let rows = rows.map(|r| flags_of("rows", &r, xs.len())).transpose()?;
     let csr = py.detach(|| {
-        let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|p| (p[0], p[1])).unzip();
         let view = headings.as_deref().map(|headings| FieldOfView {
             headings,
             direction,
@@ -100,7 +99,7 @@ pub fn perceive<'py>(
     talking: Option<Bound<'py, PyAny>>,
     carried: Option<Vec<Bound<'py, PyAny>>>,
 ) -> PyDreamResult<(Bound<'py, PyTuple>, CsrArrays<'py>)> {
-    let (xs, ys) = columns_of::<2>("positions", &positions).map(|[xs, ys]| (xs, ys))?;
+    let [xs, ys] = columns_of::<2>("positions", &positions)?;
     let n = xs.len();
     let headings = vector_in("headings", &headings, Some(n))?;
     let carried = carried.unwrap_or_default();
@@ -156,14 +155,10 @@ pub fn linked<'py>(
     positions: Option<Bound<'py, PyAny>>,
 ) -> PyDreamResult<CsrArrays<'py>> {
     let rows = indices_of("rows", &rows)?;
-    let coordinates = positions
-        .map(|p| -> PyDreamResult<(Vec<f64>, Vec<f64>)> {
-            Ok(points_of::<2>("positions", &p)?.iter().map(|q| (q[0], q[1])).unzip())
-        })
-        .transpose()?;
-    let n = coordinates.as_ref().map_or(talking.len()?, |(xs, _)| xs.len());
+    let coordinates = positions.map(|p| columns_of::<2>("positions", &p)).transpose()?;
+    let n = coordinates.as_ref().map_or(talking.len()?, |[xs, _]| xs.len());
     let talking = flags_of("talking", &talking, n)?;
-    let at = coordinates.as_ref().map(|(xs, ys)| (&xs[..], &ys[..]));
+    let at = coordinates.as_ref().map(|[xs, ys]| (&xs[..], &ys[..]));
     let heard = with_indices("indptr", &indptr, |indptr| {
         with_indices("indices", &indices, |indices| {
             Ok(py.detach(|| core_linked(at, (indptr, indices), &rows, &talking))?)
