@@ -399,8 +399,14 @@ def test_a_signal_during_a_frame_write_waits_until_the_frame_is_written():
     import signal
 
     steps = []
-    with pytest.raises(KeyboardInterrupt), video._signals_deferred():
-        os.kill(os.getpid(), signal.SIGINT)
-        steps.append("after the signal")  # the block goes on
-    assert steps == ["after the signal"]
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored
+    # Python's own handler, whatever the process inherited: a job started in the background
+    # (`cmd &` in a script) ignores SIGINT, and the signal would then never arrive.
+    inherited = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt), video._signals_deferred():
+            os.kill(os.getpid(), signal.SIGINT)
+            steps.append("after the signal")  # the block goes on
+        assert steps == ["after the signal"]
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored
+    finally:
+        signal.signal(signal.SIGINT, inherited)
