@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import operator
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -21,8 +22,26 @@ def as_array(value: Any, name: str, shape: tuple[int | None, ...]) -> FloatArray
     ValueError
         If the shape differs (the message shows expected and actual shapes) or a value is NaN/inf.
     """
+    array = as_shaped(value, name, shape, np.ascontiguousarray)
+    if not all_finite(array):
+        bad = np.argwhere(~np.isfinite(array))[0]
+        raise ValueError(f"`{name}` contains a non-finite value (NaN or inf) at index {tuple(int(i) for i in bad)}")
+    return array
+
+
+def as_shaped(
+    value: Any, name: str, shape: tuple[int | None, ...], convert: Callable[..., Any] = np.asarray
+) -> FloatArray:
+    """``value`` as a float64 array of ``shape`` (``None`` = any length) by ``convert``
+    (:func:`numpy.asarray`: in the layout it has, no copy of a float64 array), its values unchecked.
+
+    Raises
+    ------
+    ValueError
+        If it is no float array, or its shape differs (the message shows expected and actual shapes).
+    """
     try:
-        array = np.ascontiguousarray(value, dtype=np.float64)
+        array: FloatArray = convert(value, dtype=np.float64)
     except (TypeError, ValueError) as err:
         raise ValueError(f"`{name}` must be a float array of shape {_show(shape)}: {err}") from None
     fits = array.shape == shape or (
@@ -30,9 +49,6 @@ def as_array(value: Any, name: str, shape: tuple[int | None, ...]) -> FloatArray
     )
     if not fits:
         raise ValueError(f"`{name}` must have shape {_show(shape)}, got {array.shape}")
-    if not all_finite(array):
-        bad = np.argwhere(~np.isfinite(array))[0]
-        raise ValueError(f"`{name}` contains a non-finite value (NaN or inf) at index {tuple(int(i) for i in bad)}")
     return array
 
 

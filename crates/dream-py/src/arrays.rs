@@ -57,7 +57,18 @@ fn borrow_values<'py, T: numpy::Element + Copy>(
             copied: Vec::new(),
         }
     } else {
-        let copied = readonly.as_array().iter().copied().collect();
+        // Lane by lane: a lane's strided iterator is a plain loop, where the whole array's
+        // iterator works out every element's index (a transposed (2, 1,000,000) array copied
+        // 2.5 times slower so).
+        let view = readonly.as_array();
+        let mut copied = Vec::with_capacity(view.len());
+        if view.ndim() == 0 {
+            copied.extend(view.iter().copied());
+        } else {
+            for lane in view.rows() {
+                copied.extend(lane.iter().copied());
+            }
+        }
         Values { borrowed: None, copied }
     };
     Ok((values, shape))

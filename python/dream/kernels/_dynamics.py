@@ -8,7 +8,7 @@ import numpy as np
 
 import dream._reference as _reference
 from dream._checks import FloatArray, all_finite, as_array, as_poses, check_finite
-from dream.kernels._dispatch import implementation
+from dream.kernels._dispatch import implementation, kernel_input
 from dream.specs import GRITSBOT, ROBOTARIUM, RPS, ArenaSpec, RobotSpec, SimulatorSpec
 
 
@@ -36,8 +36,8 @@ def unicycle_step(poses: Any, velocities: Any, dt: float = RPS.time_step) -> Flo
         A non-finite pose or command, ``dt`` not finite and > 0, or a ``dt`` so large that a
         pose overflows (the message names the robot).
     """
-    p = as_poses(poses)
-    u = _commands(velocities, "velocities", p.shape[1])
+    p = kernel_input(poses, "poses", (3, None))
+    u = kernel_input(velocities, "velocities", (2, p.shape[1]))
     if not (np.isfinite(dt) and dt > 0):
         raise ValueError(f"`dt` must be finite and > 0, got {dt}")
     out: FloatArray = implementation("unicycle_step")(p, u, dt)
@@ -84,8 +84,8 @@ def validate_each(
 ) -> tuple[Violations, np.ndarray]:
     """:func:`validate`'s counts and the robots in a collision ``(m,)`` int64, ascending (the robots
     of the pairs counted, :func:`colliding`'s), from the same search."""
-    p = as_poses(poses)
-    u = _commands(velocities, "velocities", p.shape[1])
+    p = kernel_input(poses, "poses", (3, None))
+    u = kernel_input(velocities, "velocities", (2, p.shape[1]))
     counts = implementation("validate")(
         p,
         u,
@@ -117,8 +117,8 @@ def dxi_to_dxu(dxi: Any, poses: Any, vel_gain: float = 0.8, ang_gain: float = 3.
     ValueError
         A non-finite velocity, pose or gain (naming it), or shapes that do not match.
     """
-    d = _commands(dxi, "dxi")
-    p = as_poses(poses, n=d.shape[1])
+    d = kernel_input(dxi, "dxi", (2, None))
+    p = kernel_input(poses, "poses", (3, d.shape[1]))
     gains = check_finite(vel_gain, "vel_gain"), check_finite(ang_gain, "ang_gain")
     return implementation("dxi_to_dxu")(d, p, *gains)
 
@@ -134,15 +134,15 @@ def dxu_to_dxi(dxu: Any, headings: Any, projection: float) -> FloatArray:
     ValueError
         A non-finite command, heading or ``projection`` (naming it), or shapes that do not match.
     """
-    u = _commands(dxu, "dxu")
-    theta = as_array(headings, "headings", (u.shape[1],))
+    u = kernel_input(dxu, "dxu", (2, None))
+    theta = kernel_input(headings, "headings", (u.shape[1],))
     return implementation("dxu_to_dxi")(u, theta, check_finite(projection, "projection"))
 
 
 def actuator_limit(dxu: Any, robot: RobotSpec = GRITSBOT) -> FloatArray:
     """Commands ``(2, n)`` within the robot's limits; linear speed is sacrificed before turning."""
     return implementation("actuator_limit")(
-        _commands(dxu, "dxu"),
+        kernel_input(dxu, "dxu", (2, None)),
         max_linear=robot.v_max,
         max_angular=robot.w_max,
         wheel_radius=robot.wheel_radius,

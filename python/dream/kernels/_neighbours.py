@@ -9,7 +9,7 @@ import numpy as np
 
 import dream._reference as _reference
 from dream._checks import FloatArray, as_array, as_flags, as_offsets, check_nonnegative, check_robot_id
-from dream.kernels._dispatch import implementation
+from dream.kernels._dispatch import implementation, kernel_input
 
 
 def neighbours(
@@ -138,9 +138,9 @@ def perceive(
     (each ``(n,)``, one value per robot, NaN passed on: the velocities a movement sensor reports,
     say), its values at the robots seen. A row does not depend on which other rows are asked.
     """
-    p = as_array(positions, "positions", (None, 2))
+    p = kernel_input(positions, "positions", (None, 2))
     n = p.shape[0]
-    h = as_array(headings, "headings", (n,))
+    h = kernel_input(headings, "headings", (n,))
     asked = _asked(rows, n)
     if sight is not None:
         check_nonnegative(sight[0], "sensor range")
