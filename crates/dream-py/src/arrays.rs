@@ -133,21 +133,28 @@ pub fn points_of<const W: usize>(arg: &str, object: &Bound<'_, PyAny>) -> PyDrea
     })
 }
 
-/// The `W` columns of an `(n, W)` float64 array, each a vector (one pass over the array, read in
-/// place where it can be).
+/// The `W` columns of an `(n, W)` float64 array, each a vector: a block copy of a column that lies
+/// contiguous (Fortran order: a transposed `(W, n)` array, as poses' rows `x[:2].T`), else a
+/// strided pass over it.
 pub fn columns_of<const W: usize>(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<[Vec<f64>; W]> {
-    with_values(arg, object, "float64", |values: &[f64], shape| {
-        if shape.len() != 2 || shape[1] != W {
-            return Err(shape_error(arg, &format!("(n, {W})"), shape));
+    let array = object
+        .cast::<PyArrayDyn<f64>>()
+        .map_err(|_| value_error(format!("`{arg}` must be a NumPy array of float64")))?;
+    let readonly = array.try_readonly().map_err(|e| value_error(format!("`{arg}`: {e}")))?;
+    let view = readonly.as_array();
+    let Ok(view) = view.into_dimensionality::<numpy::ndarray::Ix2>() else {
+        return Err(shape_error(arg, &format!("(n, {W})"), readonly.shape()));
+    };
+    if view.shape()[1] != W {
+        return Err(shape_error(arg, &format!("(n, {W})"), view.shape()));
+    }
+    Ok(std::array::from_fn(|k| {
+        let column = view.column(k);
+        match column.as_slice() {
+            Some(values) => values.to_vec(),
+            None => column.iter().copied().collect(),
         }
-        let mut columns: [Vec<f64>; W] = std::array::from_fn(|_| Vec::with_capacity(shape[0]));
-        for row in values.chunks_exact(W) {
-            for (column, &value) in columns.iter_mut().zip(row) {
-                column.push(value);
-            }
-        }
-        Ok(columns)
-    })
+    }))
 }
 
 /// A 1-D float64 array's values, borrowed where it can be (see [`Values`]), checking its length
