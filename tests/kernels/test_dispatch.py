@@ -100,3 +100,23 @@ def test_hrvo_planner_refuses_bad_input_alike_on_both_paths(monkeypatch, name, r
         monkeypatch.setattr(_dispatch, "_core", core)
         with pytest.raises(ValueError, match=f"^{message}$"):
             kernels.HrvoPlanner().velocity(**given)
+
+
+@pytest.mark.parametrize("core", [None, _core])
+def test_kernel_input_is_read_in_place_by_the_core_and_checked_either_way(monkeypatch, core):
+    monkeypatch.setattr(_dispatch, "_core", core)
+    poses = np.random.default_rng(0).uniform(-1.0, 1.0, (5, 3)).T  # (3, 5), Fortran order
+    got = _dispatch.kernel_input(poses, "poses", (3, None))
+    assert np.array_equal(got, poses)
+    # The core's bindings read any layout: no copy. The reference gets a C-contiguous copy.
+    assert np.shares_memory(got, poses) == (core is not None)
+    assert core is not None or got.flags.c_contiguous
+    with pytest.raises(ValueError, match=r"`poses` must have shape \(3, n\)"):
+        _dispatch.kernel_input(poses.T, "poses", (3, None))
+    bad = poses.copy(order="F")
+    bad[1, 3] = np.nan
+    # A non-finite value is refused, naming the argument: by the wrapper or by the Rust binding.
+    with pytest.raises(ValueError, match=r"`poses` contains a non-finite value"):
+        kernels.unicycle_step(bad, np.zeros((2, 5)), 0.033)
+    with pytest.raises(ValueError, match=r"`positions` contains a non-finite value"):
+        kernels.perceive(bad[:2].T, bad[2], [0, 1], radio_range=1.0, talking=np.ones(5, bool))
