@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 use std::ops::Range;
 
-use crate::parallel::map_range;
+use crate::parallel::{map_range, worth_spreading, TASK_ITEMS};
 
 /// Points bucketed by cell; a cell's points are contiguous in `members`, in increasing index.
 #[derive(Debug, Clone)]
@@ -70,94 +70,92 @@ impl Grid {
     }
 
     fn build(xs: &[f64], ys: &[f64], cell: f64, loose: bool) -> Self {
-        let keys: Vec<(i64, i64)> = map_range(xs.len(), 3.0, |i| cell_of(xs[i], ys[i], cell));
-        let (mut x0, mut y0, mut x1, mut y1) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
-        for &(cx, cy) in &keys {
-            x0 = x0.min(cx);
-            y0 = y0.min(cy);
-            x1 = x1.max(cx);
-            y1 = y1.max(cy);
-        }
+        let n = xs.len();
+        let key = |i: usize| cell_of(xs[i], ys[i], cell);
+        // `cell_of` grows with each coordinate, so the corner cells are those of the least and
+        // the greatest coordinates: no table of every point's cell (16 bytes a point) to scan.
+        let (low_x, high_x) = extent(xs);
+        let (low_y, high_y) = extent(ys);
+        let ((x0, y0), (x1, y1)) = if n == 0 {
+            ((i64::MAX, i64::MAX), (i64::MIN, i64::MIN))
+        } else {
+            (cell_of(low_x, low_y, cell), cell_of(high_x, high_y, cell))
+        };
         let columns = x1.checked_sub(x0).and_then(|w| w.checked_add(1)).unwrap_or(i64::MAX);
         let rows = y1.checked_sub(y0).and_then(|h| h.checked_add(1)).unwrap_or(i64::MAX);
-        let budget = 4 * keys.len() as i64 + 1024;
+        let budget = 4 * n as i64 + 1024;
         let cells = columns.saturating_mul(rows);
         if loose && cells > budget && cells <= 4 * budget {
             // Wider cells by the factor that brings the table within its budget (and a hair more).
             let wider = cell * (cells as f64 / budget as f64).sqrt() * 1.01;
             return Self::build(xs, ys, wider, false);
         }
-        let (table, starts, members) =
-            if !keys.is_empty() && columns <= budget && rows <= budget && columns * rows <= budget {
-                let slots = map_range(keys.len(), 1.0, |i| {
-                    ((keys[i].0 - x0) * rows + (keys[i].1 - y0)) as usize
-                });
-                let (starts, members) = bucket(&slots, (columns * rows) as usize);
-                (CellTable::Dense { x0, y0, columns, rows }, starts, members)
-            } else if !keys.is_empty() && columns <= budget {
-                // A swarm spread thin over a wide arena (a ring hundreds of metres across): too
-                // many cells for a table of them all, few columns.
-                let (by_column, order) = bucket(
-                    &map_range(keys.len(), 1.0, |i| (keys[i].0 - x0) as usize),
-                    columns as usize,
-                );
-                // (row, point) in column order, then runs of columns of about COLUMN_POINTS
-                // points each, one task a run (a million robots on a ring or a line make a
-                // million columns): each column sorted by row (stable: increasing index per
-                // cell) and its cells listed.
-                let mut entries: Vec<(i64, usize)> = map_range(order.len(), 1.0, |k| (keys[order[k]].1, order[k]));
-                let mut runs = vec![0];
-                for (c, &first) in by_column.iter().enumerate().skip(1) {
-                    if first - by_column[runs[runs.len() - 1]] >= COLUMN_POINTS || c == columns as usize {
-                        runs.push(c);
-                    }
+        let (table, starts, members) = if n > 0 && columns <= budget && rows <= budget && columns * rows <= budget {
+            let slots = map_range(n, 3.0, |i| {
+                let (cx, cy) = key(i);
+                ((cx - x0) * rows + (cy - y0)) as usize
+            });
+            let (starts, members) = bucket(&slots, (columns * rows) as usize);
+            (CellTable::Dense { x0, y0, columns, rows }, starts, members)
+        } else if n > 0 && columns <= budget {
+            // A swarm spread thin over a wide arena (a ring hundreds of metres across): too
+            // many cells for a table of them all, few columns.
+            let (by_column, order) = bucket(&map_range(n, 3.0, |i| (key(i).0 - x0) as usize), columns as usize);
+            // (row, point) in column order, then runs of columns of about COLUMN_POINTS
+            // points each, one task a run (a million robots on a ring or a line make a
+            // million columns): each column sorted by row (stable: increasing index per
+            // cell) and its cells listed.
+            let mut entries: Vec<(i64, usize)> = map_range(order.len(), 3.0, |k| (key(order[k]).1, order[k]));
+            let mut runs = vec![0];
+            for (c, &first) in by_column.iter().enumerate().skip(1) {
+                if first - by_column[runs[runs.len() - 1]] >= COLUMN_POINTS || c == columns as usize {
+                    runs.push(c);
                 }
-                let cut: Vec<usize> = runs.iter().map(|&c| by_column[c]).collect();
-                let tables: Vec<(Vec<usize>, Vec<i64>, Vec<usize>)> = split(&mut entries, &cut)
-                    .into_par_iter()
-                    .zip(runs.par_windows(2))
-                    .map(|(mut piece, run)| {
-                        let (mut firsts, mut rows_of, mut starts) = (Vec::new(), Vec::new(), Vec::new());
-                        for column in run[0]..run[1] {
-                            let (first, size) = (by_column[column], by_column[column + 1] - by_column[column]);
-                            let entries;
-                            (entries, piece) = std::mem::take(&mut piece).split_at_mut(size);
-                            entries.sort_by_key(|entry| entry.0);
-                            firsts.push(rows_of.len());
-                            let mut at = first;
-                            for cell in entries.chunk_by(|a, b| a.0 == b.0) {
-                                rows_of.push(cell[0].0);
-                                starts.push(at);
-                                at += cell.len();
-                            }
+            }
+            let cut: Vec<usize> = runs.iter().map(|&c| by_column[c]).collect();
+            let tables: Vec<(Vec<usize>, Vec<i64>, Vec<usize>)> = split(&mut entries, &cut)
+                .into_par_iter()
+                .zip(runs.par_windows(2))
+                .map(|(mut piece, run)| {
+                    let (mut firsts, mut rows_of, mut starts) = (Vec::new(), Vec::new(), Vec::new());
+                    for column in run[0]..run[1] {
+                        let (first, size) = (by_column[column], by_column[column + 1] - by_column[column]);
+                        let entries;
+                        (entries, piece) = std::mem::take(&mut piece).split_at_mut(size);
+                        entries.sort_by_key(|entry| entry.0);
+                        firsts.push(rows_of.len());
+                        let mut at = first;
+                        for cell in entries.chunk_by(|a, b| a.0 == b.0) {
+                            rows_of.push(cell[0].0);
+                            starts.push(at);
+                            at += cell.len();
                         }
-                        (firsts, rows_of, starts)
-                    })
-                    .collect();
-                let (mut firsts, mut rows_of, mut starts) = (Vec::new(), Vec::new(), Vec::new());
-                for (run_firsts, run_rows, run_starts) in tables {
-                    let before = rows_of.len();
-                    firsts.extend(run_firsts.iter().map(|f| f + before));
-                    rows_of.extend(run_rows);
-                    starts.extend(run_starts);
-                }
-                firsts.push(rows_of.len());
-                starts.push(keys.len());
-                let members = map_range(entries.len(), 1.0, |k| entries[k].1);
-                (CellTable::Columns { x0, firsts, rows_of }, starts, members)
-            } else {
-                let mut index: FxHashMap<(i64, i64), usize> =
-                    FxHashMap::with_capacity_and_hasher(keys.len(), Default::default());
-                let slots: Vec<usize> = keys
-                    .iter()
-                    .map(|key| {
-                        let next = index.len();
-                        *index.entry(*key).or_insert(next)
-                    })
-                    .collect();
-                let (starts, members) = bucket(&slots, index.len());
-                (CellTable::Sparse(index), starts, members)
-            };
+                    }
+                    (firsts, rows_of, starts)
+                })
+                .collect();
+            let (mut firsts, mut rows_of, mut starts) = (Vec::new(), Vec::new(), Vec::new());
+            for (run_firsts, run_rows, run_starts) in tables {
+                let before = rows_of.len();
+                firsts.extend(run_firsts.iter().map(|f| f + before));
+                rows_of.extend(run_rows);
+                starts.extend(run_starts);
+            }
+            firsts.push(rows_of.len());
+            starts.push(n);
+            let members = map_range(entries.len(), 1.0, |k| entries[k].1);
+            (CellTable::Columns { x0, firsts, rows_of }, starts, members)
+        } else {
+            let mut index: FxHashMap<(i64, i64), usize> = FxHashMap::with_capacity_and_hasher(n, Default::default());
+            let slots: Vec<usize> = (0..n)
+                .map(|i| {
+                    let next = index.len();
+                    *index.entry(key(i)).or_insert(next)
+                })
+                .collect();
+            let (starts, members) = bucket(&slots, index.len());
+            (CellTable::Sparse(index), starts, members)
+        };
         let sorted_xs = map_range(members.len(), 1.0, |k| xs[members[k]]);
         let sorted_ys = map_range(members.len(), 1.0, |k| ys[members[k]]);
         Self {
@@ -477,6 +475,22 @@ fn bucket_in_bands(slots: &[usize], cells: usize) -> (Vec<usize>, Vec<usize>) {
         });
     starts[cells] = slots.len();
     (starts, members)
+}
+
+/// The least and the greatest of `values` (infinities for none), on every core for many.
+fn extent(values: &[f64]) -> (f64, f64) {
+    let fold = |(low, high): (f64, f64), &v: &f64| (low.min(v), high.max(v));
+    let merge = |a: (f64, f64), b: (f64, f64)| (a.0.min(b.0), a.1.max(b.1));
+    let none = (f64::INFINITY, f64::NEG_INFINITY);
+    if worth_spreading(values.len(), 0.5) {
+        values
+            .par_iter()
+            .with_min_len(TASK_ITEMS)
+            .fold(|| none, fold)
+            .reduce(|| none, merge)
+    } else {
+        values.iter().fold(none, fold)
+    }
 }
 
 /// The distinct cells of the 3x3 block around cell `(cx, cy)`: fewer at the saturated edges of
