@@ -258,11 +258,12 @@ impl Search<'_> {
         let (i, p) = (h.ids[r] as usize, h.here[r]);
         let seen = &h.seen[h.seen_offsets[r] as usize..h.seen_offsets[r + 1] as usize];
         let agents = &h.agents[h.agents_offsets[r] as usize..h.agents_offsets[r + 1] as usize];
-        let silent: Vec<Vec2> = seen.iter().copied().filter(|&s| !self.accounted(i, s)).collect();
+        // Every robot seen is a candidate; whether a message accounts for it (then it clips
+        // nothing) is asked only of those reached before the cell settles: in a crowd, a few of
+        // the dozens seen. The order of the rest is that of the silent ones alone.
         let extras = || {
             let ranked = |rank: u8| move |(k, &q): (usize, &Vec2)| (rank, k, q);
-            silent
-                .iter()
+            seen.iter()
                 .enumerate()
                 .map(ranked(1))
                 .chain(agents.iter().enumerate().map(ranked(2)))
@@ -294,9 +295,12 @@ impl Search<'_> {
                 }
             }
             candidates.sort_unstable_by_key(|&(d, rank, k, _)| (d, rank, k));
-            for &(d, _, _, q) in candidates.iter() {
+            for &(d, rank, _, q) in candidates.iter() {
                 if clipper.settled(f64::from_bits(d), self.widest) {
                     return finish(clipper, p);
+                }
+                if rank == 1 && self.accounted(i, q) {
+                    continue;
                 }
                 clipper.cut(q);
             }
