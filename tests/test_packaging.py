@@ -111,3 +111,15 @@ def test_version_without_the_extension_comes_from_the_metadata(monkeypatch):
         assert got == "unknown"
     else:
         assert got == installed == _cargo_version()
+
+
+def test_import_sets_the_allocator_unless_the_environment_does():
+    """``import dream`` sets mimalloc's options before the extension loads, and a user's own win."""
+    script = "import os, dream; print(os.environ['MIMALLOC_PURGE_DELAY'], os.environ['MIMALLOC_ARENA_EAGER_COMMIT'])"
+    env = {k: v for k, v in os.environ.items() if not k.startswith("MIMALLOC_")}
+    env["PYTHONPATH"] = os.pathsep.join([str(Path(dream.__file__).parents[1]), *sys.path])  # this copy of dream
+    ours = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, check=True)
+    assert ours.stdout.split() == ["10000", "0"]
+    env |= {"MIMALLOC_PURGE_DELAY": "0", "MIMALLOC_ARENA_EAGER_COMMIT": "1"}
+    theirs = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, check=True)
+    assert theirs.stdout.split() == ["0", "1"]
