@@ -8,7 +8,8 @@ two answers are the same, to the bit.
 Scenes: the rendezvous example's perception (``perceive``), inbox sums (``segment_reduce`` with an
 index) and HRVO (``hrvo_rows``), and voronoi-coverage's cells from the radio (``heard_cells``),
 captured from swarm runs of ``--robots`` robots; ``validate`` on robots 0.3 m apart, uniformly at
-random, at that count and at ten times it; ``unicycle_step``.
+random, at that count and at ten times it, and 1 m apart (where a dense table of cells of the
+robots' diameter would be too large); ``unicycle_step``.
 
 Each round draws which build goes first: a fixed order favoured the second (two copies of one
 build measured 1.08x on ``perceive`` at 100,000 robots), whose first call finds memory the other's
@@ -87,9 +88,9 @@ def captured(n: int) -> dict[str, tuple[tuple[Any, ...], dict[str, Any]]]:
     return calls
 
 
-def scattered(n: int, rng: np.random.Generator) -> np.ndarray:
-    """Poses ``(3, n)`` of robots 0.3 m apart on average, uniformly at random."""
-    side = np.sqrt(n) * 0.3
+def scattered(n: int, rng: np.random.Generator, spacing: float = 0.3) -> np.ndarray:
+    """Poses ``(3, n)`` of robots ``spacing`` (m) apart on average, uniformly at random."""
+    side = np.sqrt(n) * spacing
     xy = rng.uniform(-side / 2, side / 2, (2, n))
     return np.ascontiguousarray(np.vstack((xy, rng.uniform(-np.pi, np.pi, n))))
 
@@ -138,11 +139,11 @@ def main(argv: list[str]) -> None:
     ]:
         positional, keywords = calls[name]
         scenes.append((f"`{name}`: {scene}, {args.robots:,} robots", partial_call(name, positional, keywords)))
-    for n in (args.robots, 10 * args.robots):
-        poses, commands = scattered(n, rng), np.zeros((2, n))
+    for n, spacing in ((args.robots, 0.3), (10 * args.robots, 0.3), (args.robots, 1.0)):
+        poses, commands = scattered(n, rng, spacing), np.zeros((2, n))
         scenes.append(
             (
-                f"`validate`: {n:,} robots 0.3 m apart",
+                f"`validate`: {n:,} robots {spacing} m apart",
                 lambda m, p=poses, u=commands: m.validate(p, u, BOUNDS, **CHECKS),
             )
         )
