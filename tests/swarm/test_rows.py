@@ -159,6 +159,35 @@ def test_nearest_messages_read_on_the_board_equal_those_copied_out():
     assert "x" not in on_board.columns  # read in place, never copied out whole
 
 
+def test_several_fields_picked_on_the_board_equal_those_copied_out():
+    """Several message fields picked at any entries, read on the board at those entries only,
+    side by side: what each field gives alone, and what the fields copied out give."""
+    rng = np.random.default_rng(13)
+    n, e = 60, 500
+    board = {"x": rng.normal(size=n), "y": rng.normal(size=n), "k": rng.integers(-5, 5, n)}
+    senders = rng.integers(0, n, e)
+    offsets = np.concatenate(([0], np.sort(rng.integers(0, e, 39)), [e]))
+    on_board = Neighbourhood(offsets, {"sender": senders}, (senders, board))
+    copied = Neighbourhood(offsets, {name: board[name][senders] for name in board})
+    entries = np.flatnonzero(rng.random(e) < 0.4)
+    picked = on_board.pick(["x", "y", "k"], entries)
+    assert picked.shape == (len(entries), 3)
+    np.testing.assert_array_equal(picked, copied.pick(["x", "y", "k"], entries))
+    np.testing.assert_array_equal(picked, np.column_stack([on_board.pick(name, entries) for name in "xyk"]))
+    np.testing.assert_array_equal(picked[:, 2], board["k"][senders[entries]])
+    with_gaps = on_board.pick(["x", "k"], np.array([entries[0], -1]))
+    assert np.isnan(with_gaps[1]).all() and with_gaps[0, 1] == board["k"][senders[entries[0]]]
+    assert "x" not in on_board.columns  # read in place, never copied out whole
+
+
+@pytest.mark.parametrize("shape", [(50, 7), (50, 3, 3), (50, 1), (50, 0), (0, 7)])
+def test_each_any_is_numpys_any_along_the_rows(shape):
+    flags = np.random.default_rng(3).random(shape) < 0.2
+    np.testing.assert_array_equal(rules.each_any(flags), flags.any(axis=1))
+    with pytest.raises(ValueError, match=r"each_any takes flags of shape \(k, m, ...\), got \(7,\)"):
+        rules.each_any(np.zeros(7, dtype=bool))
+
+
 def test_broadcast_gives_each_entry_its_rows_values():
     """A row's values at each of its entries, empty rows included, as indexing by ``owner`` gives
     them; values of the wrong length are refused, naming both sizes."""

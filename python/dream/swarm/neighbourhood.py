@@ -172,18 +172,28 @@ class Neighbourhood:
         return kernels.segment_nearest_to(points, self.offsets, origins, k, index)
 
     def pick(self, what: str | Sequence[str] | np.ndarray, entries: np.ndarray, fill: float = np.nan) -> FloatArray:
-        """The values at ``entries`` (from :meth:`nearest` ``(k,)`` or :meth:`nearest_to` ``(m, k)``),
-        ``fill`` where it is -1. A message field is read on the board at the entries picked only."""
+        """The values at ``entries`` (from :meth:`nearest` ``(k,)`` or :meth:`nearest_to` ``(m, k)``,
+        or any entries), ``fill`` where it is -1; several columns side by side ``(..., w)``.
+        Message fields are read on the board at the entries picked only."""
         entries = np.asarray(entries)
         found = entries >= 0
-        if isinstance(what, str) and what not in self.columns and what in self.sources:
-            assert self.index is not None  # sources come with their index
-            values, chosen = self.sources[what], self.index[entries[found]]
+        at = entries[found]
+        if isinstance(what, np.ndarray):
+            picked = np.asarray(what, dtype=np.float64)[at]
+        elif isinstance(what, str):
+            picked = self._at(what, at)
         else:
-            values, chosen = np.asarray(self._values(what), dtype=np.float64), entries[found]
-        out = np.full((*entries.shape, *values.shape[1:]), fill)
-        out[found] = values[chosen]
+            picked = np.column_stack([self._at(name, at) for name in what]).reshape(len(at), len(what))
+        out = np.full((*entries.shape, *picked.shape[1:]), fill)
+        out[found] = picked
         return out
+
+    def _at(self, name: str, entries: np.ndarray) -> np.ndarray:
+        """Column ``name`` at ``entries`` only: a message field still on the board is read there."""
+        if name not in self.columns and name in self.sources:
+            assert self.index is not None  # sources come with their index
+            return self.sources[name][self.index[entries]]
+        return self[name][entries]
 
     def where(self, keep: np.ndarray) -> Neighbourhood:
         """The entries flagged in ``keep`` ``(e,)`` bool, rows kept (some may become empty)."""

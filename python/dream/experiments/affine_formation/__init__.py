@@ -91,7 +91,8 @@ class AffineFormation(Experiment):
         self.passes = schedule()
         self.orders = {int(step): k for k, step in enumerate(shape_plan()[0])}  #: plan step of each order
         self.bars = Fleet()
-        self.contacts, self.settled_error, self.deformed_error, self.error = 0, math.nan, 0.0, math.nan
+        self.contacts, self.settled_error, self.deformed_error = 0, math.nan, 0.0
+        self.poses: np.ndarray | None = None  #: the last step's poses, whose error is the end's
         return FormationRobot(n, self.centres)
 
     def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -115,16 +116,23 @@ class AffineFormation(Experiment):
                 self.bars = Fleet()
 
     def after_step(self, step: int, poses: np.ndarray) -> None:
+        # The error is found only at the steps a measure reads it: the last step's when asked
+        # (each step makes new poses, so keeping them costs no copy).
         self.bars.step(self.sim.time_step)
-        correct = self.correct
-        self.targets = follower_positions(self.anchors(poses))
-        errors = np.linalg.norm(poses[:2, ~self.leader].T - self.targets, axis=1)
-        self.error = float(errors[correct[~self.leader]].max(initial=0.0))
+        self.poses = poses
         if step == self.passes[0][0]:
-            self.settled_error = self.error
+            self.settled_error = self.error(poses)
         if len(self.bars):
-            self.deformed_error = max(self.deformed_error, self.error)
-            self.contacts += bool(self.bars.touching(poses[:2, correct].T, GRITSBOT.radius).any())
+            self.deformed_error = max(self.deformed_error, self.error(poses))
+            self.contacts += bool(self.bars.touching(poses[:2, self.correct].T, GRITSBOT.radius).any())
+
+    def error(self, poses: np.ndarray | None) -> float:
+        """The correct followers' largest distance (m) to their affine targets at ``poses`` (NaN
+        before the first step)."""
+        if poses is None:
+            return math.nan
+        errors = np.linalg.norm(poses[:2, ~self.leader].T - follower_positions(self.anchors(poses)), axis=1)
+        return float(errors[self.correct[~self.leader]].max(initial=0.0))
 
     def anchors(self, poses: np.ndarray) -> np.ndarray:
         """The leaders' positions ``(n, 2)`` (rows of followers unused) that the survivors' formation
@@ -157,7 +165,7 @@ class AffineFormation(Experiment):
         touched a bar, and the largest error while bars are on the arena."""
         return {
             "error_before_bars": self.settled_error,
-            "error_end": self.error,
+            "error_end": self.error(self.poses),
             "error_while_deformed": self.deformed_error,
             "bar_contacts": self.contacts,
         }
@@ -167,7 +175,7 @@ class AffineFormation(Experiment):
         leaders = np.flatnonzero(self.leader)
         goals = np.zeros((self.n, 2))
         goals[leaders] = leader_goals({"goals": self.engine.memory["goals"][leaders]}, leaders, self.centres)
-        goals[~self.leader] = self.targets
+        goals[~self.leader] = follower_positions(self.anchors(poses))
         links = np.argwhere(np.triu(WEIGHTS) != 0)
         return Frame(
             step,
@@ -179,5 +187,5 @@ class AffineFormation(Experiment):
             obstacles=[bar.polygon for bar in self.bars.obstacles],
             obstacle_moving=[True] * len(self.bars),
             roles=np.where(self.leader, "leader", "follower"),
-            title=f"{NAME}: follower error {self.error:.3f} m, bar contacts {self.contacts}",
+            title=f"{NAME}: follower error {self.error(poses):.3f} m, bar contacts {self.contacts}",
         )

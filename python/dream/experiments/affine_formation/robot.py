@@ -75,11 +75,13 @@ class FormationRobot(SwarmRobot):
     movement = Movement(range=VERIFY)
     memory = {
         "heard": np.full((MEMBERS, 2), np.nan),  # the last position each robot of its formation claimed
-        "news": np.zeros(MEMBERS, dtype=np.int64),  # its round in which it last heard each (0: never)
+        # Its tables of the formation in the narrowest types that hold them: copied out and back
+        # for every robot deciding, each step.
+        "news": np.zeros(MEMBERS, dtype=np.int32),  # its round in which it last heard each (0: never)
         "rounds": 0,  # its radio rounds so far
-        "plans": np.full((LEADERS, LEADERS, 2), np.nan),  # each leader's last word on the leaders' aims
-        "strikes": np.zeros(MEMBERS, dtype=np.int64),  # decisions in a row each one's claim was blamed
-        "liar": np.zeros(MEMBERS, dtype=np.int64),  # robots taken for liars
+        "plans": np.full((LEADERS, LEADERS, 2), np.nan),  # each leader's last word on the leaders' aims (followers)
+        "strikes": np.zeros(MEMBERS, dtype=np.int8),  # decisions in a row each one's claim was blamed (<= STRIKES)
+        "liar": np.zeros(MEMBERS, dtype=bool),  # robots taken for liars
         "liar_at": np.full((MEMBERS, 2), np.nan),  # where a liar was seen last (NaN: not located)
         "order": 0,  # the step of the plan the operator has ordered last (set by the experiment)
         "phase": -1,  # the leader's step of the plan
@@ -87,7 +89,7 @@ class FormationRobot(SwarmRobot):
         "goals": np.full((LEADERS, 2), np.nan),  # and the places they go to
         "decisions": MORPH,  # its decisions since then
         "shift": 0.0,  # how far (m) along x it shifts the plan clear of crashed robots
-        "silent": np.zeros(MEMBERS, dtype=np.int64),  # the robots it takes for crashed
+        "silent": np.zeros(MEMBERS, dtype=bool),  # the robots it takes for crashed
         "was": np.full(2, np.nan),  # its position by odometry at its last decision
         "still": 0,  # its decisions in a row without moving while its wheels were told to
     }
@@ -129,8 +131,8 @@ class FormationRobot(SwarmRobot):
             # A leader heeds only the robots it takes for crashed, where they were heard last.
             heeded = heeded & ~lead[seen.owner]
             if memory["silent"][rows].any():
-                crashed = seen.broadcast(np.where(memory["silent"][:, :, None] > 0, memory["heard"], np.nan))
-                heeded |= lead[seen.owner] & (_gaps(spotted, crashed) <= MATCH).any(axis=1)
+                crashed = seen.broadcast(np.where(memory["silent"][:, :, None], memory["heard"], np.nan))
+                heeded |= lead[seen.owner] & rules.each_any(_squared_gaps(spotted, crashed) <= MATCH**2)
         if (~lead).any():
             rows = np.flatnonzero(~lead)
             desired[rows] = self.follow(view, rows, alive[rows], spotted)
@@ -164,17 +166,17 @@ class FormationRobot(SwarmRobot):
         the robots they now take for crashed: their aims set off for the new places."""
         memory, ids = view.memory, view.ids[rows]
         phase = memory["order"][rows]
-        silent = (~alive & (memory["news"][rows] > 0)).astype(np.int64)
+        silent = ~alive & (memory["news"][rows] > 0)
         moved = phase > memory["phase"][rows]
-        changed = (silent != memory["silent"][rows]).any(axis=1)
+        changed = rules.each_any(silent != memory["silent"][rows])
         memory["phase"][rows], memory["silent"][rows] = np.maximum(phase, memory["phase"][rows]), silent
         places = (
             np.take(self.plan_places, memory["phase"][rows], axis=0)
             + np.take(self.centres, ids // MEMBERS, axis=0)[:, None, :]
         )
         shift = np.where(moved | changed, 0.0, memory["shift"][rows])
-        for r in np.flatnonzero((moved | changed) & silent.any(axis=1)):
-            shift[r] = self.clearing(places[r], silent[r].astype(bool), memory["heard"][rows[r]])
+        for r in np.flatnonzero((moved | changed) & rules.each_any(silent)):
+            shift[r] = self.clearing(places[r], silent[r], memory["heard"][rows[r]])
         again = moved | (changed & (shift != memory["shift"][rows]))  # else the aims keep their pace
         if again.any():
             chosen = rows[again]
@@ -207,11 +209,12 @@ class FormationRobot(SwarmRobot):
         keep = (mine[owner] >= 0) & in_tile(spotted, np.take(bounds, np.maximum(mine[owner], 0), axis=0))
         counts = np.bincount(mine[owner][keep], minlength=len(rows))
         hood = Neighbourhood(np.concatenate(([0], np.cumsum(counts))), {})
-        state = {key: memory[key][rows] for key in ("heard", "plans", "strikes", "liar", "liar_at")}
+        # numpy.take copies rows of several values 3-4 times faster than indexing does.
+        state = {key: np.take(memory[key], rows, axis=0) for key in ("heard", "plans", "strikes", "liar", "liar_at")}
         sensed = judge(here, ids % MEMBERS, alive, bounds, hood, spotted[keep], state)
         for key, value in state.items():
             memory[key][rows] = value
-        known = positions(state["heard"], alive, state["plans"], state["liar"].astype(bool), state["liar_at"], sensed)
+        known = positions(state["heard"], alive, state["plans"], state["liar"], state["liar_at"], sensed)
         pull = rules.stress(here, known, np.take(WEIGHTS, ids % MEMBERS, axis=0))
         return rules.capped(-GAIN * pull, self.spec.v_max)
 
@@ -228,8 +231,8 @@ def wheels_stuck(view: View) -> np.ndarray:
 
 def listen(view: View) -> None:
     """A radio round of the robots deciding now: keep each message's position, when it came (unless
-    it says its wheels are stuck: the failure detector then takes it for crashed) and (from a
-    moving leader) its word on the leaders' aims."""
+    it says its wheels are stuck: the failure detector then takes it for crashed) and, a follower,
+    a moving leader's word on the leaders' aims (which the leaders, who plan, never read)."""
     memory, heard = view.memory, view.heard
     memory["rounds"] = memory["rounds"] + 1
     owner, place = heard.owner, heard["sender"] % MEMBERS
@@ -237,9 +240,9 @@ def listen(view: View) -> None:
     _scatter(memory["heard"], slot, heard["x"], heard["y"])
     moving = heard["stuck"] == 0
     _scatter(memory["news"], slot[moving], memory["rounds"][owner[moving]])
-    lead = moving & (place < LEADERS)  # a stuck leader's word on the aims is not heeded
-    words = heard.where(lead)
-    aims = np.column_stack([words[name] for name in AIMS]).reshape(-1, LEADERS, 2)
+    # A follower heeds a moving leader's word on the aims (a stuck leader's is not heeded).
+    lead = moving & (place < LEADERS) & (view.ids[owner] % MEMBERS >= LEADERS)
+    aims = heard.pick(AIMS, np.flatnonzero(lead)).reshape(-1, LEADERS, 2)
     _scatter(aims, np.arange(len(aims)) * LEADERS + place[lead], np.nan, np.nan)  # its word on others only
     _scatter(memory["plans"], owner[lead] * LEADERS + place[lead], *aims.reshape(len(aims), 2 * LEADERS).T)
 
@@ -264,9 +267,15 @@ def in_tile(points: np.ndarray, bounds: np.ndarray) -> np.ndarray:
     return (x >= xmin - MATCH) & (x <= xmax + MATCH) & (y >= ymin - MATCH) & (y <= ymax + MATCH)
 
 
-def _gaps(spotted: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Distances ``(e, 7)`` from each robot seen ``(e, 2)`` to the points ``(e, 7, 2)`` of its row."""
-    return np.hypot(*(spotted[:, None, :] - points).transpose(2, 0, 1))
+def _squared(vectors: np.ndarray) -> np.ndarray:
+    """The squared lengths ``(...)`` of ``vectors`` ``(..., 2)``: to compare with a squared
+    distance, a fifth of the cost of ``numpy.hypot``."""
+    return vectors[..., 0] * vectors[..., 0] + vectors[..., 1] * vectors[..., 1]
+
+
+def _squared_gaps(spotted: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Squared distances ``(e, 7)`` from each robot seen ``(e, 2)`` to the points ``(e, 7, 2)`` of its row."""
+    return _squared(spotted[:, None, :] - points)
 
 
 def judge(
@@ -288,14 +297,14 @@ def judge(
     heard, liar, liar_at = state["heard"], state["liar"].astype(bool), state["liar_at"]
     members = np.arange(MEMBERS)
     trusted = np.isfinite(heard[..., 0]) & ~liar & (members != me[:, None])
-    checkable = trusted & (np.hypot(*(heard - here[:, None]).transpose(2, 0, 1)) < VERIFY - MATCH)
-    matched = hood.min(_gaps(spotted, hood.broadcast(heard))) <= MATCH
+    checkable = trusted & (_squared(heard - here[:, None]) < (VERIFY - MATCH) ** 2)
+    matched = hood.min(_squared_gaps(spotted, hood.broadcast(heard))) <= MATCH**2
     missed = (checkable & ~matched) | (trusted & implausible(heard, alive, state["plans"], liar, bounds))
-    located = ~(liar & np.isnan(liar_at[..., 0])).any(axis=1)
-    lone = ~missed.any(axis=1) & ((trusted & ~checkable).sum(axis=1) == 1) & located
+    located = ~rules.each_any(liar & np.isnan(liar_at[..., 0]))
+    lone = ~rules.each_any(missed) & ((trusted & ~checkable).sum(axis=1) == 1) & located
     if lone.any():
         accounted = np.where((trusted | liar)[..., None], np.where(liar[..., None], liar_at, heard), np.nan)
-        unaccounted = ~(_gaps(spotted, hood.broadcast(accounted)) <= MATCH).any(axis=1)
+        unaccounted = ~rules.each_any(_squared_gaps(spotted, hood.broadcast(accounted)) <= MATCH**2)
         close = np.hypot(*(spotted - hood.broadcast(here)).T) <= RANGE
         lone &= hood.any(close & unaccounted)
         missed = np.where(lone[:, None], trusted & ~checkable, missed)
@@ -304,7 +313,7 @@ def judge(
     sensed = np.zeros(liar.shape, dtype=bool)
     if liar.any():
         claims = np.where((~liar & np.isfinite(heard[..., 0]))[..., None], heard, np.nan)
-        unclaimed = np.asarray(~(_gaps(spotted, hood.broadcast(claims)) <= MATCH).any(axis=1))
+        unclaimed = ~rules.each_any(_squared_gaps(spotted, hood.broadcast(claims)) <= MATCH**2)
         count, rows = hood.where(unclaimed).count, np.arange(len(here))
         tracked = liar & np.isfinite(liar_at[..., 0])
         one = np.argmax(liar, axis=1)
@@ -320,7 +329,7 @@ def judge(
                 near = following & (hood.pick(gap, entry) < 2 * MATCH)
                 liar_at[near, j] = spotted[entry[near]]
                 sensed[near, j] = True
-    state["liar"] = liar.astype(np.int64)
+    state["liar"] = liar
     return sensed
 
 
@@ -332,9 +341,9 @@ def implausible(
     plan for it (``plans`` ``(f, 3, 3, 2)``: leader i's word on leader m)."""
     out = ~in_tile(heard, bounds[:, None, :])
     living = alive[:, :LEADERS] & ~liar[:, :LEADERS]
-    places = np.where(living[:, :, None, None], plans, np.nan)  # [row, i, m]
-    gaps = np.hypot(*(heard[:, None, :LEADERS] - places).transpose(3, 0, 1, 2))
-    off = np.isfinite(gaps).any(axis=1) & ~(gaps <= PLAN_SLACK).any(axis=1)
+    places = plans if living.all() else np.where(living[:, :, None, None], plans, np.nan)  # [row, i, m]
+    gaps = _squared(heard[:, None, :LEADERS] - places)
+    off = rules.each_any(np.isfinite(gaps)) & ~rules.each_any(gaps <= PLAN_SLACK**2)
     # A crashed leader stands where it stopped, off the plan that moves on.
     out[:, :LEADERS] |= off & alive[:, :LEADERS]
     return out
@@ -347,6 +356,20 @@ def positions(
     the law: what they claim; liars where seen; crashed leaders, and lying ones out of sight,
     where the living leaders plan them; the others (crashed followers, lying ones out of sight)
     at their places in the affine image of the nominal shape that the rest span."""
+    known = np.where(np.isfinite(heard[..., :1]), heard, np.nan)  # all a follower with no liar or crash needs
+    troubled = rules.each_any(liar | ~alive)
+    if troubled.any():
+        rows = np.flatnonzero(troubled)
+        parts = (heard, alive, plans, liar, liar_at, sensed)
+        known[rows] = _troubled_positions(*(part[rows] for part in parts))
+    return known
+
+
+def _troubled_positions(
+    heard: np.ndarray, alive: np.ndarray, plans: np.ndarray, liar: np.ndarray, liar_at: np.ndarray, sensed: np.ndarray
+) -> np.ndarray:
+    """:func:`positions` of followers that take some robot of their formation for a liar or for
+    crashed."""
     have = np.isfinite(heard[..., 0])
     living = alive[:, :LEADERS] & ~liar[:, :LEADERS]
     planned = np.full((len(heard), LEADERS, 2), np.nan)
@@ -362,7 +385,7 @@ def positions(
     lead = np.where(crashed[..., None], np.where(np.isfinite(planned), planned, heard[:, :LEADERS]), lead)
     known[:, :LEADERS] = lead
     unknown = have & np.isnan(known[..., 0])
-    for r in np.flatnonzero(unknown.any(axis=1)):
+    for r in np.flatnonzero(rules.each_any(unknown)):
         found = np.flatnonzero(np.isfinite(known[r, :, 0]))
         missing = np.flatnonzero(unknown[r])
         image = affine_image({int(j): known[r, j] for j in found}, [int(j) for j in missing])
