@@ -40,7 +40,8 @@ from dream.specs import ArenaSpec, SimulatorSpec
 from dream.swarm import byrobot, draws
 from dream.swarm.neighbourhood import Deferred, Neighbourhood
 from dream.swarm.robot import SwarmRobot, View
-from dream.swarm.safety import DETECTION, at_rows, drive
+from dream.swarm.rows import at_rows, put_rows, take_rows
+from dream.swarm.safety import DETECTION, drive
 from dream.traffic import Traffic
 
 #: What robots said: their ids ``(k,)`` and their message's fields (name to ``(k,)``).
@@ -228,10 +229,10 @@ class Engine:
         view = View(
             ids,
             clock.copy(),
-            _taken(self.belief, at),
+            take_rows(self.belief, at),
             self._sense(t, rows, seen, faults).frozen(),
             inbox,
-            {key: _taken(values, at) for key, values in self.memory.items()},
+            {key: take_rows(values, at) for key, values in self.memory.items()},
             self._obstacles(t, rows, x, faults).frozen(),
             command,
         )
@@ -259,7 +260,7 @@ class Engine:
         rows = np.asarray(whole.ids)
         at = at_rows(rows, self.n)
         for key, values in whole.memory.items():  # every robot's memory row, changed or not
-            _put(self.memory[key], at, values)
+            put_rows(self.memory[key], at, values)
         wished, straight, safety, seen = byrobot.merged(whole, settled, self.robot.avoid)
         out[:, at] = drive(self, rows, wished, self.belief[at], seen, straight, safety)
         return [said for *_, said in settled]
@@ -286,7 +287,8 @@ class Engine:
             if key not in self.memory:
                 raise ValueError(f"{name} remembers {key!r}, which its memory does not declare: add it to `memory`")
             memory = self.memory[key]
-            _put(into[key], at, per_robot(values, len(rows), memory.dtype, f"{name} memory {key!r}", memory.shape[1:]))
+            kept = per_robot(values, len(rows), memory.dtype, f"{name} memory {key!r}", memory.shape[1:])
+            put_rows(into[key], at, kept)
         for key in handed.keys() - view.memory.keys():  # a field forgotten: kept as it was
             into[key][at] = self.memory[key][rows]
         straight = safety = None
@@ -357,7 +359,7 @@ class Engine:
             reading = reading + sigma * draws.normal(self.seed, draws.ODOMETRY_NOISE, t, rows[:, None], np.arange(3))
         kept = self._kept(t, rows, np.full(len(rows), -1), faults)
         if kept.all():
-            _put(self.belief, at, reading)
+            put_rows(self.belief, at, reading)
         else:
             self.belief[rows[kept]] = reading[kept]
         return np.isfinite(self.belief[at, 0])
@@ -573,30 +575,6 @@ class Engine:
         gone = crashed[self.air["sender"]]
         if gone.any():
             self.air = {key: values[~gone] for key, values in self.air.items()}
-
-
-def _taken(values: np.ndarray, at: slice | np.ndarray) -> np.ndarray:
-    """``values[at]`` (:func:`~dream.swarm.safety.at_rows`), an array of its own either way
-    (``numpy.take`` copies rows of several values 3-4 times faster than indexing does)."""
-    return values[at].copy() if isinstance(at, slice) else np.take(values, at, axis=0)
-
-
-def _put(values: np.ndarray, at: slice | np.ndarray, rows: np.ndarray) -> None:
-    """``values[at] = rows`` (``values`` an engine array ``(n, ...)``, C-contiguous; ``rows`` taken
-    as its dtype): at an index, a row of several values is copied as one block (NumPy copies it
-    value by value: 1.5 times slower for the affine formation's memory rows)."""
-    width = values[0].nbytes if len(values) else 0
-    if isinstance(at, slice) or values.ndim == 1 or width == 0:
-        values[at] = rows
-        return
-    _blocks(values, width)[at] = _blocks(np.ascontiguousarray(rows, dtype=values.dtype), width)
-
-
-def _blocks(values: np.ndarray, width: int) -> np.ndarray:
-    """The C-contiguous ``values`` ``(k, ...)`` as ``(k,)`` blocks of ``width`` bytes (a view)."""
-    return (
-        values.reshape(len(values), math.prod(values.shape[1:])).view(np.dtype((np.void, width))).reshape(len(values))
-    )
 
 
 def _linked(

@@ -21,6 +21,7 @@ from dream.robot import GUARD_HORIZON, guard_distance
 from dream.specs import ArenaSpec, RobotSpec
 from dream.swarm.neighbourhood import Neighbourhood
 from dream.swarm.robot import SwarmRobot
+from dream.swarm.rows import at_rows
 
 
 class Driver(Protocol):
@@ -37,13 +38,6 @@ class Driver(Protocol):
 #: The columns of a detection that HRVO reads, in the order of their noise keys (``dx`` and
 #: ``dy``, the offsets, come with them).
 DETECTION = ("distance", "bearing", "vx", "vy")
-
-
-def at_rows(rows: np.ndarray, n: int) -> slice | np.ndarray:
-    """How to index ``(n, ...)`` per-robot arrays at ``rows`` (increasing ids below ``n``): a slice
-    when they are all ``n`` robots, so that a read is a view or a block copy and a write a block,
-    not a gather or a scatter over every robot (every robot decides, in many rules)."""
-    return slice(None) if len(rows) == n else rows
 
 
 def drive(
