@@ -135,13 +135,22 @@ def sensed(obstacles: Sequence[Obstacle], positions: Any, range: float) -> Float
     ``(m, k, 2)``, NaN for an obstacle beyond ``range`` (m, inclusive) or around the sensor.
 
     All obstacles in one pass (a robot's sensor reads one position, thousands of times a run)."""
-    here = np.asarray(positions, dtype=np.float64).reshape(-1, 1, 2)
+    here = np.asarray(positions, dtype=np.float64).reshape(-1, 2)
+    out = np.full((len(here), len(obstacles), 2), np.nan)
     if not obstacles:
-        return np.zeros((len(here), 0, 2))
+        return out
     centres, cos, sin, half = _frames(obstacles)
-    closest = _closest(here, centres, cos, sin, half)
-    far = ~(np.hypot(closest[..., 0] - here[..., 0], closest[..., 1] - here[..., 1]) <= range)
-    return np.where(far[..., None], np.nan, closest)
+    # Only a sensor within an obstacle's circumcircle grown by the range can read it, and a swarm's
+    # robots are mostly far from every obstacle: the closest points of the pairs that may be in
+    # range only, each as the whole table would give it (elementwise).
+    reach = (np.hypot(half[:, 0], half[:, 1]) + range) * (1 + 1e-9)
+    gap = here[:, None, :] - centres
+    rows, which = np.nonzero(gap[..., 0] * gap[..., 0] + gap[..., 1] * gap[..., 1] <= reach * reach)
+    points = here[rows]
+    closest = _closest(points, centres[which], cos[which], sin[which], half[which])
+    far = ~(np.hypot(closest[:, 0] - points[:, 0], closest[:, 1] - points[:, 1]) <= range)
+    out[rows, which] = np.where(far[:, None], np.nan, closest)
+    return out
 
 
 def _distances(local: FloatArray, half: Any) -> FloatArray:

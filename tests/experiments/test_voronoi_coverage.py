@@ -212,6 +212,13 @@ def test_sensed_reads_every_obstacle_as_each_alone(seed):
     want[far] = np.nan
     np.testing.assert_array_equal(sensed(obstacles, points, 0.8), want)
     np.testing.assert_array_equal(sensed(obstacles, points[7], 0.8)[0], want[7])
+    # Sensors far beyond some obstacles' reach, and a range that reaches everything.
+    far_points = np.vstack((points, rng.uniform(-40, 40, (50, 2))))
+    for reach in (0.05, np.inf):
+        want = np.stack([o.closest_points(far_points) for o in obstacles], axis=1)
+        want[~(np.hypot(*(want - far_points[:, None]).transpose(2, 0, 1)) <= reach)] = np.nan
+        np.testing.assert_array_equal(sensed(obstacles, far_points, reach), want)
+    assert sensed([], points, 0.8).shape == (50, 0, 2)
 
 
 def test_moving_obstacle_bounces_off_the_walls():
