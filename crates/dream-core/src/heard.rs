@@ -21,9 +21,10 @@ use crate::geom::Arena;
 use crate::geom::Vec2;
 use crate::grid::Grid;
 use crate::neighbours::{in_range, radius_squared, Closeness};
+use crate::parallel::{first_where, worth_spreading, TASK_ITEMS};
 use crate::voronoi::{
-    area_centroid, check_cell_parameters, check_coordinates, squared_distance, unit_circle, widest, Cells, Clipper,
-    PARALLEL_ROBOTS,
+    area_centroid, check_cell_parameters, check_coordinates, squared_distance, unit_circle, widest, within_reach,
+    Cells, Clipper, PARALLEL_ROBOTS,
 };
 
 /// What a range radio lets the robots hear.
@@ -89,16 +90,7 @@ pub fn heard_cells(
         drift,
         range_squared: radius_squared(radio.range),
         close: Closeness::new(hearers.same),
-        widest: widest(
-            radio
-                .said
-                .iter()
-                .chain(radio.said_now)
-                .filter(|q| !q[0].is_nan())
-                .chain(hearers.seen)
-                .chain(hearers.agents)
-                .copied(),
-        ),
+        widest: widest_point(radio, hearers),
         circle: unit_circle(resolution),
         radius,
         arena,
@@ -132,13 +124,9 @@ fn check(radio: &Radio<'_>, hearers: &Hearers<'_>) -> Result<()> {
             got: hearers.same,
         });
     }
-    for (arg, said) in [("said", radio.said), ("said_now", radio.said_now)] {
-        check_len(arg, n, said.len())?;
-        if let Some(index) = said.iter().position(|q| q[0].is_nan() != q[1].is_nan()) {
-            return Err(GeomError::PartlyNaN { arg, index });
-        }
-        let spoken: Vec<f64> = said.iter().filter(|q| !q[0].is_nan()).flatten().copied().collect();
-        check_coordinates(arg, &spoken)?;
+    check_said("said", radio.said, n)?;
+    if !said_once(radio) {
+        check_said("said_now", radio.said_now, n)?;
     }
     // Coordinates within reach of the clipping's arithmetic also keep every search distance finite.
     check_coordinates("positions", radio.positions.as_flattened())?;
@@ -167,20 +155,85 @@ fn check(radio: &Radio<'_>, hearers: &Hearers<'_>) -> Result<()> {
     Ok(())
 }
 
+/// Fails unless `said` holds one message a robot (`n`), each a point within reach or NaN in
+/// both coordinates (nothing said): one pass, on every core for many.
+fn check_said(arg: &'static str, said: &[Vec2], n: usize) -> Result<()> {
+    check_len(arg, n, said.len())?;
+    let wrong = |q: Vec2| q[0].is_nan() != q[1].is_nan() || (!q[0].is_nan() && !q.iter().all(|&v| within_reach(v)));
+    let Some(index) = first_where(said.len(), |i| wrong(said[i])) else {
+        return Ok(());
+    };
+    let q = said[index];
+    if q[0].is_nan() != q[1].is_nan() {
+        return Err(GeomError::PartlyNaN { arg, index });
+    }
+    let k = usize::from(within_reach(q[0])); // the coordinate out of reach
+    check_coordinates(arg, &q[k..=k]).map_err(|error| match error {
+        GeomError::NonFinite { arg, .. } => GeomError::NonFinite {
+            arg,
+            index: 2 * index + k,
+        },
+        other => other,
+    })
+}
+
+/// Whether the robots said the same before and after their turns (one array for both: no turns).
+fn said_once(radio: &Radio<'_>) -> bool {
+    std::ptr::eq(radio.said, radio.said_now)
+}
+
+/// The largest of `value(i)` for `i < n` (at least 0; NaN passed over), on every core for many.
+fn largest(n: usize, value: impl Fn(usize) -> f64 + Sync + Send) -> f64 {
+    if worth_spreading(n, 1.0) {
+        (0..n)
+            .into_par_iter()
+            .with_min_len(TASK_ITEMS)
+            .map(value)
+            .reduce(|| 0.0, f64::max)
+    } else {
+        (0..n).map(value).fold(0.0, f64::max)
+    }
+}
+
 /// A bound on how far any message lies from the robot that said it (m): messages near a point
 /// are found among the robots within this much more of it. One message far from its robot
 /// widens every search by as much (the messages of a range radio lie a few steps of travel off).
 fn drift(radio: &Radio<'_>) -> f64 {
-    let gap = radio
-        .said
-        .iter()
-        .chain(radio.said_now)
-        .zip(radio.positions.iter().chain(radio.positions))
-        .filter(|(q, _)| !q[0].is_nan())
-        .map(|(q, p)| squared_distance(*p, *q))
-        .fold(0.0, f64::max)
-        .sqrt();
-    gap * (1.0 + 1e-9)
+    let off = |said: &[Vec2]| {
+        largest(said.len(), |i| {
+            let q = said[i];
+            if q[0].is_nan() {
+                0.0
+            } else {
+                squared_distance(radio.positions[i], q)
+            }
+        })
+    };
+    let mut gap = off(radio.said);
+    if !said_once(radio) {
+        gap = gap.max(off(radio.said_now));
+    }
+    gap.sqrt() * (1.0 + 1e-9)
+}
+
+/// [`widest`] of every point a cell may be clipped by: the messages said, the robots seen and
+/// the virtual agents, on every core for many.
+fn widest_point(radio: &Radio<'_>, hearers: &Hearers<'_>) -> f64 {
+    let of = |points: &[Vec2]| largest(points.len(), |i| widest(std::iter::once(points[i])));
+    let spoken = |said: &[Vec2]| {
+        largest(said.len(), |i| {
+            if said[i][0].is_nan() {
+                0.0
+            } else {
+                widest(std::iter::once(said[i]))
+            }
+        })
+    };
+    let mut far = spoken(radio.said).max(of(hearers.seen)).max(of(hearers.agents));
+    if !said_once(radio) {
+        far = far.max(spoken(radio.said_now));
+    }
+    far
 }
 
 /// One call's shared inputs.
@@ -492,5 +545,76 @@ mod tests {
         assert!(heard_cells(&radio, &twice, 1.0, &arena, 16).is_err());
         assert!(heard_cells(&Radio { range: -1.0, ..radio }, &hearers, 1.0, &arena, 16).is_err());
         assert!(heard_cells(&radio, &hearers, 1.0, &arena, 16).is_ok());
+    }
+
+    #[test]
+    fn a_message_out_of_reach_is_named_by_its_value_index() {
+        let unsaid = [f64::NAN, f64::NAN];
+        let check = |said: &[Vec2]| check_said("said", said, said.len());
+        assert_eq!(check(&[[0.0, 1.0], unsaid, [2.0, 3.0]]), Ok(()));
+        assert_eq!(
+            check(&[unsaid, [0.0, f64::INFINITY], [f64::NAN, 1.0]]),
+            Err(GeomError::NonFinite { arg: "said", index: 3 })
+        );
+        assert_eq!(
+            check(&[[0.0, 1.0], [f64::NAN, 1.0], [0.0, f64::INFINITY]]),
+            Err(GeomError::PartlyNaN { arg: "said", index: 1 })
+        );
+        assert!(matches!(
+            check(&[[0.0, 1.0], [-1e200, 0.0]]),
+            Err(GeomError::InvalidParameter { arg: "said", got, .. }) if got == -1e200
+        ));
+        assert!(matches!(
+            check_said("said", &[[0.0, 1.0]], 2),
+            Err(GeomError::LengthMismatch { .. })
+        ));
+    }
+
+    #[test]
+    fn one_array_said_before_and_after_gives_what_two_copies_give() {
+        let mut next = stream(3);
+        let positions: Vec<Vec2> = (0..400).map(|_| [next() * 6.0, next() * 4.0]).collect();
+        let said: Vec<Vec2> = positions
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                if i % 7 == 0 {
+                    [f64::NAN; 2]
+                } else {
+                    [p[0] + 0.01, p[1] - 0.02]
+                }
+            })
+            .collect();
+        let copy = said.clone();
+        let ids: Vec<i64> = (0..400).step_by(3).collect();
+        let here: Vec<Vec2> = ids.iter().map(|&i| positions[i as usize]).collect();
+        let zeros = vec![0_i64; ids.len() + 1];
+        let hearers = Hearers {
+            ids: &ids,
+            here: &here,
+            seen_offsets: &zeros,
+            seen: &[],
+            same: 0.05,
+            agents_offsets: &zeros,
+            agents: &[],
+        };
+        let radio = Radio {
+            positions: &positions,
+            range: 1.0,
+            said: &said,
+            said_now: &said,
+        };
+        assert!(said_once(&radio));
+        let arena = Arena::new(0.0, 6.0, 0.0, 4.0).unwrap();
+        let twice = Radio {
+            said_now: &copy,
+            ..radio
+        };
+        assert!(!said_once(&twice));
+        assert_eq!(
+            heard_cells(&radio, &hearers, 0.5, &arena, 32).unwrap(),
+            heard_cells(&twice, &hearers, 0.5, &arena, 32).unwrap()
+        );
+        assert_eq!(drift(&radio), drift(&twice));
     }
 }

@@ -16,10 +16,11 @@ use std::f64::consts::TAU;
 use rayon::prelude::*;
 
 use crate::csr::check_offsets;
-use crate::error::{check_finite, check_len, GeomError, Result};
+use crate::error::{check_len, GeomError, Result};
 use crate::geom::Arena;
 use crate::geom::Vec2;
 use crate::neighbours;
+use crate::parallel::first_where;
 
 /// Largest number of vertices of a cell's disc (far beyond any use; keeps memory bounded).
 pub const MAX_RESOLUTION: usize = 1 << 20;
@@ -283,16 +284,22 @@ pub fn voronoi_cell(
     Ok(cell(p, radius, arena, agents, &unit_circle(resolution)))
 }
 
+/// Whether `value` is finite and at most [`MAX_COORDINATE`] in magnitude (NaN is not).
+pub(crate) fn within_reach(value: f64) -> bool {
+    value.abs() <= MAX_COORDINATE
+}
+
 /// Finite values of magnitude at most [`MAX_COORDINATE`].
 pub(crate) fn check_coordinates(arg: &'static str, values: &[f64]) -> Result<()> {
-    check_finite(arg, values)?;
-    match values.iter().find(|v| v.abs() > MAX_COORDINATE) {
-        Some(&got) => Err(GeomError::InvalidParameter {
+    // One pass, on every core for many.
+    match first_where(values.len(), |i| !within_reach(values[i])) {
+        None => Ok(()),
+        Some(index) if !values[index].is_finite() => Err(GeomError::NonFinite { arg, index }),
+        Some(index) => Err(GeomError::InvalidParameter {
             arg,
             rule: "at most 1e100 in magnitude",
-            got,
+            got: values[index],
         }),
-        None => Ok(()),
     }
 }
 

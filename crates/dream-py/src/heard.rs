@@ -37,8 +37,14 @@ pub fn heard_cells<'py>(
     let here = points_of::<2>("here", &here)?;
     let ids = indices_of("hearers", &hearers)?;
     let positions = points_of::<2>("positions", &positions)?;
+    // One array for both (no turns): read and checked once.
+    let said_once = said_now.is(&said);
     let said = points_of::<2>("said", &said)?;
-    let said_now = points_of::<2>("said_now", &said_now)?;
+    let said_now = if said_once {
+        Vec::new()
+    } else {
+        points_of::<2>("said_now", &said_now)?
+    };
     let seen_offsets = indices_of("seen_indptr", &seen_indptr)?;
     let seen = points_of::<2>("seen_points", &seen_points)?;
     let agents_offsets = indices_of("virtual_indptr", &virtual_indptr)?;
@@ -48,7 +54,7 @@ pub fn heard_cells<'py>(
             positions: &positions,
             range,
             said: &said,
-            said_now: &said_now,
+            said_now: if said_once { &said } else { &said_now },
         };
         let hearers = heard::Hearers {
             ids: &ids,

@@ -40,6 +40,12 @@ def implementation(name: str) -> Callable[..., Any]:
     return getattr(_reference if _core is None else _core, name)
 
 
+def core_checks() -> bool:
+    """Whether the Rust kernels are in use, whose bindings check every value they read (finite,
+    and within reach where a kernel says so): a wrapper then leaves those checks to them."""
+    return _core is not None
+
+
 def kernel_input(value: Any, name: str, shape: tuple[int | None, ...]) -> FloatArray:
     """``value`` as a kernel's float64 input of ``shape`` (``None`` = any length): for the Rust
     kernels, as it lies, since their bindings read any layout in place and check on every core
@@ -52,4 +58,4 @@ def kernel_input(value: Any, name: str, shape: tuple[int | None, ...]) -> FloatA
     ValueError
         If it is no float array of ``shape``; for the reference, also if a value is NaN or infinite.
     """
-    return as_array(value, name, shape) if _core is None else as_shaped(value, name, shape)
+    return as_shaped(value, name, shape) if core_checks() else as_array(value, name, shape)

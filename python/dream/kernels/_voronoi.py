@@ -7,9 +7,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from dream._checks import Bounds, FloatArray, as_array, as_offsets, checked_bounds
+from dream._checks import Bounds, FloatArray, as_array, as_offsets, as_shaped, checked_bounds
 from dream._reference.voronoi import MAX_COORDINATE
-from dream.kernels._dispatch import implementation
+from dream.kernels._dispatch import core_checks, implementation, kernel_input
 from dream.specs import ROBOTARIUM
 
 
@@ -18,6 +18,14 @@ def _within_reach(array: FloatArray, name: str) -> FloatArray:
     if array.size and np.abs(array).max() > MAX_COORDINATE:
         raise ValueError(f"`{name}` must be finite and at most 1e100 in magnitude, got {np.abs(array).max()}")
     return array
+
+
+def _points(value: Any, name: str) -> FloatArray:
+    """``value`` as ``(n, 2)`` points: as it lies for the Rust kernels, whose bindings check every
+    coordinate finite and within reach (a pass of each over 100,000 robots' arrays, every step),
+    checked here for the reference."""
+    array = kernel_input(value, name, (None, 2))
+    return array if core_checks() else _within_reach(array, name)
 
 
 def _checked_box(bounds: Any) -> Bounds:
@@ -93,7 +101,10 @@ def voronoi_cells(
 
 
 def _messages(value: Any, name: str, n: int) -> FloatArray:
-    """``value`` as ``(n, 2)`` messages: finite points within reach, or rows of NaN (nothing said)."""
+    """``value`` as ``(n, 2)`` messages: finite points within reach, or rows of NaN (nothing said);
+    the Rust kernels' bindings check the values themselves."""
+    if core_checks():
+        return as_shaped(value, name, (n, 2))
     try:
         array = np.ascontiguousarray(value, dtype=np.float64)
     except (TypeError, ValueError) as err:
@@ -160,13 +171,13 @@ def heard_cells(
     virtual : (indptr (k + 1,), points (j, 2)), optional
         Each hearer's virtual agents (see :func:`obstacle_agents`).
     """
-    p = _within_reach(as_array(here, "here", (None, 2)), "here")
+    p = _points(here, "here")
     k = p.shape[0]
     ids = np.asarray(hearers)
     if ids.size and ids.dtype.kind not in "iu":
         raise ValueError(f"`hearers` must hold robot indices, got dtype {ids.dtype}")
     ids = np.ascontiguousarray(ids, dtype=np.int64)
-    x = _within_reach(as_array(positions, "positions", (None, 2)), "positions")
+    x = _points(positions, "positions")
     n = x.shape[0]
     if ids.shape != (k,):
         raise ValueError(f"`hearers` must have shape ({k},) (one per row of `here`), got {ids.shape}")
