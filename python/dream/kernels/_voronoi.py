@@ -123,7 +123,7 @@ def _rows(value: Any, name: str, rows: int) -> tuple[np.ndarray, FloatArray]:
     """CSR ``(indptr (rows + 1,), points (m, 2))``, empty rows when ``value`` is ``None``."""
     if value is None:
         return np.zeros(rows + 1, dtype=np.int64), np.zeros((0, 2))
-    points = _within_reach(as_array(value[1], f"{name} points", (None, 2)), f"{name} points")
+    points = _points(value[1], f"{name} points")
     return as_offsets(value[0], name, len(points), rows, part="indptr"), points
 
 

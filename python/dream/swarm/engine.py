@@ -475,8 +475,10 @@ class Engine:
         missing = [name for name in fields if name not in self.board]
         if missing:
             raise KeyError(f"no field {missing[0]!r} in the radio's messages (its fields: {', '.join(self.board)})")
-        board = np.column_stack([self.board[name] for name in fields]).astype(np.float64)
-        said = np.where(talking[:, None], board, np.nan)
+        said = np.empty((len(talking), len(fields)))
+        for column, name in enumerate(fields):
+            said[:, column] = self.board[name]
+        said[~talking] = np.nan  # a robot that has said nothing yet
         assert self.robot.radio is not None  # a range radio
         radio_range = self.robot.radio.range
         return kernels.heard_cells(
