@@ -184,7 +184,10 @@ class Neighbourhood:
             picked = self._at(what, at)
         else:
             picked = np.column_stack([self._at(name, at) for name in what]).reshape(len(at), len(what))
-        out = np.full((*entries.shape, *picked.shape[1:]), fill)
+        shape = (*entries.shape, *picked.shape[1:])
+        if len(at) == entries.size:  # every entry found: nothing to fill
+            return np.asarray(picked, dtype=np.float64).reshape(shape)
+        out = np.full(shape, fill)
         out[found] = picked
         return out
 

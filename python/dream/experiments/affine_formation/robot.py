@@ -238,7 +238,8 @@ def listen(view: View) -> None:
     slot = owner * MEMBERS + place  # the message's row in its hearer's tables of the formation
     _scatter(memory["heard"], slot, heard["x"], heard["y"])
     moving = heard["stuck"] == 0
-    _scatter(memory["news"], slot[moving], memory["rounds"][owner[moving]])
+    rounds = heard.broadcast(memory["rounds"])  # each message's hearer's round
+    _scatter(memory["news"], slot[moving], rounds[moving])
     # A follower heeds a moving leader's word on the aims (a stuck leader's is not heeded).
     lead = moving & (place < LEADERS) & (view.ids[owner] % MEMBERS >= LEADERS)
     aims = heard.pick(AIMS, np.flatnonzero(lead)).reshape(-1, LEADERS, 2)
