@@ -460,11 +460,10 @@ def stress(positions: Any, others: Any, weights: Any) -> FloatArray:
     p = np.asarray(positions, dtype=np.float64)
     there = np.asarray(others, dtype=np.float64)
     w = np.asarray(weights, dtype=np.float64)
-    terms = w[..., None] * (p[..., None, :] - there)
-    counts = (w != 0) & np.isfinite(there[..., 0])
     pull = np.zeros(p.shape)
     for j in range(there.shape[-2]):
-        np.add(pull, terms[..., j, :], out=pull, where=counts[..., j, None])
+        counts = (w[..., j] != 0) & np.isfinite(there[..., j, 0])
+        pull = np.where(counts[..., None], pull + w[..., j, None] * (p - there[..., j, :]), pull)
     return pull
 
 
