@@ -156,9 +156,10 @@ class FormationRobot(SwarmRobot):
         """The points ``(k, 3, 2)`` (m) where the plan has the formation's leaders head now, for the
         leaders ``ids`` ``(k,)`` whose memory rows ``memory`` holds (before its first plan: their
         nominal places)."""
-        nominal = self.nominal[:LEADERS] + np.take(self.centres, ids // MEMBERS, axis=0)[:, None, :]
-        start = np.where(np.isnan(memory["start"]), nominal, memory["start"])
-        goals = np.where(np.isnan(memory["goals"]), nominal, memory["goals"])
+        start, goals = memory["start"], memory["goals"]
+        if np.isnan(start).any() or np.isnan(goals).any():  # some leader has not planned yet
+            nominal = self.nominal[:LEADERS] + np.take(self.centres, ids // MEMBERS, axis=0)[:, None, :]
+            start, goals = np.where(np.isnan(start), nominal, start), np.where(np.isnan(goals), nominal, goals)
         return rules.morph(start, goals, memory["decisions"], MORPH)
 
     def plan(self, view: View, rows: np.ndarray, alive: np.ndarray) -> None:
@@ -180,7 +181,7 @@ class FormationRobot(SwarmRobot):
         again = moved | (changed & (shift != memory["shift"][rows]))  # else the aims keep their pace
         if again.any():
             chosen = rows[again]
-            aims = self.aims(view.ids[chosen], {key: value[chosen] for key, value in memory.items()})
+            aims = self.aims(view.ids[chosen], {key: memory[key][chosen] for key in ("start", "goals", "decisions")})
             memory["start"][chosen] = aims
             goals = places[again, :LEADERS]
             goals[..., 0] += shift[again][:, None]
@@ -223,7 +224,7 @@ def wheels_stuck(view: View) -> np.ndarray:
     changed by a bit over :data:`STILL` decisions in a row while their wheels were told to drive
     (a robot the safety layer stops is told to stand, and does), or before."""
     memory = view.memory
-    still = (np.abs(view.command[:, 0]) > DRIVE) & (view.pose[:, :2] == memory["was"]).all(axis=1)
+    still = (np.abs(view.command[:, 0]) > DRIVE) & ~rules.each_any(view.pose[:, :2] != memory["was"])
     memory["still"] = np.where(still | (memory["still"] >= STILL), memory["still"] + 1, 0)
     return memory["still"] >= STILL
 
