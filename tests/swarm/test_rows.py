@@ -120,35 +120,36 @@ def test_a_field_named_where_is_refused():
         Radio(fields=("where",))
 
 
+def messages_on_a_board(rng, n, e, rows):
+    """A board of ``n`` robots' messages (fields ``x``, ``y``, ``k``), ``e`` of them heard in
+    ``rows`` rows: the board, the senders, the offsets, the rows reading the board in place and
+    the same rows with the fields copied out."""
+    board = {"x": rng.normal(size=n), "y": rng.normal(size=n), "k": rng.integers(-5, 5, n)}
+    senders = rng.integers(0, n, e)
+    offsets = np.concatenate(([0], np.sort(rng.integers(0, e, rows - 1)), [e]))
+    on_board = Neighbourhood(offsets, {"sender": senders}, (senders, board))
+    copied = Neighbourhood(offsets, {name: board[name][senders] for name in board})
+    return board, senders, offsets, on_board, copied
+
+
 @pytest.mark.parametrize("op", ["sum", "mean", "min", "max"])
 def test_board_fields_reduced_together_equal_field_by_field(op):
     """Several message fields read from the board in one pass give, to the bit, what each field
     gives alone and what the fields copied out give."""
-    rng = np.random.default_rng(7)
-    n, e = 50, 400
-    board = {"x": rng.normal(size=n), "y": rng.normal(size=n), "k": rng.integers(-5, 5, n)}
-    senders = rng.integers(0, n, e)
-    offsets = np.concatenate(([0], np.sort(rng.integers(0, e, 29)), [e]))
-    rows = Neighbourhood(offsets, {"sender": senders}, (senders, board))
+    _, _, _, rows, copied = messages_on_a_board(np.random.default_rng(7), 50, 400, 30)
     together = getattr(rows, op)(["x", "y", "k"])
     apart = np.column_stack([getattr(rows, op)(name) for name in ("x", "y", "k")])
-    copied = getattr(Neighbourhood(offsets, {name: board[name][senders] for name in board}), op)(["x", "y", "k"])
     assert together.shape == (30, 3)
     np.testing.assert_array_equal(together, apart)
-    np.testing.assert_array_equal(together, copied)
+    np.testing.assert_array_equal(together, getattr(copied, op)(["x", "y", "k"]))
 
 
 def test_nearest_messages_read_on_the_board_equal_those_copied_out():
     """The k messages nearest each robot, ranked with their positions read on the board in place,
     and their fields picked there, are those the fields copied out give."""
     rng = np.random.default_rng(11)
-    n, e = 60, 500
-    board = {"x": rng.normal(size=n), "y": rng.normal(size=n), "k": rng.integers(-5, 5, n)}
-    senders = rng.integers(0, n, e)
-    offsets = np.concatenate(([0], np.sort(rng.integers(0, e, 39)), [e]))
+    board, _, offsets, on_board, copied = messages_on_a_board(rng, 60, 500, 40)
     origins = rng.normal(size=(40, 2))
-    on_board = Neighbourhood(offsets, {"sender": senders}, (senders, board))
-    copied = Neighbourhood(offsets, {name: board[name][senders] for name in board})
     entries = on_board.nearest_to(["x", "y"], origins, 3)
     np.testing.assert_array_equal(entries, copied.nearest_to(["x", "y"], origins, 3))
     assert entries.shape == (40, 3) and (entries[np.diff(offsets) == 0] == -1).all()
@@ -163,13 +164,8 @@ def test_several_fields_picked_on_the_board_equal_those_copied_out():
     """Several message fields picked at any entries, read on the board at those entries only,
     side by side: what each field gives alone, and what the fields copied out give."""
     rng = np.random.default_rng(13)
-    n, e = 60, 500
-    board = {"x": rng.normal(size=n), "y": rng.normal(size=n), "k": rng.integers(-5, 5, n)}
-    senders = rng.integers(0, n, e)
-    offsets = np.concatenate(([0], np.sort(rng.integers(0, e, 39)), [e]))
-    on_board = Neighbourhood(offsets, {"sender": senders}, (senders, board))
-    copied = Neighbourhood(offsets, {name: board[name][senders] for name in board})
-    entries = np.flatnonzero(rng.random(e) < 0.4)
+    board, senders, _, on_board, copied = messages_on_a_board(rng, 60, 500, 40)
+    entries = np.flatnonzero(rng.random(500) < 0.4)
     picked = on_board.pick(["x", "y", "k"], entries)
     assert picked.shape == (len(entries), 3)
     np.testing.assert_array_equal(picked, copied.pick(["x", "y", "k"], entries))
