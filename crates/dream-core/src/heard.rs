@@ -23,8 +23,8 @@ use crate::grid::Grid;
 use crate::neighbours::{in_range, radius_squared, Closeness};
 use crate::parallel::{first_where, worth_spreading, TASK_ITEMS};
 use crate::voronoi::{
-    area_centroid, check_cell_parameters, check_coordinates, squared_distance, unit_circle, widest, within_reach,
-    Cells, Clipper, PARALLEL_ROBOTS,
+    area_centroid, check_cell_parameters, check_coordinates, nearest_first, squared_distance, unit_circle, widest,
+    within_reach, Cells, Clipper, PARALLEL_ROBOTS,
 };
 
 /// What a range radio lets the robots hear.
@@ -347,15 +347,21 @@ impl Search<'_> {
                     candidates.push((d.to_bits(), rank, k, q));
                 }
             }
-            candidates.sort_unstable_by_key(|&(d, rank, k, _)| (d, rank, k));
-            for &(d, rank, _, q) in candidates.iter() {
-                if clipper.settled(f64::from_bits(d), self.widest) {
-                    return finish(clipper, p);
-                }
-                if rank == 1 && self.accounted(i, q) {
-                    continue;
-                }
-                clipper.cut(q);
+            let settled = nearest_first(
+                candidates,
+                |&(d, rank, k, _)| (d, rank, k),
+                |&(d, rank, _, q)| {
+                    if clipper.settled(f64::from_bits(d), self.widest) {
+                        return true;
+                    }
+                    if !(rank == 1 && self.accounted(i, q)) {
+                        clipper.cut(q);
+                    }
+                    false
+                },
+            );
+            if settled {
+                return finish(clipper, p);
             }
             // Every later point lies farther than `high`.
             if last || clipper.settled(high, self.widest) {

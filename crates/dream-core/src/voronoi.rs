@@ -202,24 +202,43 @@ fn cell(p: Vec2, radius: f64, arena: &Arena, agents: impl Iterator<Item = Vec2>,
         .map(|(k, q)| (squared_distance(p, q).to_bits(), k, q))
         .collect();
     let widest = widest(agents.iter().map(|&(_, _, q)| q));
-    let mut done = 0;
-    while done < agents.len() {
-        let rest = &mut agents[done..];
-        let batch = rest.len().min(NEAREST_BATCH);
-        if batch < rest.len() {
-            rest.select_nth_unstable_by_key(batch - 1, |&(d, k, _)| (d, k));
-        }
-        rest[..batch].sort_unstable_by_key(|&(d, k, _)| (d, k));
-        for &(squared, _, q) in &rest[..batch] {
+    nearest_first(
+        &mut agents,
+        |&(d, k, _)| (d, k),
+        |&(squared, _, q)| {
             // Nonnegative floats order as their bits do.
             if cell.settled(f64::from_bits(squared), widest) {
-                return cell.polygon();
+                return true;
             }
             cell.cut(q);
+            false
+        },
+    );
+    cell.polygon()
+}
+
+/// Calls `stop(item)` on `items` in increasing `key` (a total order), until it returns true;
+/// returns whether it did. Only a batch of the nearest is sorted at a time: a cell's first few
+/// clips settle it, and the rest lie beyond.
+pub(crate) fn nearest_first<T: Copy, K: Ord>(
+    items: &mut [T],
+    key: impl Fn(&T) -> K + Copy,
+    mut stop: impl FnMut(&T) -> bool,
+) -> bool {
+    let mut done = 0;
+    while done < items.len() {
+        let rest = &mut items[done..];
+        let batch = rest.len().min(NEAREST_BATCH);
+        if batch < rest.len() {
+            rest.select_nth_unstable_by_key(batch - 1, key);
+        }
+        rest[..batch].sort_unstable_by_key(key);
+        if rest[..batch].iter().any(&mut stop) {
+            return true;
         }
         done += batch;
     }
-    cell.polygon()
+    false
 }
 
 /// An agent of a cell: `(|q - p|^2 as bits, place in the given order, q)`.
