@@ -176,6 +176,14 @@ def test_several_fields_picked_on_the_board_equal_those_copied_out():
     assert "x" not in on_board.columns  # read in place, never copied out whole
 
 
+def test_squared_length_orders_vectors_as_their_length_does():
+    vectors = np.random.default_rng(5).normal(size=(40, 7, 2))
+    squared = rules.squared_length(vectors)
+    assert squared.shape == (40, 7)
+    np.testing.assert_allclose(np.sqrt(squared), np.hypot(vectors[..., 0], vectors[..., 1]), rtol=1e-15)
+    assert rules.squared_length([3.0, 4.0]) == 25.0
+
+
 @pytest.mark.parametrize("shape", [(50, 7), (50, 3, 3), (50, 1), (50, 0), (0, 7)])
 def test_each_any_is_numpys_any_along_the_rows(shape):
     flags = np.random.default_rng(3).random(shape) < 0.2

@@ -124,9 +124,8 @@ fn check(radio: &Radio<'_>, hearers: &Hearers<'_>) -> Result<()> {
             got: hearers.same,
         });
     }
-    check_said("said", radio.said, n)?;
-    if !said_once(radio) {
-        check_said("said_now", radio.said_now, n)?;
+    for (arg, said) in messages(radio) {
+        check_said(arg, said, n)?;
     }
     // Coordinates within reach of the clipping's arithmetic also keep every search distance finite.
     check_coordinates("positions", radio.positions.as_flattened())?;
@@ -182,6 +181,15 @@ fn said_once(radio: &Radio<'_>) -> bool {
     std::ptr::eq(radio.said, radio.said_now)
 }
 
+/// The arrays of messages, by name: `said`, and `said_now` unless it is the same array.
+fn messages<'a>(radio: &Radio<'a>) -> Vec<(&'static str, &'a [Vec2])> {
+    let mut arrays = vec![("said", radio.said)];
+    if !said_once(radio) {
+        arrays.push(("said_now", radio.said_now));
+    }
+    arrays
+}
+
 /// The largest of `value(i)` for `i < n` (at least 0; NaN passed over), on every core for many.
 fn largest(n: usize, value: impl Fn(usize) -> f64 + Sync + Send) -> f64 {
     if worth_spreading(n, 1.0) {
@@ -209,31 +217,23 @@ fn drift(radio: &Radio<'_>) -> f64 {
             }
         })
     };
-    let mut gap = off(radio.said);
-    if !said_once(radio) {
-        gap = gap.max(off(radio.said_now));
-    }
+    let gap = messages(radio)
+        .into_iter()
+        .map(|(_, said)| off(said))
+        .fold(0.0, f64::max);
     gap.sqrt() * (1.0 + 1e-9)
 }
 
-/// [`widest`] of every point a cell may be clipped by: the messages said, the robots seen and
-/// the virtual agents, on every core for many.
+/// [`widest`] of every point a cell may be clipped by: the messages said (NaN: none), the robots
+/// seen and the virtual agents, on every core for many.
 fn widest_point(radio: &Radio<'_>, hearers: &Hearers<'_>) -> f64 {
-    let of = |points: &[Vec2]| largest(points.len(), |i| widest(std::iter::once(points[i])));
-    let spoken = |said: &[Vec2]| {
-        largest(said.len(), |i| {
-            if said[i][0].is_nan() {
-                0.0
-            } else {
-                widest(std::iter::once(said[i]))
-            }
+    let of = |points: &[Vec2]| {
+        largest(points.len(), |i| {
+            widest(std::iter::once(points[i]).filter(|q| !q[0].is_nan()))
         })
     };
-    let mut far = spoken(radio.said).max(of(hearers.seen)).max(of(hearers.agents));
-    if !said_once(radio) {
-        far = far.max(spoken(radio.said_now));
-    }
-    far
+    let said = messages(radio).into_iter().map(|(_, said)| said);
+    said.chain([hearers.seen, hearers.agents]).map(of).fold(0.0, f64::max)
 }
 
 /// One call's shared inputs.

@@ -437,6 +437,13 @@ def length(vectors: Any) -> FloatArray:
     return kernels.hypot(v[..., 0], v[..., 1])
 
 
+def squared_length(vectors: Any) -> FloatArray:
+    """Squared lengths ``(...)`` of ``vectors`` ``(..., 2)``: to compare with a squared distance
+    (a fifth of the cost of :func:`length`'s ``hypot``)."""
+    v = np.asarray(vectors, dtype=np.float64)
+    return v[..., 0] * v[..., 0] + v[..., 1] * v[..., 1]
+
+
 def toward(positions: Any, goals: Any, gain: float, v_max: float) -> FloatArray:
     """``gain (goals - positions)`` ``(n, 2)`` or ``(2,)`` (m/s), scaled down to ``v_max`` when faster."""
     return capped(gain * (np.asarray(goals, dtype=np.float64) - np.asarray(positions, dtype=np.float64)), v_max)

@@ -268,15 +268,9 @@ def in_tile(points: np.ndarray, bounds: np.ndarray) -> np.ndarray:
     return (x >= xmin - MATCH) & (x <= xmax + MATCH) & (y >= ymin - MATCH) & (y <= ymax + MATCH)
 
 
-def _squared(vectors: np.ndarray) -> np.ndarray:
-    """The squared lengths ``(...)`` of ``vectors`` ``(..., 2)``: to compare with a squared
-    distance, a fifth of the cost of ``numpy.hypot``."""
-    return vectors[..., 0] * vectors[..., 0] + vectors[..., 1] * vectors[..., 1]
-
-
 def _squared_gaps(spotted: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Squared distances ``(e, 7)`` from each robot seen ``(e, 2)`` to the points ``(e, 7, 2)`` of its row."""
-    return _squared(spotted[:, None, :] - points)
+    return rules.squared_length(spotted[:, None, :] - points)
 
 
 def judge(
@@ -298,7 +292,7 @@ def judge(
     heard, liar, liar_at = state["heard"], state["liar"].astype(bool), state["liar_at"]
     members = np.arange(MEMBERS)
     trusted = np.isfinite(heard[..., 0]) & ~liar & (members != me[:, None])
-    checkable = trusted & (_squared(heard - here[:, None]) < (VERIFY - MATCH) ** 2)
+    checkable = trusted & (rules.squared_length(heard - here[:, None]) < (VERIFY - MATCH) ** 2)
     matched = hood.min(_squared_gaps(spotted, hood.broadcast(heard))) <= MATCH**2
     missed = (checkable & ~matched) | (trusted & implausible(heard, alive, state["plans"], liar, bounds))
     located = ~rules.each_any(liar & np.isnan(liar_at[..., 0]))
@@ -343,7 +337,7 @@ def implausible(
     out = ~in_tile(heard, bounds[:, None, :])
     living = alive[:, :LEADERS] & ~liar[:, :LEADERS]
     places = plans if living.all() else np.where(living[:, :, None, None], plans, np.nan)  # [row, i, m]
-    gaps = _squared(heard[:, None, :LEADERS] - places)
+    gaps = rules.squared_length(heard[:, None, :LEADERS] - places)
     off = rules.each_any(np.isfinite(gaps)) & ~rules.each_any(gaps <= PLAN_SLACK**2)
     # A crashed leader stands where it stopped, off the plan that moves on.
     out[:, :LEADERS] |= off & alive[:, :LEADERS]
