@@ -6,7 +6,8 @@ alternately twelve times, three calls a turn, and prints the medians, their rati
 two answers are the same, to the bit.
 
 Scenes: the rendezvous example's perception (``perceive``), inbox sums (``segment_reduce`` with an
-index) and HRVO (``hrvo_rows``), and voronoi-coverage's cells from the radio (``heard_cells``),
+index) and HRVO (``hrvo_rows``), and voronoi-coverage's perception and cells from the radio
+(``perceive``, ``heard_cells``),
 captured from swarm runs of ``--robots`` robots; ``validate`` on robots 0.3 m apart, uniformly at
 random, at that count and at ten times it, and 1 m apart (where a dense table of cells of the
 robots' diameter would be too large); ``unicycle_step``.
@@ -56,11 +57,14 @@ RENDEZVOUS_KERNELS = ("perceive", "segment_reduce", "hrvo_rows")  #: timed on th
 PAUSE = 2e-4  #: seconds before each call (a run's Python between two kernels)
 
 
-def captured(n: int) -> dict[str, tuple[tuple[Any, ...], dict[str, Any]]]:
+Call = tuple[tuple[Any, ...], dict[str, Any]]
+
+
+def captured(n: int) -> dict[tuple[str, str], Call]:
     """The last ``perceive``, ``segment_reduce`` (with an index) and ``hrvo_rows`` calls of a swarm
-    run of the rendezvous example, and the last ``heard_cells`` call of one of voronoi-coverage,
-    past their robots' staggered start."""
-    calls: dict[str, tuple[tuple[Any, ...], dict[str, Any]]] = {}
+    run of the rendezvous example, and the last ``perceive`` and ``heard_cells`` calls of one of
+    voronoi-coverage, past their robots' staggered start, by (kernel, scene)."""
+    calls: dict[str, Call] = {}
 
     def spy(module: ModuleType, name: str, keep: Callable[[tuple[Any, ...]], bool]) -> None:
         chosen = module.implementation  # type: ignore[attr-defined]
@@ -83,9 +87,12 @@ def captured(n: int) -> dict[str, tuple[tuple[Any, ...], dict[str, Any]]]:
     spy(reduce_kernels, "segment_reduce", lambda args: len(args) > 3 and args[3] is not None)
     spy(hrvo_kernels, "hrvo_rows", lambda args: True)
     spy(voronoi_kernels, "heard_cells", lambda args: True)
-    dream.run(RENDEZVOUS, n=n, swarm=True, backend="fast", steps=36)
-    dream.run("voronoi-coverage", n=n, swarm=True, backend="fast", steps=36)
-    return calls
+    scenes: dict[tuple[str, str], Call] = {}
+    for scene, experiment in (("the rendezvous example", RENDEZVOUS), ("voronoi-coverage", "voronoi-coverage")):
+        calls.clear()
+        dream.run(experiment, n=n, swarm=True, backend="fast", steps=36)
+        scenes.update(((name, scene), call) for name, call in calls.items())
+    return scenes
 
 
 def scattered(n: int, rng: np.random.Generator, spacing: float = 0.3) -> np.ndarray:
@@ -135,9 +142,10 @@ def main(argv: list[str]) -> None:
     scenes: list[tuple[str, Callable[[ModuleType], Any]]] = []
     for name, scene in [
         *((name, "the rendezvous example") for name in RENDEZVOUS_KERNELS),
+        ("perceive", "voronoi-coverage"),
         ("heard_cells", "voronoi-coverage"),
     ]:
-        positional, keywords = calls[name]
+        positional, keywords = calls[name, scene]
         scenes.append((f"`{name}`: {scene}, {args.robots:,} robots", partial_call(name, positional, keywords)))
     for n, spacing in ((args.robots, 0.3), (10 * args.robots, 0.3), (args.robots, 1.0)):
         poses, commands = scattered(n, rng, spacing), np.zeros((2, n))

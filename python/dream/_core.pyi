@@ -159,9 +159,10 @@ def perceive(
     radio_range: float | None = None,
     talking: NDArray[np.bool_] | None = None,
     carried: Sequence[_Floats] | None = None,
+    bearings: bool = True,
 ) -> tuple[tuple[NDArray[Any], ...], tuple[_Ints, _Ints, _Floats]]:
     """(seen (offsets, ids, distances, bearings, dx, dy, *carried), heard (offsets, ids, distances)) of
-    the robots `rows`; each of `carried` (n,) is read at the robots seen."""
+    the robots `rows`; each of `carried` (n,) is read at the robots seen; bearings empty unless `bearings`."""
 
 def segment_reduce(values: _Floats, offsets: _Ints, op: str, index: _Ints | None = None) -> _Floats:
     """op (sum, mean, min, max) of each row's entries of values (k, w): (m, w)."""

@@ -268,6 +268,22 @@ def test_perceive_matches_the_reference(rng, n, fov, everyone):
     assert len(offsets) == len(h_offsets) == len(rows) + 1
 
 
+@pytest.mark.parametrize("fov", [2 * np.pi, 1.5])
+@pytest.mark.parametrize("implementation", [_core, _reference], ids=["rust", "reference"])
+def test_perceive_leaves_the_bearings_out_unless_asked(rng, fov, implementation):
+    positions, headings, talking = perceive_scene(rng, 3000)
+    rows = np.sort(rng.choice(3000, size=1500, replace=False))
+    options = dict(sight=(0.4, fov, 0.3), radio_range=0.7, talking=talking, carried=[rng.normal(size=3000)])
+    full = implementation.perceive(positions, headings, rows, **options)
+    bare = implementation.perceive(positions, headings, rows, **options, bearings=False)
+    assert len(full[0][3]) > 1000 and bare[0][3].shape == (0,)  # the field of view still decides who is seen
+    for k, (a, b) in enumerate(zip(full[0], bare[0], strict=True)):
+        if k != 3:
+            assert_array_equal(a, b)
+    for a, b in zip(full[1], bare[1], strict=True):
+        assert_array_equal(a, b)
+
+
 def test_perceive_carries_no_column_unless_asked(rng):
     positions, headings, talking = perceive_scene(rng, 50)
     seen, _ = kernels.perceive(positions, headings, np.arange(50), sight=(1.0, 2 * np.pi, 0.0))

@@ -170,6 +170,42 @@ def test_a_deferred_neighbourhood_is_found_once_and_only_when_read():
     assert calls == [1]
 
 
+def test_a_derived_column_is_worked_out_when_read_and_kept_through_where_and_rows():
+    calls = []
+
+    def doubled(hood):
+        calls.append(len(hood["v"]))
+        return 2 * hood["v"]
+
+    hood = dream.swarm.Neighbourhood(np.array([0, 2, 3]), {"v": np.array([1.0, 2.0, 4.0])}, derived={"w": doubled})
+    assert hood.names == ["v", "w"] and calls == []
+    kept = hood.where(np.array([True, False, True]))
+    assert kept["w"].tolist() == [2.0, 8.0] and calls == [2]  # worked out from the entries kept
+    frozen = hood.frozen()
+    assert frozen.sum("w").tolist() == [6.0, 8.0] and not frozen["w"].flags.writeable and calls == [2, 3]
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.01])
+@pytest.mark.parametrize("one_by_one", [False, True])
+def test_bearings_are_read_whether_or_not_the_step_needs_them(noise, one_by_one):
+    # Without HRVO or noise the engine leaves the bearings to the decision that reads them.
+    rng = np.random.default_rng(3)
+    x = np.vstack((rng.uniform(-1.0, 1.0, (2, 30)), rng.uniform(-np.pi, np.pi, 30)))
+    robot = Reader(movement=dream.swarm.Movement(range=0.8, noise=noise))
+    step(robot, x, one_by_one=one_by_one)
+    for view in robot.views:
+        seen = view.seen
+        assert "bearing" in seen.names and not seen["bearing"].flags.writeable
+        if noise == 0.0:
+            assert np.array_equal(seen["bearing"], np.arctan2(seen["dy"], seen["dx"]))
+        else:  # the noisy offsets come from the noisy bearings
+            assert np.allclose(seen["dx"], seen["distance"] * np.cos(seen["bearing"]))
+    if noise == 0.0 and not one_by_one:  # the kernel's own bearings, to an ulp
+        (view,) = robot.views
+        seen, _ = kernels.perceive(x[:2].T, x[2], view.ids, sight=(0.8, 2 * np.pi, 0.0))
+        assert len(seen[3]) > 30 and np.allclose(view.seen["bearing"], seen[3], rtol=0, atol=1e-15)
+
+
 @pytest.mark.parametrize("faults", [None, Faults(loss=0.2, latency=2)], ids=["lossless", "lossy"])
 def test_runs_are_the_same_whether_or_not_the_messages_are_counted(tmp_path, faults):
     # Without an output that shows the message counts (a trajectory log, a recording) the runner

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use crate::csr::{check_offsets, Csr};
 use crate::error::{check_finite, check_len, try_room, GeomError, Result};
 use crate::grid::Grid;
-use crate::parallel::gather_rows;
+use crate::parallel::{gather_rows, join_if, worth_spreading};
 
 /// Rows below this count run on one thread: spawning costs more than it saves.
 const PARALLEL_ROWS: usize = 512;
@@ -44,12 +44,15 @@ impl Csr {
             indptr.push(indptr[indptr.len() - 1] + length as i64);
         }
         let block = |i: usize| &blocks[rows[i].0];
-        let indices = gather_rows(&indptr, |i| (&block(i).indices[..], rows[i].1), "neighbour indices")?;
-        let distances = gather_rows(&indptr, |i| (&block(i).distances[..], rows[i].1), "neighbour distances")?;
+        let (indices, distances) = join_if(
+            worth_spreading(2 * indptr[n] as usize, 1.0),
+            || gather_rows(&indptr, |i| (&block(i).indices[..], rows[i].1), "neighbour indices"),
+            || gather_rows(&indptr, |i| (&block(i).distances[..], rows[i].1), "neighbour distances"),
+        );
         Ok(Csr {
             indptr,
-            indices,
-            distances,
+            indices: indices?,
+            distances: distances?,
         })
     }
 }

@@ -62,10 +62,24 @@ const GATHER_ROWS: usize = 4096;
 /// parallel copy measured 10-17 % slower, at 1,000,000 it is 1.14-1.31x faster).
 const PARALLEL_GATHER: usize = 400_000;
 
+/// `(a(), b())`, side by side on the threads when `spread`.
+pub(crate) fn join_if<RA: Send, RB: Send>(
+    spread: bool,
+    a: impl FnOnce() -> RA + Send,
+    b: impl FnOnce() -> RB + Send,
+) -> (RA, RB) {
+    if spread {
+        rayon::join(a, b)
+    } else {
+        (a(), b())
+    }
+}
+
 /// Ragged rows put in order, one column at a time: row r's `offsets[r + 1] - offsets[r]`
 /// entries come from `from(r)`, a slice and where the row's entries start in it (the rows of
 /// a parallel search, each found by some task in some order). At a million robots the result is
-/// hundreds of megabytes, each fresh page faulted in: filled and copied on every core.
+/// hundreds of megabytes, each fresh page faulted in: filled and copied on every core. Fewer
+/// entries are appended on the calling thread, each written once.
 ///
 /// # Errors
 /// [`crate::GeomError::OutOfMemory`] (naming `what`) when the result cannot be allocated.
@@ -78,17 +92,22 @@ pub(crate) fn gather_rows<'a, T: Copy + Default + Send + Sync + 'a>(
     let total = offsets[rows] as usize;
     let mut out = Vec::new();
     try_room(&mut out, total, what)?;
-    let parallel = total >= PARALLEL_GATHER;
-    if parallel {
-        out.par_extend(
-            (0..total)
-                .into_par_iter()
-                .with_min_len(TASK_ITEMS)
-                .map(|_| T::default()),
-        );
-    } else {
-        out.resize(total, T::default());
+    let row = |r: usize| {
+        let (column, start) = from(r);
+        &column[start..start + (offsets[r + 1] - offsets[r]) as usize]
+    };
+    if total < PARALLEL_GATHER {
+        for r in 0..rows {
+            out.extend_from_slice(row(r));
+        }
+        return Ok(out);
     }
+    out.par_extend(
+        (0..total)
+            .into_par_iter()
+            .with_min_len(TASK_ITEMS)
+            .map(|_| T::default()),
+    );
     let mut tasks = Vec::with_capacity(rows / GATHER_ROWS + 1);
     let mut rest = &mut out[..];
     for first in (0..rows).step_by(GATHER_ROWS) {
@@ -97,20 +116,14 @@ pub(crate) fn gather_rows<'a, T: Copy + Default + Send + Sync + 'a>(
         tasks.push((first..last, head));
         rest = tail;
     }
-    let copy = |(range, head): (std::ops::Range<usize>, &mut [T])| {
+    tasks.into_par_iter().for_each(|(range, head)| {
         let mut at = 0;
         for r in range {
-            let length = (offsets[r + 1] - offsets[r]) as usize;
-            let (column, start) = from(r);
-            head[at..at + length].copy_from_slice(&column[start..start + length]);
-            at += length;
+            let entries = row(r);
+            head[at..at + entries.len()].copy_from_slice(entries);
+            at += entries.len();
         }
-    };
-    if parallel {
-        tasks.into_par_iter().for_each(copy);
-    } else {
-        tasks.into_iter().for_each(copy);
-    }
+    });
     Ok(out)
 }
 

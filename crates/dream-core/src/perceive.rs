@@ -19,20 +19,22 @@ use rayon::prelude::*;
 use crate::error::{check_finite, check_len, try_filled, try_room, GeomError, Result};
 use crate::grid::Grid;
 use crate::neighbours::{length, radius_squared, wrap_angle};
-use crate::parallel::{gather_rows, map_range, worth_spreading, TASK_ITEMS};
+use crate::parallel::{gather_rows, join_if, map_range, worth_spreading, TASK_ITEMS};
 
 /// A movement sensor's reach: range (m), full aperture `fov` (rad) about the heading turned by
-/// `direction` (rad).
+/// `direction` (rad); `bearings`: whether the bearings of the robots seen are wanted (an `atan2`
+/// each, a tenth of a crowd's perception; without, the column is left empty).
 #[derive(Debug, Clone, Copy)]
 pub struct Sight {
     pub range: f64,
     pub fov: f64,
     pub direction: f64,
+    pub bearings: bool,
 }
 
 /// Ragged rows of seen or heard robots: row r is `ids[offsets[r]..offsets[r + 1]]`, with the
 /// distance of each and, for the seen ones, the bearing (world frame, from the perceiving robot
-/// towards the other) and the offset `(dx, dy)` (the other's position less the perceiving
+/// towards the other; where [`Sight::bearings`]) and the offset `(dx, dy)` (the other's position less the perceiving
 /// robot's); those three are empty for the heard ones, whom no one needs the direction of.
 /// `carried[c]` holds the `c`-th carried column's values at the robots seen (none for the heard).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -151,7 +153,8 @@ pub fn perceive(
         let order: Vec<(usize, u32)> = rows.iter().enumerate().map(|(r, &i)| (i as usize, r as u32)).collect();
         vec![find.part(&order)?]
     };
-    let (mut seen, heard) = in_row_order(&parts, rows.len())?;
+    let bearings = sight.is_some_and(|s| s.bearings);
+    let (mut seen, heard) = in_row_order(&parts, rows.len(), bearings)?;
     seen.carried = carried
         .iter()
         .map(|values| map_range(seen.ids.len(), 1.0, |e| values[seen.ids[e] as usize]))
@@ -327,11 +330,11 @@ impl Find<'_> {
     fn sort_out(&self, i: usize, near: &[Near], part: &mut Part) -> Result<()> {
         let Part { seen, heard, .. } = part;
         // At most every robot in reach, seen and heard.
-        if self.sight.is_some() {
-            seen.room(near.len(), true)?;
+        if let Some(s) = self.sight {
+            seen.room(near.len(), true, s.bearings)?;
         }
         if self.radio.is_some() {
-            heard.room(near.len(), false)?;
+            heard.room(near.len(), false, false)?;
         }
         for &Near { j, dx, dy, squared } in near {
             let distance = length(squared, dx, dy);
@@ -340,14 +343,17 @@ impl Find<'_> {
             }
             if let Some(s) = self.sight {
                 if distance <= s.range {
-                    let bearing = dy.atan2(dx);
+                    let bearing = (s.bearings || s.fov < TAU).then(|| dy.atan2(dx));
                     let ahead = s.fov >= TAU
                         || distance == 0.0
-                        || wrap_angle(bearing - (self.headings[i] + s.direction)).abs() <= s.fov / 2.0;
+                        || bearing
+                            .is_some_and(|b| wrap_angle(b - (self.headings[i] + s.direction)).abs() <= s.fov / 2.0);
                     if ahead {
                         seen.ids.push(j as i64);
                         seen.distances.push(distance);
-                        seen.bearings.push(bearing);
+                        if let (true, Some(b)) = (s.bearings, bearing) {
+                            seen.bearings.push(b);
+                        }
                         seen.dxs.push(dx);
                         seen.dys.push(dy);
                     }
@@ -385,13 +391,15 @@ struct Shared {
 }
 
 impl Perceived {
-    /// Room for `count` more entries; the bearings and offsets only where `seen`.
-    fn room(&mut self, count: usize, seen: bool) -> Result<()> {
+    /// Room for `count` more entries; the offsets only where `seen`, the bearings where `bearings`.
+    fn room(&mut self, count: usize, seen: bool, bearings: bool) -> Result<()> {
         const WHAT: &str = "perceived robots";
         try_room(&mut self.ids, count, WHAT)?;
         try_room(&mut self.distances, count, WHAT)?;
-        if seen {
+        if bearings {
             try_room(&mut self.bearings, count, WHAT)?;
+        }
+        if seen {
             try_room(&mut self.dxs, count, WHAT)?;
             try_room(&mut self.dys, count, WHAT)?;
         }
@@ -399,8 +407,9 @@ impl Perceived {
     }
 }
 
-/// The parts' rows, seen and heard, in row order (`rows` of them), copied on every core.
-fn in_row_order(parts: &[Part], rows: usize) -> Result<(Perceived, Perceived)> {
+/// The parts' rows, seen and heard, in row order (`rows` of them), the columns side by side; the
+/// bearings where the parts have them.
+fn in_row_order(parts: &[Part], rows: usize, with_bearings: bool) -> Result<(Perceived, Perceived)> {
     const WHAT: &str = "perceived robots";
     // Each row's part and where its entries start in that part's seen and heard columns.
     let mut at = try_filled(rows, (0_usize, 0_usize, 0_usize), WHAT)?;
@@ -420,36 +429,57 @@ fn in_row_order(parts: &[Part], rows: usize) -> Result<(Perceived, Perceived)> {
         seen_offsets[r + 1] += seen_offsets[r];
         heard_offsets[r + 1] += heard_offsets[r];
     }
-    let seen = || -> Result<Perceived> {
-        let row = |r: usize| (&parts[at[r].0].seen, at[r].1);
-        let column =
-            |of: fn(&Perceived) -> &Vec<f64>| gather_rows(&seen_offsets, |r| (&of(row(r).0)[..], row(r).1), WHAT);
-        Ok(Perceived {
-            ids: gather_rows(&seen_offsets, |r| (&row(r).0.ids[..], row(r).1), WHAT)?,
-            distances: column(|p| &p.distances)?,
-            bearings: column(|p| &p.bearings)?,
-            dxs: column(|p| &p.dxs)?,
-            dys: column(|p| &p.dys)?,
-            ..Perceived::default()
-        })
+    let seen_at = |r: usize| (&parts[at[r].0].seen, at[r].1);
+    let heard_at = |r: usize| (&parts[at[r].0].heard, at[r].2);
+    let seen_ids = || gather_rows(&seen_offsets, |r| (&seen_at(r).0.ids[..], seen_at(r).1), WHAT);
+    let seen_column =
+        |of: fn(&Perceived) -> &Vec<f64>| gather_rows(&seen_offsets, |r| (&of(seen_at(r).0)[..], seen_at(r).1), WHAT);
+    let heard_ids = || gather_rows(&heard_offsets, |r| (&heard_at(r).0.ids[..], heard_at(r).1), WHAT);
+    let heard_distances = || gather_rows(&heard_offsets, |r| (&heard_at(r).0.distances[..], heard_at(r).1), WHAT);
+    // The seven columns copied side by side where there is much to copy: each is a pass over
+    // fresh memory, bound by its page faults and cache misses.
+    let spread = worth_spreading(
+        (4 + usize::from(with_bearings)) * seen_offsets[rows] as usize + 2 * heard_offsets[rows] as usize,
+        1.0,
+    );
+    let (((ids, distances), (bearings, (dxs, dys))), (heard_ids, heard_distances)) = join_if(
+        spread,
+        || {
+            join_if(
+                spread,
+                || join_if(spread, seen_ids, || seen_column(|p| &p.distances)),
+                || {
+                    join_if(
+                        spread,
+                        || {
+                            if with_bearings {
+                                seen_column(|p| &p.bearings)
+                            } else {
+                                Ok(Vec::new())
+                            }
+                        },
+                        || join_if(spread, || seen_column(|p| &p.dxs), || seen_column(|p| &p.dys)),
+                    )
+                },
+            )
+        },
+        || join_if(spread, heard_ids, heard_distances),
+    );
+    let seen = Perceived {
+        offsets: seen_offsets,
+        ids: ids?,
+        distances: distances?,
+        bearings: bearings?,
+        dxs: dxs?,
+        dys: dys?,
+        carried: Vec::new(),
     };
-    let heard = || -> Result<Perceived> {
-        let row = |r: usize| (&parts[at[r].0].heard, at[r].2);
-        Ok(Perceived {
-            ids: gather_rows(&heard_offsets, |r| (&row(r).0.ids[..], row(r).1), WHAT)?,
-            distances: gather_rows(&heard_offsets, |r| (&row(r).0.distances[..], row(r).1), WHAT)?,
-            ..Perceived::default()
-        })
+    let heard = Perceived {
+        offsets: heard_offsets,
+        ids: heard_ids?,
+        distances: heard_distances?,
+        ..Perceived::default()
     };
-    // The seen and the heard copied side by side where there is much to copy.
-    let values = 5 * seen_offsets[rows] as usize + 2 * heard_offsets[rows] as usize;
-    let (seen, heard) = if worth_spreading(values, 1.0) {
-        rayon::join(seen, heard)
-    } else {
-        (seen(), heard())
-    };
-    let (mut seen, mut heard) = (seen?, heard?);
-    (seen.offsets, heard.offsets) = (seen_offsets, heard_offsets);
     Ok((seen, heard))
 }
 
@@ -464,6 +494,7 @@ mod tests {
             range: 0.3,
             fov: 1.0,
             direction: 0.0,
+            bearings: true,
         };
         let talking = [true, true, false, true];
         let speeds: &[f64] = &[0.5, 0.1, 0.2, 0.3];
@@ -484,6 +515,14 @@ mod tests {
         assert_eq!(heard.ids, vec![1, 3, 0, 1]); // robot 2 is silent; 0 and 3 are 0.9 apart
         assert!(heard.carried.is_empty());
         assert!(perceive(&xs, &ys, &headings, &[4], Some(sight), None, &[]).is_err());
+        // Without bearings: the same robots seen (the field of view still decides), no bearings.
+        let unturned = Sight {
+            bearings: false,
+            ..sight
+        };
+        let (bare, _) = perceive(&xs, &ys, &headings, &[0, 3], Some(unturned), None, &[]).unwrap();
+        assert_eq!((bare.ids, bare.dxs), (seen.ids.clone(), seen.dxs.clone()));
+        assert!(bare.bearings.is_empty() && seen.bearings.len() == 1);
         // Over a graph: robot 0 is linked to 3 (0.9 away), to itself and to the silent 2.
         let graph: (&[i64], &[i64]) = (&[0, 3, 3, 3, 4], &[3, 0, 2, 0]);
         let at = Some((&xs[..], &ys[..]));

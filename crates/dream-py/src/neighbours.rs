@@ -84,10 +84,10 @@ pub fn far_from<'py>(
 }
 
 /// Who the robots `rows` see and hear: `(seen, heard)`, `(offsets, ids, distances, bearings, dx,
-/// dy, *carried)` (each of `carried` `(n,)` read at the robots seen) and `(offsets, ids,
-/// distances)`.
+/// dy, *carried)` (each of `carried` `(n,)` read at the robots seen; bearings empty unless
+/// `bearings`) and `(offsets, ids, distances)`.
 #[pyfunction]
-#[pyo3(signature = (positions, headings, rows, *, sight=None, radio_range=None, talking=None, carried=None))]
+#[pyo3(signature = (positions, headings, rows, *, sight=None, radio_range=None, talking=None, carried=None, bearings=true))]
 #[allow(clippy::too_many_arguments)]
 pub fn perceive<'py>(
     py: Python<'py>,
@@ -98,6 +98,7 @@ pub fn perceive<'py>(
     radio_range: Option<f64>,
     talking: Option<Bound<'py, PyAny>>,
     carried: Option<Vec<Bound<'py, PyAny>>>,
+    bearings: bool,
 ) -> PyDreamResult<(Bound<'py, PyTuple>, CsrArrays<'py>)> {
     let [xs, ys] = columns_of::<2>("positions", &positions)?;
     let n = xs.len();
@@ -114,7 +115,12 @@ pub fn perceive<'py>(
         (None, None) => None,
         _ => return Err(value_error("give both `radio_range` and `talking`, or neither".into())),
     };
-    let sight = sight.map(|(range, fov, direction)| Sight { range, fov, direction });
+    let sight = sight.map(|(range, fov, direction)| Sight {
+        range,
+        fov,
+        direction,
+        bearings,
+    });
     let columns: Vec<&[f64]> = carried.iter().map(|c| &c[..]).collect();
     let headings: &[f64] = &headings;
     let (seen, heard) = py.detach(|| core_perceive(&xs, &ys, headings, &rows, sight, radio, &columns))?;

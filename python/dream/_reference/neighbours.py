@@ -110,11 +110,13 @@ def perceive(
     radio_range: float | None = None,
     talking: np.ndarray | None = None,
     carried: Sequence[FloatArray] | None = None,
+    bearings: bool = True,
 ) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
     """Who the robots ``rows`` see (``sight``: range, fov, direction) and hear (within
     ``radio_range``, among the ``talking``): ``(seen, heard)``, ``(offsets, ids, distances,
-    bearings, dx, dy, *carried)`` (each of ``carried`` ``(n,)`` read at the robots seen) and
-    ``(offsets, ids, distances)`` over those rows, ids increasing in each row."""
+    bearings, dx, dy, *carried)`` (each of ``carried`` ``(n,)`` read at the robots seen; the
+    bearings empty unless ``bearings``) and ``(offsets, ids, distances)`` over those rows, ids
+    increasing in each row."""
     n = len(positions)
     reach = max(0.0 if sight is None else sight[0], 0.0 if radio_range is None else radio_range)
     asked = np.zeros(n, dtype=bool)
@@ -144,6 +146,8 @@ def perceive(
         return (offsets, *(np.concatenate([p[k] for p in parts]) for k in range(columns)))
 
     seen_csr = csr(seen, 5)
+    if not bearings:
+        seen_csr = (*seen_csr[:3], np.zeros(0), *seen_csr[4:])
     ids = seen_csr[1]
     return (*seen_csr, *(np.asarray(values, dtype=np.float64)[ids] for values in carried or ())), csr(heard, 2)
 

@@ -125,6 +125,7 @@ def perceive(
     radio_range: float | None = None,
     talking: Any = None,
     carried: Sequence[Any] = (),
+    bearings: bool = True,
 ) -> tuple[Perceived, Heard]:
     """Who the robots ``rows`` ``(m,)`` (increasing ids) see and hear, in one neighbour query.
 
@@ -137,6 +138,8 @@ def perceive(
     the other's position less the perceiving robot's; then one column per array of ``carried``
     (each ``(n,)``, one value per robot, NaN passed on: the velocities a movement sensor reports,
     say), its values at the robots seen. A row does not depend on which other rows are asked.
+    Without ``bearings`` the bearings column is empty (an ``atan2`` a robot seen, saved where no
+    one reads them).
     """
     p = kernel_input(positions, "positions", (None, 2))
     n = p.shape[0]
@@ -153,7 +156,7 @@ def perceive(
         flags = as_flags(talking, "talking", n)
     columns = [_carried(values, n) for values in carried]
     return implementation("perceive")(
-        p, h, asked, sight=sight, radio_range=radio_range, talking=flags, carried=columns or None
+        p, h, asked, sight=sight, radio_range=radio_range, talking=flags, carried=columns or None, bearings=bearings
     )
 
 

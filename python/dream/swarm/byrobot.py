@@ -67,6 +67,7 @@ def _row(hood: Neighbourhood, start: int, end: int) -> Neighbourhood:
         offsets,
         {name: values[start:end] for name, values in hood.columns.items()},
         None if hood.index is None else (hood.index[start:end], hood.sources),
+        hood.derived,
     )
     part.read_only = hood.read_only
     return part

@@ -206,6 +206,7 @@ class Engine:
             radio_range=radio.range if radio is not None and by_range and not deferred else None,
             talking=talking if by_range and not deferred else None,
             carried=velocities,  # read at the robots seen, in the same pass
+            bearings=self._bearings_read(faults),
         )
         if radio is not None and radio.graph is not None:
             heard = _linked(
@@ -329,6 +330,7 @@ class Engine:
         def own(hood: Neighbourhood) -> dict[str, np.ndarray]:
             cut = slice(hood.offsets[at], hood.offsets[at + 1])
             found = {name: values[cut].copy() for name, values in hood.columns.items()}
+            found.update({name: hood[name][cut].copy() for name in hood.derived if name not in found})
             if hood.index is not None:  # the fields still on the board: this robot's entries only
                 found.update(
                     {name: source[hood.index[cut]] for name, source in hood.sources.items() if name not in found}
@@ -388,8 +390,11 @@ class Engine:
         offsets, others, gaps, bearing, dx, dy, *moving = seen
         if sensor is None:
             return Neighbourhood(offsets, {name: np.zeros(0) for name in (*DETECTION, "dx", "dy")})
+        if not self._bearings_read(faults):  # worked out only if the decision reads them
+            columns = {"distance": gaps, "vx": moving[0], "vy": moving[1], "dx": dx, "dy": dy}
+            return Neighbourhood(offsets, columns, derived={"bearing": _bearings})
         columns = {"distance": gaps, "bearing": bearing, "vx": moving[0], "vy": moving[1]}
-        sigma = math.hypot(sensor.noise, 0.0 if faults is None else faults.faults.sensor_noise)
+        sigma = self._sensor_noise(faults)
         if sigma > 0:
             me = np.repeat(rows, np.diff(offsets))
             noise = draws.normal(self.seed, draws.DETECTION_NOISE, t, me[:, None], others[:, None], np.arange(4))
@@ -399,6 +404,18 @@ class Engine:
             dy = columns["distance"] * np.sin(columns["bearing"])
         columns["dx"], columns["dy"] = dx, dy
         return Neighbourhood(offsets, columns)
+
+    def _sensor_noise(self, faults: FaultState | None) -> float:
+        """The movement sensor's noise with the world's (standard deviation of each value)."""
+        assert self.robot.movement is not None
+        return math.hypot(self.robot.movement.noise, 0.0 if faults is None else faults.faults.sensor_noise)
+
+    def _bearings_read(self, faults: FaultState | None) -> bool:
+        """Whether the step reads the bearings of the robots seen whatever the decision does: HRVO
+        steers by them, and a noisy sensor's offsets come from them. Otherwise they are worked
+        out only if the decision reads them (an ``atan2`` each: a tenth of a crowd's perception)."""
+        movement = self.robot.movement
+        return movement is not None and (self.robot.avoid is not None or self._sensor_noise(faults) > 0)
 
     def _obstacles(self, t: int, rows: np.ndarray, x: np.ndarray, faults: FaultState | None) -> Neighbourhood:
         """The obstacle sensor's reading of ``rows`` (:class:`~dream.swarm.robot.Obstacles`): the
@@ -587,3 +604,8 @@ def _linked(
     if len(graph[0]) - 1 != x.shape[1]:
         raise ValueError(f"the radio's graph links {len(graph[0]) - 1} robots, but the run has {x.shape[1]}")
     return kernels.linked(rows, graph, talking, positions=x[:2].T if measured else None)
+
+
+def _bearings(seen: Neighbourhood) -> np.ndarray:
+    """The bearings of the robots seen, from their offsets (world frame, towards them)."""
+    return np.arctan2(seen["dy"], seen["dx"])

@@ -34,6 +34,9 @@ class Neighbourhood:
         More columns, read from per-robot arrays ``sources`` (name to ``(n,)``) at the robots
         ``index`` ``(e,)``: a message field on the board, say. They are copied out only when
         read whole; reductions read them in place.
+    derived : mapping of name to function, optional
+        More columns, each worked out entry by entry from the others (``derived[name](self)``)
+        the first time it is read: the bearings of the robots seen, from their offsets.
     """
 
     def __init__(
@@ -41,11 +44,13 @@ class Neighbourhood:
         offsets: np.ndarray,
         columns: Mapping[str, np.ndarray],
         gathered: tuple[np.ndarray, Mapping[str, np.ndarray]] | None = None,
+        derived: Mapping[str, Callable[[Neighbourhood], np.ndarray]] | None = None,
     ) -> None:
         self.offsets = offsets
         self.columns = dict(columns)
         self.index: np.ndarray | None = None if gathered is None else gathered[0]
         self.sources: Mapping[str, np.ndarray] = {} if gathered is None else gathered[1]
+        self.derived: Mapping[str, Callable[[Neighbourhood], np.ndarray]] = {} if derived is None else derived
         self.read_only = False
 
     def __len__(self) -> int:
@@ -55,9 +60,12 @@ class Neighbourhood:
     def __getitem__(self, name: str) -> np.ndarray:
         """Column ``name``, one value per entry."""
         if name not in self.columns:
-            if name not in self.sources:
+            if name in self.derived:
+                column = self.derived[name](self)
+            elif name in self.sources:
+                column = self.sources[name][self.index]
+            else:
                 raise KeyError(f"no column {name!r} in this neighbourhood (its columns: {', '.join(self.names)})")
-            column = self.sources[name][self.index]
             column.flags.writeable = not self.read_only
             self.columns[name] = column
         return self.columns[name]
@@ -65,7 +73,8 @@ class Neighbourhood:
     @property
     def names(self) -> list[str]:
         """The names of the columns."""
-        return [*self.columns, *(name for name in self.sources if name not in self.columns)]
+        later = (name for name in (*self.derived, *self.sources) if name not in self.columns)
+        return [*self.columns, *later]
 
     def __repr__(self) -> str:
         return f"Neighbourhood({len(self)} rows, {self.offsets[-1]} entries, columns {self.names})"
@@ -205,7 +214,8 @@ class Neighbourhood:
             raise ValueError(f"`keep` must have shape ({self.offsets[-1]},), one flag per entry, got {keep.shape}")
         kept = np.concatenate(([0], np.cumsum(keep)))[self.offsets]
         columns = {name: column[keep] for name, column in self.columns.items()}
-        return Neighbourhood(kept, columns, None if self.index is None else (self.index[keep], self.sources))
+        gathered = None if self.index is None else (self.index[keep], self.sources)
+        return Neighbourhood(kept, columns, gathered, self.derived)
 
     def frozen(self) -> Neighbourhood:
         """This neighbourhood with read-only arrays (what a decision gets: it reads, never writes)."""
