@@ -133,16 +133,17 @@ def hrvo_rows(
     preferred: _Floats,
     positions: _Floats,
     offsets: _Ints,
-    detections: _Floats | tuple[_Floats, _Floats, _Floats, _Floats],
+    detections: _Floats | tuple[_Floats, ...],
     *,
     safety: float,
     v_max: float,
     bounds: _Bounds | None,
     candidates: _Floats,
     include_preferred: bool,
-    towards: bool = False,
+    relative: bool = False,
 ) -> _Floats:
-    """HRVO velocities (m, 2) of the deciding robots, each from its own detections (k, 4) or their four columns, cut by offsets (m+1,)."""
+    """HRVO velocities (m, 2) of the deciding robots, each from its own detections (k, 4) or their four columns, cut by
+    offsets (m+1,); with `relative`, (k, 5) or five columns: distance, dx, dy, vx, vy."""
 
 def linked(
     rows: _Ints, indptr: _Ints, indices: _Ints, talking: NDArray[np.bool_], positions: _Floats | None = None

@@ -175,20 +175,28 @@ def test_hrvo_rows_is_the_planner_row_by_row(rng, rows):
         _core.hrvo_rows(velocities, preferred, positions, offsets, columns, candidates=grid, **options), got
     )
     assert_array_equal(kernels.hrvo_rows(velocities, preferred, positions, offsets, columns, **options), got)
-    # Bearings towards the robots seen, as a movement sensor's neighbourhood holds them: the same
-    # answer once the kernel turns them into the sensor's angles (from them), on both paths.
-    angle = seen[:, 1]
-    bearing = np.where(angle > 0, angle - np.pi, angle + np.pi)
-    bearing[:3] = 0.0  # straight ahead: the flip's edge
-    towards = np.column_stack((seen[:, 0], bearing, seen[:, 2:]))
-    flipped = seen.copy()
-    flipped[:, 1] = np.where(bearing > 0, bearing - np.pi, bearing + np.pi)
-    want = _reference.hrvo_rows(velocities, preferred, positions, offsets, flipped, candidates=grid, **options)
+    # A movement sensor's neighbourhood: distances and offsets, the direction their quotient (no
+    # trigonometry: the same bits on both paths), on both paths and in both forms.
+    towards = seen[:, 1] + np.pi
+    sensed = np.column_stack((seen[:, 0], seen[:, 0] * np.cos(towards), seen[:, 0] * np.sin(towards), seen[:, 2:]))
+    want = _reference.hrvo_rows(
+        velocities, preferred, positions, offsets, sensed, candidates=grid, relative=True, **options
+    )
     for path in (_core, _reference):
-        both = path.hrvo_rows(
-            velocities, preferred, positions, offsets, towards, candidates=grid, towards=True, **options
-        )
-        assert_array_equal(both, want)
+        for form in (sensed, tuple(sensed.T.copy())):
+            relative = path.hrvo_rows(
+                velocities, preferred, positions, offsets, form, candidates=grid, relative=True, **options
+            )
+            assert_array_equal(relative, want)
+    assert_array_equal(
+        kernels.hrvo_rows(velocities, preferred, positions, offsets, sensed, relative=True, **options), want
+    )
+    # The same robots seen in both forms, their directions to an ulp (the polar form's at distance 0
+    # along its angle, the offsets' along (1, 0): so the angle there too).
+    polar = seen.copy()
+    polar[seen[:, 0] == 0.0, 1] = -np.pi
+    steered = _core.hrvo_rows(velocities, preferred, positions, offsets, polar, candidates=grid, **options)
+    assert_allclose(want, steered, atol=1e-12)
     planner = _core.HrvoPlanner(grid, **options)
     for r in range(0, rows, max(rows // 40, 1)):  # exactly the per-robot planner's answer
         row = seen[offsets[r] : offsets[r + 1]]

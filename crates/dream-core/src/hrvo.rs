@@ -100,6 +100,14 @@ impl Neighbour {
         Self::at(offset, (offset[0] * offset[0] + offset[1] * offset[1]).sqrt(), velocity)
     }
 
+    /// From a detection `[distance, dx, dy, vx, vy]` that gives the detected robot's offset (its
+    /// position less the sensing robot's) with its distance: the direction is the offset over
+    /// the distance ((1, 0) at distance 0), two divisions where an angle costs a sine and a cosine.
+    pub fn from_sensed(detection: [f64; 5]) -> Self {
+        let [distance, dx, dy, vx, vy] = detection;
+        Self::at([dx, dy], distance, [vx, vy])
+    }
+
     /// [`Neighbour::from_offset`] with the offset's length already known.
     fn at(offset: Vec2, distance: f64, velocity: Vec2) -> Self {
         let direction = if distance > 0.0 {
@@ -541,10 +549,42 @@ fn check_neighbours(neighbours: &[Neighbour]) -> Result<()> {
     }
 }
 
+/// What movement sensors report of the robots they detect, one entry a detection.
+#[derive(Debug, Clone, Copy)]
+pub enum Detections<'a> {
+    /// `[distance, angle, vx, vy]`, as in [`Neighbour::from_detection`].
+    Polar(&'a [[f64; 4]]),
+    /// `[distance, dx, dy, vx, vy]`, as in [`Neighbour::from_sensed`].
+    Offsets(&'a [[f64; 5]]),
+}
+
+impl Detections<'_> {
+    fn len(&self) -> usize {
+        match self {
+            Detections::Polar(d) => d.len(),
+            Detections::Offsets(d) => d.len(),
+        }
+    }
+
+    /// The neighbours they describe, checked, on every core for many (a million robots see
+    /// millions of others).
+    fn neighbours(&self) -> Result<Vec<Neighbour>> {
+        let around = match self {
+            Detections::Polar(d) => map_range(d.len(), 20.0, |e| Neighbour::from_detection(d[e])),
+            Detections::Offsets(d) => {
+                // The offset is only read for a distance above 0: checked here, every value.
+                check_finite("detections", d.as_flattened())?;
+                map_range(d.len(), 3.0, |e| Neighbour::from_sensed(d[e]))
+            }
+        };
+        check_neighbours(&around)?;
+        Ok(around)
+    }
+}
+
 /// HRVO velocities of the robots deciding now, each from its own detections (what its movement
-/// sensor reported, `[distance, angle, vx, vy]` as in [`Neighbour::from_detection`]): row r's
-/// are `detections[offsets[r]..offsets[r + 1]]`. Row r gets exactly [`hrvo_one`]'s answer for
-/// those detections, rows in parallel for a large swarm.
+/// sensor reported): row r's are `detections[offsets[r]..offsets[r + 1]]`. Row r gets exactly
+/// [`hrvo_one`]'s answer for those detections' neighbours, rows in parallel for a large swarm.
 ///
 /// # Errors
 /// Length mismatches, non-finite inputs, negative distances, invalid parameters or offsets.
@@ -553,7 +593,7 @@ pub fn hrvo_rows(
     preferred: &[Vec2],
     positions: &[Vec2],
     offsets: &[i64],
-    detections: &[[f64; 4]],
+    detections: Detections<'_>,
     grid: &[Vec2],
     params: &HrvoParams,
 ) -> Result<Vec<Vec2>> {
@@ -567,9 +607,7 @@ pub fn hrvo_rows(
     check_vec2s("preferred", preferred)?;
     check_vec2s("positions", positions)?;
     check_vec2s("candidates", grid)?;
-    // On every core: a million robots see millions of others, each a cosine and a sine.
-    let around = map_range(detections.len(), 20.0, |e| Neighbour::from_detection(detections[e]));
-    check_neighbours(&around)?;
+    let around = detections.neighbours()?;
     let robot = |scratch: &mut Scratch, r: usize| {
         scratch.cones.clear();
         let row = &around[offsets[r] as usize..offsets[r + 1] as usize];

@@ -2,12 +2,11 @@
 
 use dream_core::geom::Arena;
 use dream_core::geom::Vec2;
-use dream_core::hrvo::{self as core, HrvoParams, Neighbour};
+use dream_core::hrvo::{self as core, Detections, HrvoParams, Neighbour};
 use dream_core::parallel::map_range;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
-use std::f64::consts::PI;
 
 use crate::arrays::{both, indices_of, points_of, vector_of};
 use crate::errors::{value_error, PyDreamResult};
@@ -70,8 +69,10 @@ pub fn hrvo<'py>(
 
 /// HRVO velocities `(m, 2)` of the deciding robots, each from its own detections `(k, 4)`
 /// (row r's: `offsets[r]..offsets[r + 1]`); row r is `HrvoPlanner.velocity`'s answer for them.
+/// With `relative`, the detections are `(k, 5)`: distance, the offset `(dx, dy)` of the robot
+/// detected, its velocity.
 #[pyfunction]
-#[pyo3(signature = (velocities, preferred, positions, offsets, detections, *, safety, v_max, bounds, candidates, include_preferred, towards=false))]
+#[pyo3(signature = (velocities, preferred, positions, offsets, detections, *, safety, v_max, bounds, candidates, include_preferred, relative=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn hrvo_rows<'py>(
     py: Python<'py>,
@@ -85,52 +86,45 @@ pub fn hrvo_rows<'py>(
     bounds: Option<(f64, f64, f64, f64)>,
     candidates: Bound<'py, PyAny>,
     include_preferred: bool,
-    towards: bool,
+    relative: bool,
 ) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
     let v = points_of::<2>("velocities", &velocities)?;
     let pref = points_of::<2>("preferred", &preferred)?;
     let p = points_of::<2>("positions", &positions)?;
     let offsets = indices_of("offsets", &offsets)?;
-    let mut seen = detections_of(&detections)?;
-    if towards {
-        // Bearings towards the detected robots, as the movement sensor's angles from them: the
-        // reference's flip, to the bit.
-        seen = map_range(seen.len(), 1.0, |e| {
-            let [distance, bearing, vx, vy] = seen[e];
-            [
-                distance,
-                if bearing > 0.0 { bearing - PI } else { bearing + PI },
-                vx,
-                vy,
-            ]
-        });
-    }
+    let sensed = relative
+        .then(|| detections_of::<5>(&detections, "(distance, dx, dy, vx, vy)"))
+        .transpose()?;
+    let polar = match sensed {
+        Some(_) => Vec::new(),
+        None => detections_of::<4>(&detections, "(distance, angle, vx, vy)")?,
+    };
+    let seen = sensed.as_deref().map_or(Detections::Polar(&polar), Detections::Offsets);
     let grid = points_of::<2>("candidates", &candidates)?;
     let params = params(safety, v_max, bounds, include_preferred)?;
-    let chosen = py.detach(|| core::hrvo_rows(&v, &pref, &p, &offsets, &seen, &grid, &params))?;
+    let chosen = py.detach(|| core::hrvo_rows(&v, &pref, &p, &offsets, seen, &grid, &params))?;
     let m = chosen.len();
     Ok(chosen.into_flattened().into_pyarray(py).reshape([m, 2])?)
 }
 
-/// Detections `(k, 4)`, or their four columns `(k,)` each (distance, angle, vx, vy): a movement
-/// sensor's columns go in without being stacked first.
-fn detections_of(object: &Bound<'_, PyAny>) -> PyDreamResult<Vec<[f64; 4]>> {
+/// Detections `(k, W)`, or their `W` columns `(k,)` each (`names`): a movement sensor's columns
+/// go in without being stacked first.
+fn detections_of<const W: usize>(object: &Bound<'_, PyAny>, names: &str) -> PyDreamResult<Vec<[f64; W]>> {
     let Ok(columns) = object.cast::<PyTuple>() else {
-        return points_of::<4>("detections", object);
+        return points_of::<W>("detections", object);
     };
-    if columns.len() != 4 {
+    if columns.len() != W {
         return Err(value_error(format!(
-            "`detections` columns must be (distance, angle, vx, vy), got {} columns",
+            "`detections` columns must be {names}, got {} columns",
             columns.len()
         )));
     }
-    let distance = vector_of("detections", &columns.get_item(0)?, None)?;
-    let rest: Vec<Vec<f64>> = (1..4)
-        .map(|c| vector_of("detections", &columns.get_item(c)?, Some(distance.len())))
-        .collect::<PyDreamResult<_>>()?;
-    Ok(map_range(distance.len(), 1.0, |e| {
-        [distance[e], rest[0][e], rest[1][e], rest[2][e]]
-    }))
+    let first = vector_of("detections", &columns.get_item(0)?, None)?;
+    let mut all = vec![first];
+    for c in 1..W {
+        all.push(vector_of("detections", &columns.get_item(c)?, Some(all[0].len()))?);
+    }
+    Ok(map_range(all[0].len(), 1.0, |e| std::array::from_fn(|c| all[c][e])))
 }
 
 /// A robot's HRVO planner: parameters and candidate grid, fixed; one call per decision.

@@ -51,10 +51,16 @@ def candidate_grid(v_max: float, n_angles: int = 20, n_speeds: int = 10) -> Floa
 def unit_directions(offsets: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Unit vectors ``(k, 2)`` along ``offsets`` ``(k, 2)`` ((1, 0) for a zero offset) and their lengths."""
     distances = np.sqrt(offsets[:, 0] * offsets[:, 0] + offsets[:, 1] * offsets[:, 1])
+    return along(offsets, distances), distances
+
+
+def along(offsets: FloatArray, distances: FloatArray) -> FloatArray:
+    """Unit vectors ``(k, 2)`` along ``offsets`` ``(k, 2)`` of lengths ``distances`` ``(k,)``: each offset
+    over its length, (1, 0) at length 0."""
     units = np.tile([1.0, 0.0], (len(offsets), 1))
     apart = distances > 0
     units[apart] = offsets[apart] / distances[apart, None]
-    return units, distances
+    return units
 
 
 def detection_directions(detections: FloatArray) -> FloatArray:
@@ -211,22 +217,36 @@ def hrvo_rows(
     bounds: tuple[float, float, float, float] | None,
     candidates: FloatArray,
     include_preferred: bool,
-    towards: bool = False,
+    relative: bool = False,
 ) -> FloatArray:
     """HRVO velocities ``(m, 2)`` of the deciding robots, row r from its own detections
     ``detections[offsets[r]:offsets[r + 1]]`` ``(k, 4)``, or its four columns (:meth:`HrvoPlanner.velocity`'s
-    answer); with ``towards``, the angles are bearings towards the detected robots."""
+    answer); with ``relative``, ``(k, 5)`` or five columns: distance, the offset ``(dx, dy)`` of the robot
+    detected (its direction: :func:`along` it) and its velocity."""
     if isinstance(detections, tuple):
         detections = np.column_stack(detections)
-    if towards:
-        bearing = detections[:, 1]
-        detections = detections.copy()
-        detections[:, 1] = np.where(bearing > 0, bearing - np.pi, bearing + np.pi)
-    planner = HrvoPlanner(candidates, safety=safety, v_max=v_max, bounds=bounds, include_preferred=include_preferred)
+    if relative:
+        distances, velocities_seen = detections[:, 0], detections[:, 3:5]
+        directions = along(detections[:, 1:3], distances)
+    else:
+        distances, velocities_seen = detections[:, 0], detections[:, 2:4]
+        directions = detection_directions(detections)
     out = np.zeros((len(positions), 2))
     for r in range(len(positions)):
-        seen = detections[offsets[r] : offsets[r + 1]]
-        out[r] = planner.velocity(seen, velocities[r], preferred[r], positions[r])
+        row = slice(offsets[r], offsets[r + 1])
+        out[r] = hrvo_velocity(
+            velocities[r],
+            preferred[r],
+            directions[row],
+            distances[row],
+            velocities_seen[row],
+            safety=safety,
+            v_max=v_max,
+            position=positions[r],
+            bounds=bounds,
+            candidates=candidates,
+            include_preferred=include_preferred,
+        )
     return out
 
 

@@ -212,16 +212,16 @@ def hrvo_rows(
     n_angles: int = 20,
     n_speeds: int = 10,
     include_preferred: bool = True,
-    towards: bool = False,
+    relative: bool = False,
 ) -> FloatArray:
     """HRVO velocities ``(m, 2)`` of the robots deciding now, each from its own detections.
 
     Row r's detections are ``detections[offsets[r]:offsets[r + 1]]``, movement-sensor rows
     ``[distance, angle, vx, vy]`` (angle from the detected robot towards this one), or a tuple
-    of those four columns (a neighbourhood's, unstacked); with ``towards``, the angle column holds
-    bearings from the robot towards the detected one (a movement sensor's neighbourhood), turned
-    into the sensor's angles inside the kernel; row r's
-    answer is :meth:`HrvoPlanner.velocity`'s for them, with ``velocities``, ``preferred`` and
+    of those four columns (a neighbourhood's, unstacked); with ``relative``, rows ``[distance,
+    dx, dy, vx, vy]`` or their five columns, ``(dx, dy)`` the detected robot's offset (a movement
+    sensor's neighbourhood holds them: no angle to turn back into a direction). Row r's answer
+    is :meth:`HrvoPlanner.velocity`'s for them, with ``velocities``, ``preferred`` and
     ``positions`` ``(m, 2)``: the robots' previous, wanted velocities and believed positions.
     A robot decides from what it perceives, never from the others' true poses (see :func:`hrvo`).
     """
@@ -229,13 +229,15 @@ def hrvo_rows(
     m = pos.shape[0]
     v = as_array(velocities, "velocities", (m, 2))
     pref = as_array(preferred, "preferred", (m, 2))  # bounded by hrvo_rows_trusted
+    names = "(distance, dx, dy, vx, vy)" if relative else "(distance, angle, vx, vy)"
+    width = 5 if relative else 4
     if isinstance(detections, tuple):
-        if len(detections) != 4:
-            raise ValueError(f"`detections` columns must be (distance, angle, vx, vy), got {len(detections)} columns")
+        if len(detections) != width:
+            raise ValueError(f"`detections` columns must be {names}, got {len(detections)} columns")
         distance = as_array(detections[0], "detections", (None,))
         seen: Any = (distance, *(as_array(column, "detections", (len(distance),)) for column in detections[1:]))
     else:
-        seen = as_array(detections, "detections", (None, 4))
+        seen = as_array(detections, "detections", (None, width))
         distance = seen[:, 0]
     if len(distance) and distance.min() < 0:
         raise ValueError(f"`detection distance` must be finite and >= 0, got {distance.min()}")
@@ -252,7 +254,7 @@ def hrvo_rows(
         n_angles=n_angles,
         n_speeds=n_speeds,
         include_preferred=include_preferred,
-        towards=towards,
+        relative=relative,
     )
 
 
@@ -261,7 +263,7 @@ def hrvo_rows_trusted(
     preferred: FloatArray,
     positions: FloatArray,
     offsets: np.ndarray,
-    detections: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    detections: tuple[FloatArray, ...],
     *,
     safety: float,
     v_max: float,
@@ -269,7 +271,7 @@ def hrvo_rows_trusted(
     n_angles: int,
     n_speeds: int,
     include_preferred: bool,
-    towards: bool,
+    relative: bool,
 ) -> FloatArray:
     """:func:`hrvo_rows` of arrays its caller built and vouches for: float64 of the right shapes,
     finite, detections at distances >= 0 cut into rows by int64 ``offsets`` (the swarm engine's
@@ -286,5 +288,5 @@ def hrvo_rows_trusted(
         bounds=checked_bounds(bounds),
         candidates=_checked_grid(v_max, n_angles, n_speeds),
         include_preferred=include_preferred,
-        towards=towards,
+        relative=relative,
     )

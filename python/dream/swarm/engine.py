@@ -41,7 +41,7 @@ from dream.swarm import byrobot, draws
 from dream.swarm.neighbourhood import Deferred, Neighbourhood
 from dream.swarm.robot import SwarmRobot, View
 from dream.swarm.rows import at_rows, put_rows, take_rows
-from dream.swarm.safety import DETECTION, drive
+from dream.swarm.safety import drive
 from dream.traffic import Traffic
 
 #: What robots said: their ids ``(k,)`` and their message's fields (name to ``(k,)``).
@@ -49,6 +49,9 @@ Said = tuple[np.ndarray, dict[str, np.ndarray]]
 #: A checked decision: the wished velocities, the rows driven direct, the safety radii, the
 #: detections heeded (None where not chosen) and what was said.
 Settled = tuple[np.ndarray, np.ndarray | None, np.ndarray | None, np.ndarray | None, Said | None]
+#: The values a movement sensor measures of each robot it sees, in the order of their noise keys
+#: (the offsets ``dx`` and ``dy`` follow from the distance and the bearing).
+SENSED = ("distance", "bearing", "vx", "vy")
 
 
 class Engine:
@@ -389,7 +392,7 @@ class Engine:
         sensor = self.robot.movement
         offsets, others, gaps, bearing, dx, dy, *moving = seen
         if sensor is None:
-            return Neighbourhood(offsets, {name: np.zeros(0) for name in (*DETECTION, "dx", "dy")})
+            return Neighbourhood(offsets, {name: np.zeros(0) for name in (*SENSED, "dx", "dy")})
         if not self._bearings_read(faults):  # worked out only if the decision reads them
             columns = {"distance": gaps, "vx": moving[0], "vy": moving[1], "dx": dx, "dy": dy}
             return Neighbourhood(offsets, columns, derived={"bearing": _bearings})
@@ -398,7 +401,7 @@ class Engine:
         if sigma > 0:
             me = np.repeat(rows, np.diff(offsets))
             noise = draws.normal(self.seed, draws.DETECTION_NOISE, t, me[:, None], others[:, None], np.arange(4))
-            columns = {name: columns[name] + sigma * noise[:, k] for k, name in enumerate(DETECTION)}
+            columns = {name: columns[name] + sigma * noise[:, k] for k, name in enumerate(SENSED)}
             columns["distance"] = np.maximum(columns["distance"], 0.0)  # never negative, noisy or not
             dx = columns["distance"] * np.cos(columns["bearing"])
             dy = columns["distance"] * np.sin(columns["bearing"])
@@ -411,11 +414,10 @@ class Engine:
         return math.hypot(self.robot.movement.noise, 0.0 if faults is None else faults.faults.sensor_noise)
 
     def _bearings_read(self, faults: FaultState | None) -> bool:
-        """Whether the step reads the bearings of the robots seen whatever the decision does: HRVO
-        steers by them, and a noisy sensor's offsets come from them. Otherwise they are worked
-        out only if the decision reads them (an ``atan2`` each: a tenth of a crowd's perception)."""
-        movement = self.robot.movement
-        return movement is not None and (self.robot.avoid is not None or self._sensor_noise(faults) > 0)
+        """Whether the step reads the bearings of the robots seen whatever the decision does: a
+        noisy sensor's offsets come from them. Otherwise they are worked out only if the decision
+        reads them (an ``atan2`` each: a tenth of a crowd's perception; HRVO steers by the offsets)."""
+        return self.robot.movement is not None and self._sensor_noise(faults) > 0
 
     def _obstacles(self, t: int, rows: np.ndarray, x: np.ndarray, faults: FaultState | None) -> Neighbourhood:
         """The obstacle sensor's reading of ``rows`` (:class:`~dream.swarm.robot.Obstacles`): the

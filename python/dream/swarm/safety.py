@@ -35,9 +35,8 @@ class Driver(Protocol):
     side: np.ndarray  #: (n,) which side each robot steps aside to
 
 
-#: The columns of a detection that HRVO reads, in the order of their noise keys (``dx`` and
-#: ``dy``, the offsets, come with them).
-DETECTION = ("distance", "bearing", "vx", "vy")
+#: The columns of a detection that HRVO reads: its distance, offset and velocity.
+STEERED_BY = ("distance", "dx", "dy", "vx", "vy")
 
 
 def drive(
@@ -66,7 +65,7 @@ def drive(
         counts = np.diff(seen.offsets)[part]
         hood = Neighbourhood(
             np.concatenate(([0], np.cumsum(counts))),
-            {name: seen[name][spans(seen.offsets[:-1][part], counts)] for name in (*DETECTION, "dx", "dy")},
+            {name: seen[name][spans(seen.offsets[:-1][part], counts)] for name in STEERED_BY},
         )
         cut = None if straight is None else straight[part]
         out[:, part] = _drive_apart(engine, rows[part], wished[part], pose[part], hood, cut, float(radius))
@@ -99,21 +98,21 @@ def _drive_apart(
         asked = want
         if avoid.sidestep:
             asked = _sidestep_preference(engine, ids, want)
-        distance, bearing, vx, vy = (np.ascontiguousarray(seen[name][entries]) for name in DETECTION)
+        detections = tuple(np.ascontiguousarray(seen[name][entries]) for name in STEERED_BY)
         margin = robot.spec.radius if avoid.margin is None else avoid.margin
         steered = hrvo_rows_trusted(  # the engine's own perception, and a decision checked in `Engine._apply`
             engine.dxi[at_rows(ids, n)],
             np.ascontiguousarray(asked),
             np.ascontiguousarray(pose[steer, :2]),
             offsets,
-            (distance, bearing, vx, vy),
+            detections,
             safety=safety,
             v_max=robot.spec.v_max,
             bounds=engine.arena.shrunk(margin) if avoid.check_boundaries else None,
             n_angles=avoid.n_angles,
             n_speeds=avoid.n_speeds,
             include_preferred=avoid.include_preferred,
-            towards=True,  # the sensor's bearings, towards the robots seen
+            relative=True,  # the offsets of the robots seen: no angle to turn back into a direction
         )
         chosen[steer] = steered
         if avoid.sidestep:
