@@ -215,6 +215,26 @@ def test_hrvo_rows_bad_input_is_named(rng):
         kernels.hrvo_rows(velocities, preferred, positions, offsets, tuple(bad.T))
     with pytest.raises(ValueError, match=r"columns must be \(distance, angle, vx, vy\), got 3"):
         kernels.hrvo_rows(velocities, preferred, positions, offsets, tuple(bad.T[:3]))
+    with pytest.raises(ValueError, match=r"columns must be \(distance, dx, dy, vx, vy\), got 4"):
+        kernels.hrvo_rows(velocities, preferred, positions, offsets, tuple(seen.T), relative=True)
+    with pytest.raises(ValueError, match="columns must be"):
+        _core.hrvo_rows(
+            velocities,
+            preferred,
+            positions,
+            offsets,
+            tuple(seen.T),
+            safety=0.2,
+            v_max=0.2,
+            bounds=None,
+            candidates=_grid(0.2, 20, 10),
+            include_preferred=True,
+            relative=True,
+        )
+    sensed = np.column_stack((seen[:, :1], np.zeros((len(seen), 2)), seen[:, 2:]))
+    sensed[0, 1] = np.nan
+    with pytest.raises(ValueError, match="`detections` contains a non-finite value"):
+        kernels.hrvo_rows(velocities, preferred, positions, offsets, sensed, relative=True)
     with pytest.raises(ValueError, match="columns must be"):
         _core.hrvo_rows(
             velocities,

@@ -721,6 +721,7 @@ fn for_each_robot(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     const PARAMS: HrvoParams = HrvoParams {
         safety: 0.24,
@@ -886,6 +887,30 @@ mod tests {
             let one = hrvo_one(velocities[i], preferred[i], positions[i], &around, &g, &PARAMS).unwrap();
             assert_eq!(batch[i], one);
         }
+    }
+
+    #[test]
+    fn offsets_steer_as_the_angles_they_stand_for() {
+        // Robots straight ahead (angle -pi from them: direction (1, 0) exactly, as the offsets').
+        let (v, pref, at) = ([[0.1, 0.0]; 2], [[0.2, 0.05]; 2], [[0.0, 0.0]; 2]);
+        let polar = [[0.3, -PI, 0.0, 0.0], [0.0, -PI, 0.1, 0.0], [0.25, -PI, -0.1, 0.0]];
+        let sensed = [
+            [0.3, 0.3, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, 0.1, 0.0],
+            [0.25, 0.25, 0.0, -0.1, 0.0],
+        ];
+        let offsets = [0, 1, 3];
+        let g = grid();
+        let by_angle = hrvo_rows(&v, &pref, &at, &offsets, Detections::Polar(&polar), &g, &PARAMS).unwrap();
+        let by_offset = hrvo_rows(&v, &pref, &at, &offsets, Detections::Offsets(&sensed), &g, &PARAMS).unwrap();
+        assert_eq!(by_angle, by_offset);
+        assert_ne!(by_offset[0], pref[0]); // the robot ahead is in the way
+                                           // Every value is checked, the offset at distance 0 too.
+        let mut bad = sensed;
+        bad[1][1] = f64::NAN;
+        assert!(hrvo_rows(&v, &pref, &at, &offsets, Detections::Offsets(&bad), &g, &PARAMS).is_err());
+        bad[1] = [-0.1, 0.0, 0.0, 0.0, 0.0];
+        assert!(hrvo_rows(&v, &pref, &at, &offsets, Detections::Offsets(&bad), &g, &PARAMS).is_err());
     }
 
     #[test]
