@@ -35,6 +35,8 @@ __all__ = [
     "segment_nearest",
     "segment_nearest_to",
     "motion_guard",
+    "take_rows",
+    "put_rows",
 ]
 
 _Bounds = tuple[float, float, float, float]
@@ -247,3 +249,9 @@ def distance_rays(
     robots: _Ints | None = None,
 ) -> _Floats:
     """Readings (k, n) of the rays (3, k) of every robot (or of `robots`) against walls (m, 4) and the other robots; -1 for nothing."""
+
+def take_rows(tables: Sequence[NDArray[np.uint8]], rows: _Ints) -> list[NDArray[np.uint8]]:
+    """The rows `rows` (increasing) of each table (n, width) uint8: one (len(rows), width) array each."""
+
+def put_rows(tables: Sequence[NDArray[np.uint8]], rows: _Ints, values: Sequence[NDArray[np.uint8]]) -> None:
+    """values[t] (len(rows), width) uint8 written into tables[t] (n, width) at the rows `rows` (increasing)."""

@@ -77,6 +77,8 @@ def test_every_public_kernel_goes_through_the_dispatch(monkeypatch):
     kernels.segment_nearest(points[:, 0], offsets)
     kernels.segment_nearest_to(points, offsets, points, 1)
     kernels.motion_guard(np.zeros(2), np.zeros(2), offsets, points[:, 0], points[:, 1], near=0.1, horizon=0.2)
+    kernels.take_rows([points], [1])
+    kernels.put_rows([points], [1], [points[:1]])
     assert recorder.asked == set(CORE_KERNELS)
 
 

@@ -205,6 +205,11 @@ def test_hrvo_rows_is_the_planner_row_by_row(rng, rows):
 
 def test_hrvo_rows_bad_input_is_named(rng):
     velocities, preferred, positions, offsets, seen = detections_scene(rng, 3)
+    options = dict(safety=0.2, v_max=0.2, bounds=None, candidates=_grid(0.2, 20, 10), include_preferred=True)
+
+    def core(detections, **more):
+        return _core.hrvo_rows(velocities, preferred, positions, offsets, detections, **options, **more)
+
     with pytest.raises(ValueError, match="`offsets`"):
         kernels.hrvo_rows(velocities, preferred, positions, offsets[:-1], seen)
     bad = seen.copy()
@@ -218,49 +223,15 @@ def test_hrvo_rows_bad_input_is_named(rng):
     with pytest.raises(ValueError, match=r"columns must be \(distance, dx, dy, vx, vy\), got 4"):
         kernels.hrvo_rows(velocities, preferred, positions, offsets, tuple(seen.T), relative=True)
     with pytest.raises(ValueError, match="columns must be"):
-        _core.hrvo_rows(
-            velocities,
-            preferred,
-            positions,
-            offsets,
-            tuple(seen.T),
-            safety=0.2,
-            v_max=0.2,
-            bounds=None,
-            candidates=_grid(0.2, 20, 10),
-            include_preferred=True,
-            relative=True,
-        )
+        core(tuple(seen.T), relative=True)
     sensed = np.column_stack((seen[:, :1], np.zeros((len(seen), 2)), seen[:, 2:]))
     sensed[0, 1] = np.nan
     with pytest.raises(ValueError, match="`detections` contains a non-finite value"):
         kernels.hrvo_rows(velocities, preferred, positions, offsets, sensed, relative=True)
     with pytest.raises(ValueError, match="columns must be"):
-        _core.hrvo_rows(
-            velocities,
-            preferred,
-            positions,
-            offsets,
-            tuple(bad.T[:3]),
-            safety=0.2,
-            v_max=0.2,
-            bounds=None,
-            candidates=_grid(0.2, 20, 10),
-            include_preferred=True,
-        )
+        core(tuple(bad.T[:3]))
     with pytest.raises(ValueError, match="detection distance"):
-        _core.hrvo_rows(
-            velocities,
-            preferred,
-            positions,
-            offsets,
-            bad,
-            safety=0.2,
-            v_max=0.2,
-            bounds=None,
-            candidates=_grid(0.2, 20, 10),
-            include_preferred=True,
-        )
+        core(bad)
 
 
 def perceive_scene(rng, n):

@@ -12,6 +12,7 @@ mod neighbours;
 mod obstacles;
 mod raycast;
 mod reduce;
+mod tables;
 mod voronoi;
 
 use pyo3::prelude::*;
@@ -48,5 +49,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(reduce::segment_nearest, m)?)?;
     m.add_function(wrap_pyfunction!(reduce::segment_nearest_to, m)?)?;
     m.add_function(wrap_pyfunction!(guard::motion_guard, m)?)?;
+    m.add_function(wrap_pyfunction!(tables::take_rows, m)?)?;
+    m.add_function(wrap_pyfunction!(tables::put_rows, m)?)?;
     Ok(())
 }

@@ -21,6 +21,8 @@ bounds; the zero velocity if no candidate qualifies.
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -185,23 +187,14 @@ def hrvo(
     if indptr is None or indices is None:
         indptr, indices, _ = find_neighbours(positions, radius)
     grid = candidate_grid(v_max) if candidates is None else candidates
+    steer = partial(
+        hrvo_velocity, safety=safety, v_max=v_max, bounds=bounds, candidates=grid, include_preferred=include_preferred
+    )
     out = np.zeros((n, 2))
     for i in range(n):
         js = np.asarray(indices[indptr[i] : indptr[i + 1]], dtype=np.int64)
         directions, distances = unit_directions(positions[js] - positions[i])
-        out[i] = hrvo_velocity(
-            velocities[i],
-            preferred[i],
-            directions,
-            distances,
-            velocities[js],
-            safety=safety,
-            v_max=v_max,
-            position=positions[i],
-            bounds=bounds,
-            candidates=grid,
-            include_preferred=include_preferred,
-        )
+        out[i] = steer(velocities[i], preferred[i], directions, distances, velocities[js], position=positions[i])
     return out
 
 
@@ -231,21 +224,19 @@ def hrvo_rows(
     else:
         distances, velocities_seen = detections[:, 0], detections[:, 2:4]
         directions = detection_directions(detections)
+    steer = partial(
+        hrvo_velocity,
+        safety=safety,
+        v_max=v_max,
+        bounds=bounds,
+        candidates=candidates,
+        include_preferred=include_preferred,
+    )
     out = np.zeros((len(positions), 2))
     for r in range(len(positions)):
         row = slice(offsets[r], offsets[r + 1])
-        out[r] = hrvo_velocity(
-            velocities[r],
-            preferred[r],
-            directions[row],
-            distances[row],
-            velocities_seen[row],
-            safety=safety,
-            v_max=v_max,
-            position=positions[r],
-            bounds=bounds,
-            candidates=candidates,
-            include_preferred=include_preferred,
+        out[r] = steer(
+            velocities[r], preferred[r], directions[row], distances[row], velocities_seen[row], position=positions[r]
         )
     return out
 

@@ -8,7 +8,7 @@ from dream.swarm.cells import known_cells
 from dream.swarm.engine import Engine
 from dream.swarm.neighbourhood import Neighbourhood
 from dream.swarm.robot import Avoid, Guard, Movement, Obstacles, Radio, SwarmRobot, View
-from dream.swarm.rows import put_rows, take_rows
+from dream.swarm.rows import put_all, put_rows, take_all, take_rows
 
 __all__ = [
     "Avoid",
@@ -21,6 +21,8 @@ __all__ = [
     "SwarmRobot",
     "View",
     "known_cells",
+    "put_all",
     "put_rows",
+    "take_all",
     "take_rows",
 ]

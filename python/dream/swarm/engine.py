@@ -40,7 +40,7 @@ from dream.specs import ArenaSpec, SimulatorSpec
 from dream.swarm import byrobot, draws
 from dream.swarm.neighbourhood import Deferred, Neighbourhood
 from dream.swarm.robot import SwarmRobot, View
-from dream.swarm.rows import at_rows, put_rows, take_rows
+from dream.swarm.rows import at_rows, put_all, put_rows, take_all, take_rows
 from dream.swarm.safety import drive
 from dream.traffic import Traffic
 
@@ -236,7 +236,7 @@ class Engine:
             take_rows(self.belief, at),
             self._sense(t, rows, seen, faults).frozen(),
             inbox,
-            {key: take_rows(values, at) for key, values in self.memory.items()},
+            take_all(self.memory, at),
             self._obstacles(t, rows, x, faults).frozen(),
             command,
         )
@@ -263,8 +263,7 @@ class Engine:
         settled = [self._settle(view, wish, (whole.memory, slice(r, r + 1), kept)) for r, (view, wish, kept) in pieces]
         rows = np.asarray(whole.ids)
         at = at_rows(rows, self.n)
-        for key, values in whole.memory.items():  # every robot's memory row, changed or not
-            put_rows(self.memory[key], at, values)
+        put_all(self.memory, at, whole.memory)  # every robot's memory row, changed or not
         wished, straight, safety, seen = byrobot.merged(whole, settled, self.robot.avoid)
         out[:, at] = drive(self, rows, wished, self.belief[at], seen, straight, safety)
         return [said for *_, said in settled]
@@ -285,14 +284,15 @@ class Engine:
                 f"got shape {wished.shape}" + ("" if wished.shape != (len(rows), 2) else " with NaN or inf")
             )
         into, at, handed = (self.memory, at_rows(rows, self.n), {}) if piece is None else piece
+        kept = {}
         for key, values in view.memory.items():
             if key in handed and values is handed[key]:
                 continue
             if key not in self.memory:
                 raise ValueError(f"{name} remembers {key!r}, which its memory does not declare: add it to `memory`")
             memory = self.memory[key]
-            kept = per_robot(values, len(rows), memory.dtype, f"{name} memory {key!r}", memory.shape[1:])
-            put_rows(into[key], at, kept)
+            kept[key] = per_robot(values, len(rows), memory.dtype, f"{name} memory {key!r}", memory.shape[1:])
+        put_all(into, at, kept)  # every field checked first: a bad one leaves the memory as it was
         for key in handed.keys() - view.memory.keys():  # a field forgotten: kept as it was
             into[key][at] = self.memory[key][rows]
         straight = safety = None

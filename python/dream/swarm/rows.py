@@ -2,14 +2,16 @@
 
 The engine copies the memory of the robots deciding now out of its tables and back every step,
 and a robot's decision may do the same with a part of them (the followers of a formation, say):
-these are the fast ways to, for rows of several values each.
+these are the fast ways to, every table at once (:func:`dream.kernels.take_rows`, on every core).
 """
 
 from __future__ import annotations
 
-import math
+from collections.abc import Mapping
 
 import numpy as np
+
+from dream import kernels
 
 
 def at_rows(rows: np.ndarray, n: int) -> slice | np.ndarray:
@@ -20,26 +22,26 @@ def at_rows(rows: np.ndarray, n: int) -> slice | np.ndarray:
 
 
 def take_rows(values: np.ndarray, at: slice | np.ndarray) -> np.ndarray:
-    """``values[at]`` (a slice of :func:`at_rows`, or row indices), an array of its own either way
-    (``numpy.take`` copies rows of several values 3-4 times faster than indexing does)."""
-    return values[at].copy() if isinstance(at, slice) else np.take(values, at, axis=0)
+    """``values[at]`` (a slice of :func:`at_rows`, or row indices), an array of its own either way."""
+    return take_all({"": values}, at)[""]
+
+
+def take_all(tables: Mapping[str, np.ndarray], at: slice | np.ndarray) -> dict[str, np.ndarray]:
+    """:func:`take_rows` of each of ``tables`` (C-contiguous), by name."""
+    if isinstance(at, slice):
+        return {name: values[at].copy() for name, values in tables.items()}
+    return dict(zip(tables, kernels.take_rows(list(tables.values()), at), strict=True))
 
 
 def put_rows(values: np.ndarray, at: slice | np.ndarray, rows: np.ndarray) -> None:
-    """``values[at] = rows`` (``values`` ``(n, ...)`` C-contiguous; ``rows`` taken as its dtype):
-    at an index, a row of several values is copied as one block (NumPy copies it value by
-    value: 1.5 times slower for the affine formation's memory rows)."""
-    width = values[0].nbytes if len(values) else 0
-    if isinstance(at, slice) or values.ndim == 1 or width == 0:
-        values[at] = rows
+    """``values[at] = rows`` (``values`` ``(n, ...)`` C-contiguous; ``rows`` taken as its dtype)."""
+    put_all({"": values}, at, {"": rows})
+
+
+def put_all(tables: Mapping[str, np.ndarray], at: slice | np.ndarray, rows: Mapping[str, np.ndarray]) -> None:
+    """:func:`put_rows` of ``rows[name]`` into ``tables[name]``, for each name of ``rows``."""
+    if isinstance(at, slice):
+        for name, values in rows.items():
+            tables[name][at] = values
         return
-    if not values.flags.c_contiguous:
-        raise ValueError(f"an array of shape {values.shape} to put rows into must be C-contiguous")
-    _blocks(values, width)[at] = _blocks(np.ascontiguousarray(rows, dtype=values.dtype), width)
-
-
-def _blocks(values: np.ndarray, width: int) -> np.ndarray:
-    """The C-contiguous ``values`` ``(k, ...)`` as ``(k,)`` blocks of ``width`` bytes (a view)."""
-    return (
-        values.reshape(len(values), math.prod(values.shape[1:])).view(np.dtype((np.void, width))).reshape(len(values))
-    )
+    kernels.put_rows([tables[name] for name in rows], at, list(rows.values()))

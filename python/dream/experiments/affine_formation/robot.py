@@ -28,7 +28,7 @@ from dream.experiments.affine_formation.plan import (
     tile_bounds,
 )
 from dream.robot import SIDESTEP_UPDATES
-from dream.swarm import Avoid, Movement, Neighbourhood, Radio, SwarmRobot, View, put_rows, take_rows
+from dream.swarm import Avoid, Movement, Neighbourhood, Radio, SwarmRobot, View, put_all, take_all
 
 MEMBERS = len(NOMINAL)  #: robots in a formation
 SAFETY = 0.15  #: the HRVO safety radius (m): the formation's robots are 0.3 m apart
@@ -210,10 +210,9 @@ class FormationRobot(SwarmRobot):
         keep = (mine[owner] >= 0) & in_tile(spotted, np.take(bounds, np.maximum(mine[owner], 0), axis=0))
         counts = np.bincount(mine[owner][keep], minlength=len(rows))
         hood = Neighbourhood(np.concatenate(([0], np.cumsum(counts))), {})
-        state = {key: take_rows(memory[key], rows) for key in ("heard", "plans", "strikes", "liar", "liar_at")}
+        state = take_all({key: memory[key] for key in ("heard", "plans", "strikes", "liar", "liar_at")}, rows)
         sensed = judge(here, ids % MEMBERS, alive, bounds, hood, spotted[keep], state)
-        for key, value in state.items():
-            put_rows(memory[key], rows, value)
+        put_all(memory, rows, state)
         known = positions(state["heard"], alive, state["plans"], state["liar"], state["liar_at"], sensed)
         pull = rules.stress(here, known, np.take(WEIGHTS, ids % MEMBERS, axis=0))
         return rules.capped(-GAIN * pull, self.spec.v_max)
