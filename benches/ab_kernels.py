@@ -105,7 +105,7 @@ def scattered(n: int, rng: np.random.Generator, spacing: float = 0.3) -> np.ndar
 def same(a: Any, b: Any) -> bool:
     if isinstance(a, tuple):
         return len(a) == len(b) and all(same(x, y) for x, y in zip(a, b))
-    return bool(np.array_equal(np.asarray(a), np.asarray(b)))
+    return bool(np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True))  # NaN: nothing yet, on both
 
 
 def compare(
