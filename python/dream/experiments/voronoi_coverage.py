@@ -130,12 +130,14 @@ def coverage_cost(positions: np.ndarray, arena: ArenaSpec, obstacles: list[Obsta
 
     Approximated on a grid of ``step`` (m) (:func:`free_points`). ``positions`` is ``(2, n)``. A
     k-d tree of the robots finds each point's nearest robot: at 10,000 robots, 100 times faster
-    than measuring every point-robot pair.
+    than measuring every point-robot pair. The tree is built unbalanced (twice as fast at 100,000
+    robots, built for one query) and queried on every core: the same distances either way.
     """
     # Imported here: scipy.spatial takes ~0.2 s to load, more than all the rest of `import dream`.
     from scipy.spatial import cKDTree
 
-    distances, _ = cKDTree(positions.T).query(free_points(arena, obstacles, step))
+    tree = cKDTree(positions.T, balanced_tree=False, compact_nodes=False)
+    distances, _ = tree.query(free_points(arena, obstacles, step), workers=-1)
     return float(np.sum(distances * distances)) * step * step
 
 
