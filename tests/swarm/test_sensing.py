@@ -185,6 +185,19 @@ def test_a_derived_column_is_worked_out_when_read_and_kept_through_where_and_row
     assert frozen.sum("w").tolist() == [6.0, 8.0] and not frozen["w"].flags.writeable and calls == [2, 3]
 
 
+def test_points_are_the_origins_plus_the_offsets_to_the_bit():
+    rng = np.random.default_rng(4)
+    offsets = np.concatenate(([0], np.cumsum(rng.integers(0, 6, 50))))
+    dx, dy = rng.normal(size=(2, offsets[-1]))
+    hood = dream.swarm.Neighbourhood(offsets, {"dx": dx, "dy": dy}).frozen()
+    here = rng.normal(size=(50, 2))
+    got = hood.points(here)
+    assert np.array_equal(got, hood.broadcast(here) + np.column_stack((dx, dy)))
+    assert got.flags.writeable and np.array_equal(hood["dx"], dx)  # its own array; the columns untouched
+    with pytest.raises(ValueError, match=r"origins of shape \(49, 2\)"):
+        hood.points(here[1:])
+
+
 @pytest.mark.parametrize("noise", [0.0, 0.01])
 @pytest.mark.parametrize("one_by_one", [False, True])
 def test_bearings_are_read_whether_or_not_the_step_needs_them(noise, one_by_one):

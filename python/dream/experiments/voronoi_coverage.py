@@ -187,7 +187,7 @@ class CoverageRobot(SwarmRobot):
         moving = memory["moving"].astype(bool)
         said = here + rules.momentum(here, last, moving, LEAD)
         view.send(x=said[:, 0], y=said[:, 1])
-        sighted = seen.broadcast(here) + np.column_stack((seen["dx"], seen["dy"]))
+        sighted = seen.points(here)
         near = sensed.broadcast(here)
         points = near + np.column_stack((sensed["dx"], sensed["dy"]))
         agents = kernels.obstacle_agents(near, points, robot_radius=self.spec.radius, margin=MARGIN)

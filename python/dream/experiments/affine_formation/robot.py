@@ -113,7 +113,7 @@ class FormationRobot(SwarmRobot):
         alive = (memory["news"] == 0) | (memory["rounds"][:, None] - memory["news"] <= SILENCE)
         lead = place < LEADERS
         seen = view.seen
-        spotted = seen.broadcast(here) + np.column_stack((seen["dx"], seen["dy"]))  # where it sees each robot
+        spotted = seen.points(here)  # where it sees each robot
         desired, heeded = np.zeros((len(view), 2)), seen["distance"] <= RANGE
         rows = np.flatnonzero(lead)
         aims = np.zeros((0, LEADERS, 2))
