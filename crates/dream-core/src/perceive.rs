@@ -23,7 +23,7 @@ use crate::parallel::{gather_rows, join_if, map_range, worth_spreading, TASK_ITE
 
 /// A movement sensor's reach: range (m), full aperture `fov` (rad) about the heading turned by
 /// `direction` (rad); `bearings`: whether the bearings of the robots seen are wanted (an `atan2`
-/// each, a tenth of a crowd's perception; without, the column is left empty).
+/// each, 15-20 % of a crowd's perception; without, the column is left empty).
 #[derive(Debug, Clone, Copy)]
 pub struct Sight {
     pub range: f64,
@@ -34,8 +34,9 @@ pub struct Sight {
 
 /// Ragged rows of seen or heard robots: row r is `ids[offsets[r]..offsets[r + 1]]`, with the
 /// distance of each and, for the seen ones, the bearing (world frame, from the perceiving robot
-/// towards the other; where [`Sight::bearings`]) and the offset `(dx, dy)` (the other's position less the perceiving
-/// robot's); those three are empty for the heard ones, whom no one needs the direction of.
+/// towards the other; where [`Sight::bearings`]) and the offset `(dx, dy)` (the other's position
+/// less the perceiving robot's); those three are empty for the heard ones, whom no one needs the
+/// direction of.
 /// `carried[c]` holds the `c`-th carried column's values at the robots seen (none for the heard).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Perceived {
