@@ -54,6 +54,9 @@ import dream
 from dream.experiments import find
 
 name, n, steps, warm_up, top = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5])
+if sys.argv[6] == "one-call":  # a threaded robot's swarm decides in one call, on one thread
+    import dream.swarm.engine
+    dream.swarm.engine.threads = lambda: 1
 stamps = []
 profile = cProfile.Profile()
 
@@ -131,10 +134,18 @@ def ab_run(name: str, n: int, steps: int, warm_up: int, baseline: str, timeout: 
 
 
 def one_run(
-    name: str, n: int, steps: int, warm_up: int, threads: int | None, timeout: float, top: int = 0
+    name: str,
+    n: int,
+    steps: int,
+    warm_up: int,
+    threads: int | None,
+    timeout: float,
+    top: int = 0,
+    one_call: bool = False,
 ) -> dict[str, Any] | str:
     """The figures of one run, or why there are none."""
-    return _child([ONE_RUN, name, str(n), str(steps), str(warm_up), str(top)], threads, timeout)
+    how = "one-call" if one_call else "blocks"
+    return _child([ONE_RUN, name, str(n), str(steps), str(warm_up), str(top), how], threads, timeout)
 
 
 def _child(script: list[str], threads: int | None, timeout: float) -> dict[str, Any] | str:
@@ -203,6 +214,11 @@ def main() -> None:
         "the K functions of most own time",
     )
     parser.add_argument("--baseline", metavar="SO", help="another build's _core.abi3.so, timed in turns with this one")
+    parser.add_argument(
+        "--one-call",
+        action="store_true",
+        help="decide a threaded robot's swarm in one call (SwarmRobot.threaded's A/B: the default cuts it in blocks)",
+    )
     args = parser.parse_args()
     print(machine())
     threads: list[int | None] = list(args.threads) if args.threads else [None]
@@ -213,7 +229,8 @@ def main() -> None:
         return
     print(
         f"{args.steps} steps a run, the mean step past the first {args.warm_up}, swarm mode on Fast; "
-        f"threads: {'all' if threads == [None] else threads}"
+        f"threads: {'all' if threads == [None] else threads}; decisions "
+        f"{'in one call' if args.one_call else 'in blocks on the threads (threaded robots)'}"
     )
     print(
         f"| experiment | robots | threads | step (ms) | robot-steps/s | µs per robot-step | set-up (s) "
@@ -225,7 +242,7 @@ def main() -> None:
             n = asked - asked % GROUPS.get(name, 1)
             first: float | None = None
             for count in threads:
-                got = one_run(name, n, args.steps, args.warm_up, count, args.timeout, args.breakdown)
+                got = one_run(name, n, args.steps, args.warm_up, count, args.timeout, args.breakdown, args.one_call)
                 shown = "all" if count is None else str(count)
                 if isinstance(got, str):
                     print(f"| {name} | {n:,} | {shown} | {got} | | | | | | |", flush=True)
@@ -245,8 +262,9 @@ def main() -> None:
                     breakdowns.append(f"- {name}, {n:,} robots, {shown} threads ({totals}): {parts}")
     if breakdowns:
         print(
-            "\nOwn time per step (ms, cProfile of the steps the mean covers; the rest, Python and NumPy, runs"
-            " on one core whatever the threads: it bounds the speed-up on many):"
+            "\nOwn time per step (ms, cProfile of the steps the mean covers, on the main thread: decisions in"
+            " blocks on other threads show as its wait; the rest, Python and NumPy, runs on one core whatever"
+            " the threads: it bounds the speed-up on many):"
         )
         print("\n".join(breakdowns))
 

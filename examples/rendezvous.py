@@ -35,6 +35,7 @@ class MeetingRobot(SwarmRobot):
     presses the crowd together (1,000 robots stopped at 1.24 times the meeting radius)."""
 
     period = 5
+    threaded = True  # decide reads its view alone: blocks of a swarm decide on several threads
     movement = Movement(range=0.5)
     memory = {"meet_x": math.nan, "meet_y": math.nan}
 

@@ -53,7 +53,7 @@ class Choosy(SwarmRobot):
 
 def run(robot, one_by_one, steps=12, count_traffic=True):
     n = 12
-    engine = dream.swarm.Engine(robot, n, 0, dream.specs.ROBOTARIUM, one_by_one=one_by_one)
+    engine = dream.swarm.Engine(robot, n, 0, dream.specs.ROBOTARIUM, one_by_one=one_by_one is True)
     engine.count_traffic = count_traffic
     x, commands, out = scene(n), np.zeros((2, n)), []
     for t in range(steps):
@@ -79,6 +79,44 @@ def test_choices_some_robots_make_come_out_as_the_swarms(count_traffic):
     assert (one.traffic.heard > 0).any() == count_traffic  # counted only when asked to
     assert (one.traffic.sent > 0).tolist() == [count_traffic and i % 2 == 1 for i in range(12)]  # odd ids send
     assert (one.sidestep > 0).any() or (one.side < 0).any()  # someone was blocked and stepped aside
+
+
+class Threaded(Choosy):
+    """Choosy, decided in blocks on several threads: notes the rows of each call (a test's record)."""
+
+    threaded = True
+
+    def __init__(self):
+        self.calls = []
+
+    def decide(self, view):
+        self.calls.append(view.ids.tolist())
+        return super().decide(view)
+
+
+@pytest.mark.parametrize("count_traffic", [True, False], ids=["inbox found at once", "inbox found when read"])
+def test_blocks_decided_on_threads_come_out_as_the_swarms(monkeypatch, count_traffic):
+    monkeypatch.setattr(dream.swarm.engine, "LEAST_BLOCK", 3)
+    monkeypatch.setattr(dream.swarm.engine, "threads", lambda: 4)
+    threaded = Threaded()
+    blocks, apart = run(threaded, False, count_traffic=count_traffic)
+    swarm, together = run(Choosy(), False, count_traffic=count_traffic)
+    assert np.array_equal(apart, together)  # bit for bit, every step
+    for name in ("dxi", "sidestep", "side", "sent_at", "belief"):
+        assert np.array_equal(getattr(blocks, name), getattr(swarm, name), equal_nan=True), name
+    for key in swarm.memory:
+        assert np.array_equal(blocks.memory[key], swarm.memory[key], equal_nan=True), key
+    for name in ("sent", "heard", "lost"):
+        assert np.array_equal(getattr(blocks.traffic, name), getattr(swarm.traffic, name)), name
+    decided = [call for call in threaded.calls if len(call) > 0]
+    assert sorted(map(len, decided[:4])) == [3, 3, 3, 3]  # every step: four blocks of three rows
+    assert sorted(sum(decided[:4], [])) == list(range(12))
+
+
+def test_blocks_of_a_swarm_are_at_least_the_least_block():
+    assert byrobot.blocks(100, 16, 40) == [0, 50, 100]
+    assert byrobot.blocks(79, 16, 40) is None  # one block: decided as it is
+    assert byrobot.blocks(10, 4, 1) == [0, 2, 5, 7, 10]
 
 
 def test_each_robot_gets_its_own_row_of_the_swarms_view():
@@ -127,5 +165,5 @@ def test_views_not_cut_by_the_engine_are_carried_out_one_by_one():
 
 def test_an_empty_neighbourhood_cuts_into_empty_rows():
     hood = dream.swarm.Neighbourhood(np.zeros(4, dtype=np.int64), {"dx": np.zeros(0)}).frozen()
-    rows = byrobot._rows(hood, 3)
+    rows = byrobot._rows(hood, range(4))
     assert [row.offsets.tolist() for row in rows] == [[0, 0]] * 3 and all(row.read_only for row in rows)

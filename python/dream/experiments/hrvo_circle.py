@@ -216,6 +216,7 @@ class CircleRobot(SwarmRobot):
     """
 
     period = CONTROL_GAP
+    threaded = True  # decide reads its view alone: blocks of a swarm decide on several threads
     memory = {
         "heading": 0,  # the goal it heads for: 0, 1 (the antipode) or 2
         "unreached": 1,  # that goal is not reached yet

@@ -155,6 +155,7 @@ class LineRobot(SwarmRobot):
     """
 
     period = CONTROL_GAP
+    threaded = True  # decide reads its view alone: blocks of a swarm decide on several threads
     movement = Movement(range=SENSING)
     memory = {"target_x": math.nan, "target_y": math.nan, "travelling": 0, "slot": -1}
 

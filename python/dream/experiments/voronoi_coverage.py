@@ -164,6 +164,7 @@ class CoverageRobot(SwarmRobot):
     """
 
     period = CONTROL_GAP
+    threaded = True  # decide reads its view alone: blocks of a swarm decide on several threads
     movement = Movement(range=SEEN)
     radio = Radio(range=RADIO_RANGE, fields=("x", "y"))
     halts = True

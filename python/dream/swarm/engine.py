@@ -24,7 +24,10 @@ from __future__ import annotations
 
 import math
 import operator
-from functools import partial
+import os
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+from functools import cache, partial
 from typing import Any
 
 import numpy as np
@@ -49,6 +52,9 @@ Said = tuple[np.ndarray, dict[str, np.ndarray]]
 #: A checked decision: the wished velocities, the rows driven direct, the safety radii, the
 #: detections heeded (None where not chosen) and what was said.
 Settled = tuple[np.ndarray, np.ndarray | None, np.ndarray | None, np.ndarray | None, Said | None]
+#: The fewest robots a block of a swarm decided on a thread of its own holds: NumPy gives the
+#: thread back while it works on a block's arrays, for most of a block's time from a few thousand rows.
+LEAST_BLOCK = 32768
 #: The values a movement sensor measures of each robot it sees, in the order of their noise keys
 #: (the offsets ``dx`` and ``dy`` follow from the distance and the bearing).
 SENSED = ("distance", "bearing", "vx", "vy")
@@ -112,7 +118,7 @@ class Engine:
         #: robot :attr:`focus`'s last decision: its ``step``, and the columns of what it ``seen`` and ``heard``
         self.focus_view: dict[str, Any] = {}
         #: robot by robot, the view of every robot deciding now and the views cut from it
-        self._cut: tuple[View | None, list[View]] = (None, [])
+        self._cut: tuple[View | None, list[View], Sequence[int]] = (None, [], [])
         self._handed: list[dict[str, np.ndarray]] = []  #: the memory rows each of those views was handed
 
     def attach(self, simulator: SimulatorSpec) -> None:
@@ -124,7 +130,13 @@ class Engine:
         """Decide at step ``t`` from the poses ``x`` ``(3, n)``: ``commands`` ``(2, n)`` (the last
         ones, which the movement sensors see) with the deciding robots' columns replaced."""
         views = self.perceive(t, x, commands, faults)
-        return self.act(t, views, [self.robot.decide(view) for view in views], commands, faults)
+        bounds = None
+        if len(views) == 1 and not self.one_by_one and self.robot.threaded:
+            bounds = byrobot.blocks(len(views[0]), threads(), LEAST_BLOCK)
+        if bounds is None:
+            return self.act(t, views, [self.robot.decide(view) for view in views], commands, faults)
+        pieces = self._pieces(views[0], bounds)
+        return self.act(t, pieces, list(_pool().map(self.robot.decide, pieces)), commands, faults)
 
     def perceive(self, t: int, x: np.ndarray, commands: np.ndarray, faults: FaultState | None = None) -> list[View]:
         """What the robots due to decide at step ``t`` know: one :class:`View` per robot robot by
@@ -147,7 +159,7 @@ class Engine:
             rows = rows[self._kept(t, rows, np.full(len(rows), -2), faults)]
         if self.robot.obstacles is not None:  # so does one whose obstacle reading is lost
             rows = rows[self._kept(t, rows, np.full(len(rows), -3), faults)]
-        self._cut = (None, [])
+        self._cut = (None, [], [])
         if not len(rows):
             return []
         # What the sensors see of the others' motion: their commands before anyone decides now.
@@ -156,9 +168,14 @@ class Engine:
         whole = self._view(t, rows, clock[rows], x, commands, velocities, talking, faults)
         if not self.one_by_one:
             return [whole]
-        self._cut = (whole, byrobot.cut(whole))  # perceived at once, decided one by one
-        self._handed = [dict(view.memory) for view in self._cut[1]]
-        return self._cut[1]
+        return self._pieces(whole, range(len(whole) + 1))  # perceived at once, decided one by one
+
+    def _pieces(self, whole: View, bounds: Sequence[int]) -> list[View]:
+        """``whole`` cut into the pieces of rows ``bounds`` (:func:`~dream.swarm.byrobot.cut`), kept
+        with the memory each was handed until :meth:`act` carries them out."""
+        pieces = byrobot.cut(whole, bounds)
+        self._cut, self._handed = (whole, pieces, bounds), [dict(view.memory) for view in pieces]
+        return pieces
 
     def act(
         self,
@@ -172,12 +189,12 @@ class Engine:
         what the views remember and send: ``commands`` ``(2, n)`` with the deciding robots' columns
         replaced."""
         out = commands.copy()
-        whole, pieces = self._cut
+        whole, pieces, bounds = self._cut
         if whole is not None and len(views) == len(pieces) and all(map(operator.is_, views, pieces)):
-            said = self._apply_pieces(whole, views, list(wishes), out)
+            said = self._apply_pieces(whole, views, list(wishes), bounds, out)
         else:
             said = [self._apply(view, wished, out) for view, wished in zip(views, wishes)]
-        self._cut, self._handed = (None, []), []  # the step's views are done with (a checkpoint keeps none)
+        self._cut, self._handed = (None, [], []), []  # the step's views are done with (a checkpoint keeps none)
         if self.robot.radio is not None:
             self._publish(t, [s for s in said if s is not None], faults)
         return out
@@ -256,15 +273,17 @@ class Engine:
         out[:, at] = drive(self, rows, wished, self.belief[at], seen, straight, safety)
         return said
 
-    def _apply_pieces(self, whole: View, views: list[View], wishes: list[Any], out: np.ndarray) -> list[Said | None]:
-        """:meth:`_apply` of the views :func:`~dream.swarm.byrobot.cut` made of ``whole``: each
-        decision checked and kept on its own, all of them driven at once."""
-        pieces = enumerate(zip(views, wishes, self._handed))
-        settled = [self._settle(view, wish, (whole.memory, slice(r, r + 1), kept)) for r, (view, wish, kept) in pieces]
+    def _apply_pieces(
+        self, whole: View, views: list[View], wishes: list[Any], bounds: Sequence[int], out: np.ndarray
+    ) -> list[Said | None]:
+        """:meth:`_apply` of the views :func:`~dream.swarm.byrobot.cut` made of ``whole`` (rows
+        ``bounds``): each decision checked and kept on its own, all of them driven at once."""
+        pieces = zip(views, wishes, self._handed, bounds[:-1], bounds[1:])
+        settled = [self._settle(view, wish, (whole.memory, slice(a, b), kept)) for view, wish, kept, a, b in pieces]
         rows = np.asarray(whole.ids)
         at = at_rows(rows, self.n)
         put_all(self.memory, at, whole.memory)  # every robot's memory row, changed or not
-        wished, straight, safety, seen = byrobot.merged(whole, settled, self.robot.avoid)
+        wished, straight, safety, seen = byrobot.merged(whole, settled, self.robot.avoid, bounds)
         out[:, at] = drive(self, rows, wished, self.belief[at], seen, straight, safety)
         return [said for *_, said in settled]
 
@@ -611,3 +630,14 @@ def _linked(
 def _bearings(seen: Neighbourhood) -> np.ndarray:
     """The bearings of the robots seen, from their offsets (world frame, towards them)."""
     return np.arctan2(seen["dy"], seen["dx"])
+
+
+def threads() -> int:
+    """The threads to decide on: those of the Rust kernels' pool (``RAYON_NUM_THREADS``, else
+    the cores this process may run on)."""
+    return int(os.environ.get("RAYON_NUM_THREADS") or len(os.sched_getaffinity(0)))
+
+
+@cache
+def _pool() -> ThreadPoolExecutor:
+    return ThreadPoolExecutor(threads(), thread_name_prefix="dream-decide")

@@ -12,6 +12,7 @@ radio delivered (sender and the message's fields). Reductions run in the Rust ke
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -249,5 +250,11 @@ class Deferred(Neighbourhood):
         # Called only for what the instance lacks: every attribute of a neighbourhood, until loaded.
         if name.startswith("__") or name == "_load":
             raise AttributeError(name)
-        self.__dict__.update(vars(self._load()))
-        return getattr(self, name)
+        with _LOADING:  # blocks of a swarm deciding on several threads read their inboxes at once
+            if "offsets" not in self.__dict__:
+                self.__dict__.update(vars(self._load()))
+        return object.__getattribute__(self, name)
+
+
+#: Held while a :class:`Deferred` loads (reentrant: a block's inbox loads the whole one's).
+_LOADING = threading.RLock()

@@ -310,6 +310,13 @@ class SwarmRobot:
         A robot that wishes no velocity gets no command at all (default False: the unicycle
         conversion's, which for a zero wish turns a robot heading between -pi and -pi/2 at full
         speed, ``atan2(+0, -0) = pi``).
+    threaded : bool
+        :meth:`decide` reads nothing but its view and keeps nothing of its own (no state on
+        ``self``, no random draws of its own), so that each robot's result depends on its own row
+        alone, as robot by robot. A swarm of such robots then decides in blocks of at least
+        :data:`~dream.swarm.engine.LEAST_BLOCK` rows on several threads at once (one per core of
+        the Rust kernels' pool), with the same bits: NumPy gives the thread back while it works
+        on a block's arrays. Default False: one call for all the rows.
     memory : dict
         Each memory field's initial value (a float or an int, or an array of them: each robot then
         keeps one of that shape), kept per robot between decisions.
@@ -328,6 +335,7 @@ class SwarmRobot:
     obstacles: Obstacles | None = None
     guard: Guard | None = None
     halts: bool = False
+    threaded: bool = False
     memory: ClassVar[dict[str, Any]] = {}
     odometry_noise: float = 0.0
     vel_gain: float = 0.8

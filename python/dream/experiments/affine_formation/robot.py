@@ -72,6 +72,7 @@ class FormationRobot(SwarmRobot):
     """
 
     period = CONTROL_GAP
+    threaded = True  # decide reads its view alone: blocks of a swarm decide on several threads
     movement = Movement(range=VERIFY)
     memory = {
         "heard": np.full((MEMBERS, 2), np.nan),  # the last position each robot of its formation claimed

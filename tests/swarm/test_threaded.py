@@ -1,0 +1,52 @@
+"""Every robot of DREAM's own that decides in blocks on several threads
+(:attr:`~dream.swarm.robot.SwarmRobot.threaded`) drives its swarm to the same poses, bit for bit, as
+one call for all its rows: its decision reads its own rows alone. The blocks here are small, so
+that a run of a hundred-odd robots cuts into several."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dream
+from dream.faults import Faults
+from dream.swarm import engine
+
+EXAMPLE = str(Path(__file__).resolve().parents[2] / "examples" / "rendezvous.py")
+FAULTS = Faults(loss=0.1, crash=0.05, crash_at=40, sensor_noise=0.002, latency=1, byzantine=2)
+
+
+def trace(name, n, faults, monkeypatch, threads, **params):
+    monkeypatch.setattr(engine, "LEAST_BLOCK", 2)
+    monkeypatch.setattr(engine, "threads", lambda: threads)
+    blocks, cut = [], engine.Engine._pieces
+
+    def pieces(self, whole, bounds):
+        blocks.append(len(bounds) - 1)
+        return cut(self, whole, bounds)
+
+    monkeypatch.setattr(engine.Engine, "_pieces", pieces)
+    result = dream.run(name, n=n, steps=90, seed=4, backend="fast", swarm=True, trace=True, faults=faults, **params)
+    assert max(blocks, default=1) == threads  # one block a thread, where the rows allow
+    return result.trace
+
+
+@pytest.mark.parametrize(
+    "name, n, params",
+    [
+        ("hrvo-circle", 60, {}),
+        ("line-consensus", 60, {}),
+        ("affine-formation", 70, {}),
+        ("voronoi-coverage", 60, {}),
+        (EXAMPLE, 60, {"radius": 0.2}),  # not met within the run
+    ],
+    ids=["hrvo-circle", "line-consensus", "affine-formation", "voronoi-coverage", "rendezvous example"],
+)
+@pytest.mark.parametrize("faults", [None, FAULTS], ids=["no faults", "faults"])
+def test_blocks_on_threads_give_the_poses_of_one_call(name, n, params, faults, monkeypatch):
+    one = trace(name, n, faults, monkeypatch, 1, **params)
+    blocks = trace(name, n, faults, monkeypatch, 4, **params)
+    assert np.array_equal(one, blocks)
+    assert not np.array_equal(one[0], one[-1])  # they moved
