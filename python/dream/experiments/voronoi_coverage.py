@@ -164,7 +164,9 @@ class CoverageRobot(SwarmRobot):
     """
 
     period = CONTROL_GAP
-    threaded = True  # decide reads its view alone: blocks of a swarm decide on several threads
+    # Its decision reads its view alone, but its cells query the whole board, built once a call: in blocks
+    # on 16 threads a million robots' step took 591 ms against 492 in one call.
+    threaded = False
     movement = Movement(range=SEEN)
     radio = Radio(range=RADIO_RANGE, fields=("x", "y"))
     halts = True

@@ -316,7 +316,9 @@ class SwarmRobot:
         alone, as robot by robot. A swarm of such robots then decides in blocks of at least
         :data:`~dream.swarm.engine.LEAST_BLOCK` rows on several threads at once (one per core of
         the Rust kernels' pool), with the same bits: NumPy gives the thread back while it works
-        on a block's arrays. Default False: one call for all the rows.
+        on a block's arrays. Work a decision does once a call for the whole swarm (``cells`` of
+        a lossless radio looks up the whole board) is then done once a block. Default False: one
+        call for all the rows.
     memory : dict
         Each memory field's initial value (a float or an int, or an array of them: each robot then
         keeps one of that shape), kept per robot between decisions.
