@@ -167,3 +167,24 @@ def test_an_empty_neighbourhood_cuts_into_empty_rows():
     hood = dream.swarm.Neighbourhood(np.zeros(4, dtype=np.int64), {"dx": np.zeros(0)}).frozen()
     rows = byrobot._rows(hood, range(4))
     assert [row.offsets.tolist() for row in rows] == [[0, 0]] * 3 and all(row.read_only for row in rows)
+
+
+class Failing(Threaded):
+    """Fails in the block that holds robot 7, as a user's rule may."""
+
+    def decide(self, view):
+        if 7 in view.ids:
+            raise ArithmeticError("robot 7 divided by zero")
+        return super().decide(view)
+
+
+def test_an_error_in_a_block_reaches_the_caller_and_keeps_the_memory(monkeypatch):
+    monkeypatch.setattr(dream.swarm.engine, "LEAST_BLOCK", 3)
+    monkeypatch.setattr(dream.swarm.engine, "threads", lambda: 4)
+    n, x = 12, scene()
+    engine = dream.swarm.Engine(Failing(), n, 0, dream.specs.ROBOTARIUM)
+    before = {key: values.copy() for key, values in engine.memory.items()}
+    with pytest.raises(ArithmeticError, match="robot 7"):
+        engine.step(1, x, np.zeros((2, n)))
+    for key, values in before.items():  # no block's memory was written back
+        assert np.array_equal(engine.memory[key], values, equal_nan=True), key
