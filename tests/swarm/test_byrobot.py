@@ -63,19 +63,24 @@ def run(robot, one_by_one, steps=12, count_traffic=True):
     return engine, np.array(out)
 
 
+def assert_same_state(engine, other):
+    """The two engines' robots ended with the same state, memory and message counts."""
+    for name in ("dxi", "sidestep", "side", "sent_at", "belief"):
+        assert np.array_equal(getattr(engine, name), getattr(other, name), equal_nan=True), name
+    for key in other.memory:
+        assert np.array_equal(engine.memory[key], other.memory[key], equal_nan=True), key
+    for name in ("sent", "heard", "lost"):
+        assert np.array_equal(getattr(engine.traffic, name), getattr(other.traffic, name)), name
+
+
 @pytest.mark.parametrize("count_traffic", [True, False], ids=["inbox found at once", "inbox found when read"])
 def test_choices_some_robots_make_come_out_as_the_swarms(count_traffic):
     one, alone = run(Choosy(), True, count_traffic=count_traffic)
     swarm, together = run(Choosy(), False, count_traffic=count_traffic)
     assert np.array_equal(alone, together)  # bit for bit, every step
-    for name in ("dxi", "sidestep", "side", "sent_at", "belief"):
-        assert np.array_equal(getattr(one, name), getattr(swarm, name), equal_nan=True), name
-    for key in swarm.memory:
-        assert np.array_equal(one.memory[key], swarm.memory[key], equal_nan=True), key
+    assert_same_state(one, swarm)
     assert one.memory["count"].tolist() == [11] * 12 and (one.memory["heard"][:5] != 0).all()
     assert one.memory["heard"][[5, 11]].tolist() == [0.0, 0.0]  # forgotten each time
-    for name in ("sent", "heard", "lost"):
-        assert np.array_equal(getattr(one.traffic, name), getattr(swarm.traffic, name)), name
     assert (one.traffic.heard > 0).any() == count_traffic  # counted only when asked to
     assert (one.traffic.sent > 0).tolist() == [count_traffic and i % 2 == 1 for i in range(12)]  # odd ids send
     assert (one.sidestep > 0).any() or (one.side < 0).any()  # someone was blocked and stepped aside
@@ -102,12 +107,7 @@ def test_blocks_decided_on_threads_come_out_as_the_swarms(monkeypatch, count_tra
     blocks, apart = run(threaded, False, count_traffic=count_traffic)
     swarm, together = run(Choosy(), False, count_traffic=count_traffic)
     assert np.array_equal(apart, together)  # bit for bit, every step
-    for name in ("dxi", "sidestep", "side", "sent_at", "belief"):
-        assert np.array_equal(getattr(blocks, name), getattr(swarm, name), equal_nan=True), name
-    for key in swarm.memory:
-        assert np.array_equal(blocks.memory[key], swarm.memory[key], equal_nan=True), key
-    for name in ("sent", "heard", "lost"):
-        assert np.array_equal(getattr(blocks.traffic, name), getattr(swarm.traffic, name)), name
+    assert_same_state(blocks, swarm)
     decided = [call for call in threaded.calls if len(call) > 0]
     assert sorted(map(len, decided[:4])) == [3, 3, 3, 3]  # every step: four blocks of three rows
     assert sorted(sum(decided[:4], [])) == list(range(12))

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import dream
-from dream.faults import Faults
 from dream.experiments.voronoi_coverage import CoverageRobot
+from dream.faults import Faults
 from dream.swarm import engine
 
 EXAMPLE = str(Path(__file__).resolve().parents[2] / "examples" / "rendezvous.py")
