@@ -30,8 +30,9 @@ def test_wmsr_graph_gives_every_robot_enough_neighbours_and_keeps_the_plain_grap
     plain = lc.graph(100, np.random.default_rng(3))
     # The plain graph as it was drawn before `reach`: the ring's next id plus the same n chords.
     rng, old = np.random.default_rng(3), np.zeros((100, 100))
-    chords = np.array([rng.choice(100, size=2, replace=False) for _ in range(100)])
-    old[np.arange(100), (np.arange(100) + 1) % 100] = old[chords[:, 0], chords[:, 1]] = 1.0
+    ends, others = rng.integers(100, size=100), rng.integers(99, size=100)
+    others += others >= ends  # two distinct robots a chord
+    old[np.arange(100), (np.arange(100) + 1) % 100] = old[ends, others] = 1.0
     old = np.maximum(old, old.T)
     np.fill_diagonal(old, 0.0)
     assert (plain == old).all()
