@@ -32,7 +32,7 @@ pub enum Reduce {
 /// # Errors
 /// `values` not a whole number of rows of `width`, an index out of bounds, or an invalid CSR.
 pub fn reduce(values: &[f64], width: usize, offsets: &[i64], index: Option<&[i64]>, op: Reduce) -> Result<Vec<f64>> {
-    if width == 0 || values.len() % width != 0 {
+    if width == 0 || !values.len().is_multiple_of(width) {
         return Err(GeomError::LengthMismatch {
             arg: "values",
             expected: width * (values.len() / width.max(1)),

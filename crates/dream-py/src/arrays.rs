@@ -95,10 +95,6 @@ fn values_of<T: numpy::Element + Copy>(
     Ok((values.into_vec(), shape))
 }
 
-fn float_values(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<(Vec<f64>, Vec<usize>)> {
-    values_of::<f64>(arg, object, "float64")
-}
-
 /// A `(rows, n)` float64 array's values, row-major and borrowed where it can be (see
 /// [`Values`]), with `n`.
 pub fn rows_in<'py>(arg: &str, object: &Bound<'py, PyAny>, rows: usize) -> PyDreamResult<(Values<'py, f64>, usize)> {
@@ -114,23 +110,41 @@ pub fn rows_of(arg: &str, object: &Bound<'_, PyAny>, rows: usize) -> PyDreamResu
     rows_in(arg, object, rows).map(|(values, n)| (values.into_vec(), n))
 }
 
-/// Copies a `(k, w)` float64 array into a row-major vector; returns it with `w`.
-pub fn matrix_of(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<(Vec<f64>, usize)> {
-    let (values, shape) = float_values(arg, object)?;
+/// A `(k, w)` float64 array's values, row-major and borrowed where it can be (see [`Values`]),
+/// with `w`.
+pub fn matrix_in<'py>(arg: &str, object: &Bound<'py, PyAny>) -> PyDreamResult<(Values<'py, f64>, usize)> {
+    let (values, shape) = borrow_values(arg, object, "float64")?;
     if shape.len() != 2 {
         return Err(shape_error(arg, "(k, w)", &shape));
     }
     Ok((values, shape[1]))
 }
 
+/// An `(n, W)` float64 array's `n` rows, borrowed where it can be (see [`Values`]).
+/// Dereferences to the rows.
+pub struct Points<'py, const W: usize>(Values<'py, f64>);
+
+impl<const W: usize> std::ops::Deref for Points<'_, W> {
+    type Target = [[f64; W]];
+
+    fn deref(&self) -> &[[f64; W]] {
+        // `points_in` checked the shape: the values are whole rows of W.
+        self.0.as_chunks::<W>().0
+    }
+}
+
+/// An `(n, W)` float64 array's rows, borrowed where it can be (see [`Values`]).
+pub fn points_in<'py, const W: usize>(arg: &str, object: &Bound<'py, PyAny>) -> PyDreamResult<Points<'py, W>> {
+    let (values, shape) = borrow_values(arg, object, "float64")?;
+    if shape.len() != 2 || shape[1] != W {
+        return Err(shape_error(arg, &format!("(n, {W})"), &shape));
+    }
+    Ok(Points(values))
+}
+
 /// Copies an `(n, W)` float64 array into `n` fixed-size rows.
 pub fn points_of<const W: usize>(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<Vec<[f64; W]>> {
-    with_values(arg, object, "float64", |values: &[f64], shape| {
-        if shape.len() != 2 || shape[1] != W {
-            return Err(shape_error(arg, &format!("(n, {W})"), shape));
-        }
-        Ok(values.chunks_exact(W).map(|c| std::array::from_fn(|k| c[k])).collect())
-    })
+    points_in::<W>(arg, object).map(|points| points.to_vec())
 }
 
 /// The `W` columns of an `(n, W)` float64 array, each a vector: a block copy of a column that lies
@@ -173,13 +187,19 @@ pub fn vector_of(arg: &str, object: &Bound<'_, PyAny>, len: Option<usize>) -> Py
     vector_in(arg, object, len).map(Values::into_vec)
 }
 
-/// Copies a 1-D int64 array (CSR offsets and indices).
-pub fn indices_of(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<Vec<i64>> {
-    let (values, shape) = values_of::<i64>(arg, object, "int64")?;
+/// A 1-D int64 array (CSR offsets and indices), borrowed where it can be (see [`Values`]): a
+/// million robots' message indices are tens of megabytes, copied on one core.
+pub fn indices_in<'py>(arg: &str, object: &Bound<'py, PyAny>) -> PyDreamResult<Values<'py, i64>> {
+    let (values, shape) = borrow_values::<i64>(arg, object, "int64")?;
     if shape.len() != 1 {
         return Err(shape_error(arg, "(n,)", &shape));
     }
     Ok(values)
+}
+
+/// Copies a 1-D int64 array (CSR offsets and indices).
+pub fn indices_of(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<Vec<i64>> {
+    indices_in(arg, object).map(Values::into_vec)
 }
 
 /// `read(values)` on a 1-D int64 array, borrowed where it is C-ordered (a large graph, read in

@@ -4,7 +4,7 @@ use dream_core::guard as core;
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 
-use crate::arrays::{indices_of, vector_of};
+use crate::arrays::{indices_in, vector_in};
 use crate::errors::PyDreamResult;
 
 /// `(m,)` bool: which robots stop, driving at `speeds` along `headings` `(m,)` towards the robots
@@ -22,11 +22,13 @@ pub fn motion_guard<'py>(
     near: f64,
     horizon: f64,
 ) -> PyDreamResult<Bound<'py, PyArray1<bool>>> {
-    let speeds = vector_of("speeds", &speeds, None)?;
-    let headings = vector_of("headings", &headings, Some(speeds.len()))?;
-    let offsets = indices_of("offsets", &offsets)?;
-    let dx = vector_of("dx", &dx, None)?;
-    let dy = vector_of("dy", &dy, Some(dx.len()))?;
-    let out = py.detach(|| core::stopping(&speeds, &headings, &offsets, &dx, &dy, near, horizon))?;
+    let speeds = vector_in("speeds", &speeds, None)?;
+    let headings = vector_in("headings", &headings, Some(speeds.len()))?;
+    let offsets = indices_in("offsets", &offsets)?;
+    let dx = vector_in("dx", &dx, None)?;
+    let dy = vector_in("dy", &dy, Some(dx.len()))?;
+    let (speeds, headings, offsets, dx, dy): (&[f64], &[f64], &[i64], &[f64], &[f64]) =
+        (&speeds, &headings, &offsets, &dx, &dy);
+    let out = py.detach(|| core::stopping(speeds, headings, offsets, dx, dy, near, horizon))?;
     Ok(out.into_pyarray(py))
 }

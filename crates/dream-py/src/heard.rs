@@ -4,7 +4,7 @@ use dream_core::geom::Arena;
 use dream_core::heard;
 use pyo3::prelude::*;
 
-use crate::arrays::{count_of, indices_of, points_of};
+use crate::arrays::{count_of, indices_in, points_in};
 use crate::errors::PyDreamResult;
 use crate::voronoi::{cell_arrays, CellArrays};
 
@@ -34,38 +34,38 @@ pub fn heard_cells<'py>(
 ) -> PyDreamResult<CellArrays<'py>> {
     let resolution = count_of("resolution", resolution)?;
     let arena = Arena::new(bounds.0, bounds.1, bounds.2, bounds.3)?;
-    let here = points_of::<2>("here", &here)?;
-    let ids = indices_of("hearers", &hearers)?;
-    let positions = points_of::<2>("positions", &positions)?;
+    // Every array read in place: the positions and messages of every robot are tens of
+    // megabytes at a million, copied on one core.
+    let here = points_in::<2>("here", &here)?;
+    let ids = indices_in("hearers", &hearers)?;
+    let positions = points_in::<2>("positions", &positions)?;
     // One array for both (no turns): read and checked once.
     let said_once = said_now.is(&said);
-    let said = points_of::<2>("said", &said)?;
+    let said = points_in::<2>("said", &said)?;
     let said_now = if said_once {
-        Vec::new()
+        None
     } else {
-        points_of::<2>("said_now", &said_now)?
+        Some(points_in::<2>("said_now", &said_now)?)
     };
-    let seen_offsets = indices_of("seen_indptr", &seen_indptr)?;
-    let seen = points_of::<2>("seen_points", &seen_points)?;
-    let agents_offsets = indices_of("virtual_indptr", &virtual_indptr)?;
-    let agents = points_of::<2>("virtual_points", &virtual_points)?;
-    let cells = py.detach(|| {
-        let radio = heard::Radio {
-            positions: &positions,
-            range,
-            said: &said,
-            said_now: if said_once { &said } else { &said_now },
-        };
-        let hearers = heard::Hearers {
-            ids: &ids,
-            here: &here,
-            seen_offsets: &seen_offsets,
-            seen: &seen,
-            same,
-            agents_offsets: &agents_offsets,
-            agents: &agents,
-        };
-        heard::heard_cells(&radio, &hearers, radius, &arena, resolution)
-    })?;
+    let seen_offsets = indices_in("seen_indptr", &seen_indptr)?;
+    let seen = points_in::<2>("seen_points", &seen_points)?;
+    let agents_offsets = indices_in("virtual_indptr", &virtual_indptr)?;
+    let agents = points_in::<2>("virtual_points", &virtual_points)?;
+    let radio = heard::Radio {
+        positions: &positions,
+        range,
+        said: &said,
+        said_now: said_now.as_deref().unwrap_or(&said),
+    };
+    let hearers = heard::Hearers {
+        ids: &ids,
+        here: &here,
+        seen_offsets: &seen_offsets,
+        seen: &seen,
+        same,
+        agents_offsets: &agents_offsets,
+        agents: &agents,
+    };
+    let cells = py.detach(|| heard::heard_cells(&radio, &hearers, radius, &arena, resolution))?;
     cell_arrays(py, cells)
 }

@@ -8,7 +8,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
-use crate::arrays::{both, indices_of, points_of, vector_of};
+use crate::arrays::{both, indices_in, indices_of, points_in, points_of, vector_in, vector_of};
 use crate::errors::{value_error, PyDreamResult};
 
 fn params(
@@ -88,10 +88,10 @@ pub fn hrvo_rows<'py>(
     include_preferred: bool,
     relative: bool,
 ) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
-    let v = points_of::<2>("velocities", &velocities)?;
-    let pref = points_of::<2>("preferred", &preferred)?;
-    let p = points_of::<2>("positions", &positions)?;
-    let offsets = indices_of("offsets", &offsets)?;
+    let v = points_in::<2>("velocities", &velocities)?;
+    let pref = points_in::<2>("preferred", &preferred)?;
+    let p = points_in::<2>("positions", &positions)?;
+    let offsets = indices_in("offsets", &offsets)?;
     let sensed = relative
         .then(|| detections_of::<5>(&detections, "(distance, dx, dy, vx, vy)"))
         .transpose()?;
@@ -102,7 +102,8 @@ pub fn hrvo_rows<'py>(
     let seen = sensed.as_deref().map_or(Detections::Polar(&polar), Detections::Offsets);
     let grid = points_of::<2>("candidates", &candidates)?;
     let params = params(safety, v_max, bounds, include_preferred)?;
-    let chosen = py.detach(|| core::hrvo_rows(&v, &pref, &p, &offsets, seen, &grid, &params))?;
+    let (v, pref, p, offsets): (&[Vec2], &[Vec2], &[Vec2], &[i64]) = (&v, &pref, &p, &offsets);
+    let chosen = py.detach(|| core::hrvo_rows(v, pref, p, offsets, seen, &grid, &params))?;
     let m = chosen.len();
     Ok(chosen.into_flattened().into_pyarray(py).reshape([m, 2])?)
 }
@@ -119,12 +120,16 @@ fn detections_of<const W: usize>(object: &Bound<'_, PyAny>, names: &str) -> PyDr
             columns.len()
         )));
     }
-    let first = vector_of("detections", &columns.get_item(0)?, None)?;
+    // Each column read in place (a million robots' detections are tens of megabytes, copied on one
+    // core), then interleaved on every core.
+    let first = vector_in("detections", &columns.get_item(0)?, None)?;
+    let len = first.len();
     let mut all = vec![first];
     for c in 1..W {
-        all.push(vector_of("detections", &columns.get_item(c)?, Some(all[0].len()))?);
+        all.push(vector_in("detections", &columns.get_item(c)?, Some(len))?);
     }
-    Ok(map_range(all[0].len(), 1.0, |e| std::array::from_fn(|c| all[c][e])))
+    let columns: Vec<&[f64]> = all.iter().map(|column| &**column).collect();
+    Ok(map_range(len, 1.0, |e| std::array::from_fn(|c| columns[c][e])))
 }
 
 /// A robot's HRVO planner: parameters and candidate grid, fixed; one call per decision.

@@ -4,7 +4,7 @@ use dream_core::reduce::{self as core, Reduce};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
-use crate::arrays::{flags_of, indices_of, matrix_of, points_of, vector_of};
+use crate::arrays::{flags_of, indices_in, indices_of, matrix_in, points_of, vector_of};
 use crate::errors::{value_error, PyDreamResult};
 
 /// `op` ("sum", "mean", "min" or "max") of each row's entries of `values` `(k, w)`: `(m, w)`;
@@ -25,15 +25,16 @@ pub fn segment_reduce<'py>(
         "max" => Reduce::Max,
         _ => return Err(value_error(format!("`op` must be sum, mean, min or max, got {op:?}"))),
     };
-    let (values, width) = matrix_of("values", &values)?;
-    let offsets = indices_of("offsets", &offsets)?;
+    let (values, width) = matrix_in("values", &values)?;
+    let offsets = indices_in("offsets", &offsets)?;
     if width == 0 {
         return Err(value_error(
             "`values` must have at least one column, got shape (k, 0)".into(),
         ));
     }
-    let index = index.map(|index| indices_of("index", &index)).transpose()?;
-    let out = py.detach(|| core::reduce(&values, width, &offsets, index.as_deref(), op))?;
+    let index = index.map(|index| indices_in("index", &index)).transpose()?;
+    let (v, o, i): (&[f64], &[i64], Option<&[i64]>) = (&values, &offsets, index.as_deref());
+    let out = py.detach(|| core::reduce(v, width, o, i, op))?;
     let rows = offsets.len().saturating_sub(1);
     Ok(out.into_pyarray(py).reshape([rows, width])?)
 }
