@@ -147,28 +147,48 @@ pub fn points_of<const W: usize>(arg: &str, object: &Bound<'_, PyAny>) -> PyDrea
     points_in::<W>(arg, object).map(|points| points.to_vec())
 }
 
-/// The `W` columns of an `(n, W)` float64 array, each a vector: a block copy of a column that lies
-/// contiguous (Fortran order: a transposed `(W, n)` array, as poses' rows `x[:2].T`), else a
-/// strided pass over it.
-pub fn columns_of<const W: usize>(arg: &str, object: &Bound<'_, PyAny>) -> PyDreamResult<[Vec<f64>; W]> {
+/// The `W` columns of an `(n, W)` float64 array: each borrowed where it lies contiguous (Fortran
+/// order: a transposed `(W, n)` array, as poses' rows `x[:2].T`), else copied by a strided pass.
+pub struct Columns<'py, const W: usize> {
+    array: PyReadonlyArrayDyn<'py, f64>,
+    copied: [Option<Vec<f64>>; W],
+}
+
+impl<const W: usize> Columns<'_, W> {
+    /// The columns, each `(n,)`.
+    pub fn get(&self) -> [&[f64]; W] {
+        std::array::from_fn(|k| match &self.copied[k] {
+            Some(values) => values.as_slice(),
+            // Not copied only where the column lies contiguous (see `columns_in`).
+            None => self
+                .array
+                .as_array()
+                .index_axis_move(numpy::ndarray::Axis(1), k)
+                .to_slice()
+                .unwrap_or_default(),
+        })
+    }
+}
+
+/// The `W` columns of an `(n, W)` float64 array (see [`Columns`]).
+pub fn columns_in<'py, const W: usize>(arg: &str, object: &Bound<'py, PyAny>) -> PyDreamResult<Columns<'py, W>> {
     let array = object
         .cast::<PyArrayDyn<f64>>()
         .map_err(|_| value_error(format!("`{arg}` must be a NumPy array of float64")))?;
     let readonly = array.try_readonly().map_err(|e| value_error(format!("`{arg}`: {e}")))?;
-    let view = readonly.as_array();
-    let Ok(view) = view.into_dimensionality::<numpy::ndarray::Ix2>() else {
-        return Err(shape_error(arg, &format!("(n, {W})"), readonly.shape()));
-    };
-    if view.shape()[1] != W {
-        return Err(shape_error(arg, &format!("(n, {W})"), view.shape()));
+    let shape = readonly.shape().to_vec();
+    if shape.len() != 2 || shape[1] != W {
+        return Err(shape_error(arg, &format!("(n, {W})"), &shape));
     }
-    Ok(std::array::from_fn(|k| {
-        let column = view.column(k);
-        match column.as_slice() {
-            Some(values) => values.to_vec(),
-            None => column.iter().copied().collect(),
-        }
-    }))
+    let view = readonly.as_array();
+    let copied = std::array::from_fn(|k| {
+        let column = view.index_axis(numpy::ndarray::Axis(1), k);
+        column.as_slice().is_none().then(|| column.iter().copied().collect())
+    });
+    Ok(Columns {
+        array: readonly,
+        copied,
+    })
 }
 
 /// A 1-D float64 array's values, borrowed where it can be (see [`Values`]), checking its length

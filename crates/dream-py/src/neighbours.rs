@@ -6,7 +6,7 @@ use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
-use crate::arrays::{columns_of, count_of, flags_of, indices_of, points_of, vector_in, vector_of, with_indices};
+use crate::arrays::{columns_in, count_of, flags_of, indices_of, points_of, vector_in, vector_of, with_indices};
 use crate::errors::{value_error, PyDreamResult};
 
 type CsrArrays<'py> = (
@@ -30,7 +30,8 @@ pub fn neighbours<'py>(
     max_neighbours: Option<i64>,
     rows: Option<Bound<'py, PyAny>>,
 ) -> PyDreamResult<CsrArrays<'py>> {
-    let [xs, ys] = columns_of::<2>("positions", &positions)?;
+    let positions = columns_in::<2>("positions", &positions)?;
+    let [xs, ys] = positions.get();
     let max_neighbours = max_neighbours.map(|k| count_of("max_neighbours", k)).transpose()?;
     let headings = headings
         .map(|h| vector_of("headings", &h, Some(xs.len())))
@@ -42,7 +43,7 @@ pub fn neighbours<'py>(
             direction,
             fov,
         });
-        core::within(&xs, &ys, radius, view, max_neighbours, rows.as_deref())
+        core::within(xs, ys, radius, view, max_neighbours, rows.as_deref())
     })?;
     Ok((
         csr.indptr.into_pyarray(py),
@@ -100,7 +101,8 @@ pub fn perceive<'py>(
     carried: Option<Vec<Bound<'py, PyAny>>>,
     bearings: bool,
 ) -> PyDreamResult<(Bound<'py, PyTuple>, CsrArrays<'py>)> {
-    let [xs, ys] = columns_of::<2>("positions", &positions)?;
+    let positions = columns_in::<2>("positions", &positions)?;
+    let [xs, ys] = positions.get();
     let n = xs.len();
     let headings = vector_in("headings", &headings, Some(n))?;
     let carried = carried.unwrap_or_default();
@@ -123,7 +125,7 @@ pub fn perceive<'py>(
     });
     let columns: Vec<&[f64]> = carried.iter().map(|c| &c[..]).collect();
     let headings: &[f64] = &headings;
-    let (seen, heard) = py.detach(|| core_perceive(&xs, &ys, headings, &rows, sight, radio, &columns))?;
+    let (seen, heard) = py.detach(|| core_perceive(xs, ys, headings, &rows, sight, radio, &columns))?;
     let Perceived {
         offsets,
         ids,
@@ -161,10 +163,13 @@ pub fn linked<'py>(
     positions: Option<Bound<'py, PyAny>>,
 ) -> PyDreamResult<CsrArrays<'py>> {
     let rows = indices_of("rows", &rows)?;
-    let coordinates = positions.map(|p| columns_of::<2>("positions", &p)).transpose()?;
-    let n = coordinates.as_ref().map_or(talking.len()?, |[xs, _]| xs.len());
+    let coordinates = positions.map(|p| columns_in::<2>("positions", &p)).transpose()?;
+    let at = coordinates.as_ref().map(|columns| {
+        let [xs, ys] = columns.get();
+        (xs, ys)
+    });
+    let n = at.map_or(talking.len()?, |(xs, _)| xs.len());
     let talking = flags_of("talking", &talking, n)?;
-    let at = coordinates.as_ref().map(|[xs, ys]| (&xs[..], &ys[..]));
     let heard = with_indices("indptr", &indptr, |indptr| {
         with_indices("indices", &indices, |indices| {
             Ok(py.detach(|| core_linked(at, (indptr, indices), &rows, &talking))?)
