@@ -5,6 +5,8 @@ that a run of a hundred-odd robots cuts into several."""
 
 from __future__ import annotations
 
+import multiprocessing
+import time
 from pathlib import Path
 
 import numpy as np
@@ -53,3 +55,22 @@ def test_blocks_on_threads_give_the_poses_of_one_call(name, n, params, faults, m
     blocks = trace(name, n, faults, monkeypatch, 4, **params)
     assert np.array_equal(one, blocks)
     assert not np.array_equal(one[0], one[-1])  # they moved
+
+
+def test_a_forked_child_decides_in_blocks_on_threads_of_its_own(monkeypatch):
+    monkeypatch.setattr(engine, "LEAST_BLOCK", 2)
+    monkeypatch.setattr(engine, "threads", lambda: 3)
+    list(engine._pool().map(time.sleep, [0.05] * 3))  # the parent's pool, every thread started
+    context = multiprocessing.get_context("fork")
+    ours, theirs = context.Pipe()
+    child = context.Process(target=_run, args=(theirs, "hrvo-circle", 40))
+    child.start()
+    done = ours.poll(120)  # on the parent's dead threads, the child would wait forever
+    child.kill()
+    child.join()
+    assert done and ours.recv() == "moved"
+
+
+def _run(pipe, name, n):
+    result = dream.run(name, n=n, steps=60, seed=1, backend="fast", swarm=True, trace=True)
+    pipe.send("moved" if not np.array_equal(result.trace[0], result.trace[-1]) else "stood")

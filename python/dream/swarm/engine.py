@@ -641,3 +641,7 @@ def threads() -> int:
 @cache
 def _pool() -> ThreadPoolExecutor:
     return ThreadPoolExecutor(threads(), thread_name_prefix="dream-decide")
+
+
+# A forked child (multiprocessing's default on Linux) has none of its parent's threads: a new pool.
+os.register_at_fork(after_in_child=_pool.cache_clear)
