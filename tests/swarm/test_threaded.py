@@ -6,6 +6,7 @@ that a run of a hundred-odd robots cuts into several."""
 from __future__ import annotations
 
 import multiprocessing
+import os
 import time
 from pathlib import Path
 
@@ -74,3 +75,10 @@ def test_a_forked_child_decides_in_blocks_on_threads_of_its_own(monkeypatch):
 def _run(pipe, name, n):
     result = dream.run(name, n=n, steps=60, seed=1, backend="fast", swarm=True, trace=True)
     pipe.send("moved" if not np.array_equal(result.trace[0], result.trace[-1]) else "stood")
+
+
+@pytest.mark.parametrize(("asked", "expected"), [("3", 3), ("0", None), ("", None), ("many", None)])
+def test_the_decision_threads_follow_the_kernels_pool(monkeypatch, asked, expected):
+    monkeypatch.setenv("RAYON_NUM_THREADS", asked)
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    assert engine.threads() == (cores if expected is None else expected)  # rayon's default for 0 or none

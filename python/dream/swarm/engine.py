@@ -52,8 +52,10 @@ Said = tuple[np.ndarray, dict[str, np.ndarray]]
 #: A checked decision: the wished velocities, the rows driven direct, the safety radii, the
 #: detections heeded (None where not chosen) and what was said.
 Settled = tuple[np.ndarray, np.ndarray | None, np.ndarray | None, np.ndarray | None, Said | None]
-#: The fewest robots a block of a swarm decided on a thread of its own holds: NumPy gives the
-#: thread back while it works on a block's arrays, for most of a block's time from a few thousand rows.
+#: The fewest robots a block of a swarm decided on a thread of its own holds. NumPy gives the
+#: interpreter's lock back while it works on a block's arrays; between two calls each thread waits
+#: for it, and on small blocks that wait is most of the time (at a million robots on 16 cores,
+#: blocks of 12,000 rows gained less than blocks of 32,768; on 2 cores, blocks of 10,000 nothing).
 LEAST_BLOCK = 32768
 #: The values a movement sensor measures of each robot it sees, in the order of their noise keys
 #: (the offsets ``dx`` and ``dy`` follow from the distance and the bearing).
@@ -633,9 +635,12 @@ def _bearings(seen: Neighbourhood) -> np.ndarray:
 
 
 def threads() -> int:
-    """The threads to decide on: those of the Rust kernels' pool (``RAYON_NUM_THREADS``, else
-    the cores this process may run on)."""
-    return int(os.environ.get("RAYON_NUM_THREADS") or len(os.sched_getaffinity(0)))
+    """The threads to decide on: as many as the Rust kernels' pool has (``RAYON_NUM_THREADS``,
+    where it is a whole number above 0, else the cores this process may run on)."""
+    asked = os.environ.get("RAYON_NUM_THREADS", "")
+    if asked.isdigit() and int(asked) > 0:
+        return int(asked)
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
 @cache
