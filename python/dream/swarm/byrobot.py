@@ -28,10 +28,10 @@ def cut(whole: View, bounds: Sequence[int] | None = None) -> list[View]:
     ``whole``'s arrays (read-only where ``whole``'s are), its own memory rows, nothing said or
     chosen yet."""
     bounds = range(len(whole) + 1) if bounds is None else bounds
-    blocks = list(zip(bounds[:-1], bounds[1:]))
+    pieces = list(zip(bounds[:-1], bounds[1:]))
     seen, heard = _rows(whole.seen, bounds), _rows(whole.heard, bounds)
     obstacles: Sequence[Neighbourhood | None] = (
-        [None] * len(blocks) if whole.obstacles is None else _rows(whole.obstacles, bounds)
+        [None] * len(pieces) if whole.obstacles is None else _rows(whole.obstacles, bounds)
     )
     ids, clock, pose, memory, command = whole.ids, whole.clock, whole.pose, whole.memory, whole.command
     return [
@@ -46,7 +46,7 @@ def cut(whole: View, bounds: Sequence[int] | None = None) -> list[View]:
             None if command is None else command[a:b],
             board_cells=whole.board_cells,
         )
-        for i, (a, b) in enumerate(blocks)
+        for i, (a, b) in enumerate(pieces)
     ]
 
 
