@@ -307,6 +307,37 @@ def test_a_perceived_row_does_not_depend_on_the_other_rows(rng):
         assert_array_equal(r1, heard[h_offsets[r] : h_offsets[r + 1]])
 
 
+@pytest.mark.parametrize("scale", [0.1, 1e154], ids=["lattice", "squares overflow"])
+@pytest.mark.parametrize("kinds", ["sight and radio", "sight", "radio"])
+@pytest.mark.parametrize("fov", [2 * np.pi, 1.5])
+def test_perceive_counts_alike_at_the_ranges_edge(rng, scale, kinds, fov):
+    """Robots on a lattice whose spacing is the ranges' unit: many pairs lie exactly at a range
+    (the count's test of squares against the range's bound and the rows' test of roots must agree,
+    on every row); past 1.3e154 m the squares overflow, and lengths come from hypot."""
+    side = 12
+    positions = np.stack(np.meshgrid(np.arange(side), np.arange(side)), axis=-1).reshape(-1, 2) * scale
+    positions[::5] = positions[1::5][: len(positions[::5])]  # some robots on the same spot
+    n = len(positions)
+    headings = rng.uniform(-np.pi, np.pi, n)
+    options = {}
+    if "sight" in kinds:
+        options["sight"] = (2 * scale, fov, 0.3)
+    if "radio" in kinds:
+        options |= dict(radio_range=3 * scale, talking=rng.random(n) < 0.8)
+    rows = np.arange(0, n, 2)
+    got = _core.perceive(positions, headings, rows, **options)
+    want = _reference.perceive(positions, headings, rows, **options)
+    for mine, theirs in zip(got, want, strict=True):
+        for k, (a, b) in enumerate(zip(mine, theirs, strict=True)):
+            if k == 3:  # bearings: Rust's atan2 and NumPy's, to an ulp
+                assert_allclose(a, b, rtol=0, atol=1e-15)
+            else:
+                assert_array_equal(a, b)
+    (offsets, *_), (h_offsets, *_) = got
+    assert offsets[-1] > 0 if "sight" in kinds else offsets[-1] == 0
+    assert h_offsets[-1] > 0 if "radio" in kinds else h_offsets[-1] == 0
+
+
 @pytest.mark.parametrize(
     ("options", "message"),
     [

@@ -224,6 +224,20 @@ pub(crate) fn radius_squared(radius: f64) -> f64 {
     (radius * radius).max(f64::MIN_POSITIVE) * (1.0 + 4.0 * f64::EPSILON)
 }
 
+/// The largest finite square whose root is within `radius` (finite, >= 0): for a finite
+/// `squared`, `squared <= within_squared(radius)` exactly when `length(squared, ..) <= radius`
+/// (`sqrt` is correctly rounded and never decreasing), so a count needs no root.
+pub(crate) fn within_squared(radius: f64) -> f64 {
+    let mut bound = (radius * radius).min(f64::MAX);
+    while bound > 0.0 && bound.sqrt() > radius {
+        bound = bound.next_down();
+    }
+    while bound < f64::MAX && bound.next_up().sqrt() <= radius {
+        bound = bound.next_up();
+    }
+    bound
+}
+
 /// Whether the offset `(dx, dy)` lies within `radius` (inclusive), as every neighbour query
 /// decides it; `radius_squared` is [`radius_squared`]`(radius)`.
 #[inline]
@@ -472,6 +486,42 @@ impl Query<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn within_squared_decides_as_the_root_does() {
+        // Squares a few ulps either side of each radius's bound, and radii at the extremes.
+        for radius in [
+            0.0,
+            5e-324,
+            1e-160,
+            0.1,
+            0.3,
+            0.7,
+            1.0,
+            2.5,
+            1e150,
+            1.3e154,
+            1e200,
+            f64::MAX,
+        ] {
+            let bound = within_squared(radius);
+            assert!(bound.sqrt() <= radius, "{radius}: the bound's root is out");
+            let mut squared = bound;
+            for _ in 0..4 {
+                squared = squared.next_down();
+            }
+            for _ in 0..9 {
+                if squared >= 0.0 {
+                    assert_eq!(
+                        squared <= bound,
+                        squared.sqrt() <= radius,
+                        "radius {radius}, squared {squared}"
+                    );
+                }
+                squared = squared.next_up();
+            }
+        }
+    }
 
     fn brute(xs: &[f64], ys: &[f64], radius: f64) -> Vec<Vec<i64>> {
         (0..xs.len())

@@ -10,6 +10,7 @@ use dream_core::geom::Vec2;
 use dream_core::hrvo::{self, HrvoParams};
 use dream_core::neighbours;
 use dream_core::obstacles::{self, Obstacles};
+use dream_core::perceive;
 use dream_core::raycast::{self, Ray, Sensors, Wall};
 use dream_core::voronoi;
 use dream_core::GeomError;
@@ -154,6 +155,50 @@ proptest! {
             }
         }
         prop_assert!(csr.distances.iter().all(|d| d.is_finite()));
+    }
+
+    /// What robots see all around and hear matches the brute force, at any scale: each row by
+    /// increasing id, and the rows asked for alone as among all.
+    #[test]
+    fn perceive_matches_brute_force(
+        (points, scale) in swarm(40),
+        sight in prop::sample::select(vec![None, Some(0.0), Some(0.25), Some(1.0), Some(1e300)]),
+        radio in prop::sample::select(vec![None, Some(0.0), Some(0.5), Some(3.0)]),
+    ) {
+        let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|p| (p[0], p[1])).unzip();
+        let n = points.len();
+        let talking: Vec<bool> = (0..n).map(|j| j % 3 != 0).collect();
+        let sight = sight.map(|range: f64| perceive::Sight {
+            range: (range * scale).min(f64::MAX),
+            fov: 2.0 * PI,
+            direction: 0.0,
+            bearings: false,
+        });
+        let radio = radio.map(|range: f64| ((range * scale).min(f64::MAX), &talking[..]));
+        let rows: Vec<i64> = (0..n as i64).collect();
+        let headings = vec![0.0; n];
+        let (seen, heard) = perceive::perceive(&xs, &ys, &headings, &rows, sight, radio, &[]).unwrap();
+        let within = |i: usize, j: usize, range: f64| {
+            let (dx, dy) = (xs[j] - xs[i], ys[j] - ys[i]);
+            j != i && (dx * dx + dy * dy).sqrt() <= range
+        };
+        for i in 0..n {
+            let row = |p: &perceive::Perceived| p.ids[p.offsets[i] as usize..p.offsets[i + 1] as usize].to_vec();
+            let want_seen: Vec<i64> = match sight {
+                Some(s) => (0..n).filter(|&j| within(i, j, s.range)).map(|j| j as i64).collect(),
+                None => Vec::new(),
+            };
+            let want_heard: Vec<i64> = match radio {
+                Some((range, _)) => (0..n).filter(|&j| within(i, j, range) && talking[j]).map(|j| j as i64).collect(),
+                None => Vec::new(),
+            };
+            prop_assert_eq!(row(&seen), want_seen);
+            prop_assert_eq!(row(&heard), want_heard);
+            let (alone_seen, alone_heard) =
+                perceive::perceive(&xs, &ys, &headings, &[i as i64], sight, radio, &[]).unwrap();
+            prop_assert_eq!(alone_seen.ids, row(&seen));
+            prop_assert_eq!(alone_heard.ids, row(&heard));
+        }
     }
 
     /// HRVO picks zero, a grid candidate or the preferred velocity shortened to v_max, keeps
