@@ -2,7 +2,7 @@
 
 use rayon::prelude::*;
 
-use crate::error::{try_room, Result};
+use crate::error::{try_filled, try_room, Result};
 
 /// Serial work, in nanoseconds, from which a loop is spread over the threads. Between kernel
 /// calls rayon's threads sleep, and waking them costs tens of microseconds: on a 2-core VM
@@ -75,6 +75,26 @@ pub(crate) fn join_if<RA: Send, RB: Send>(
     }
 }
 
+/// `len` copies of `value`, written on every core where there are many: a large output is fresh
+/// memory, and writing it first faults its pages in, which one thread does at a fraction of the
+/// speed of all (hundreds of megabytes for a million robots' perception).
+///
+/// # Errors
+/// [`crate::GeomError::OutOfMemory`] (naming `what`) when it cannot be allocated.
+pub(crate) fn try_filled_on_every_core<T: Copy + Send + Sync>(
+    len: usize,
+    value: T,
+    what: &'static str,
+) -> Result<Vec<T>> {
+    if !worth_spreading(len, 1.0) {
+        return try_filled(len, value, what);
+    }
+    let mut out = Vec::new();
+    try_room(&mut out, len, what)?;
+    out.par_extend((0..len).into_par_iter().with_min_len(TASK_ITEMS).map(|_| value));
+    Ok(out)
+}
+
 /// Ragged rows put in order, one column at a time: row r's `offsets[r + 1] - offsets[r]`
 /// entries come from `from(r)`, a slice and where the row's entries start in it (the rows of
 /// a parallel search, each found by some task in some order). At a million robots the result is
@@ -90,24 +110,19 @@ pub(crate) fn gather_rows<'a, T: Copy + Default + Send + Sync + 'a>(
 ) -> Result<Vec<T>> {
     let rows = offsets.len() - 1;
     let total = offsets[rows] as usize;
-    let mut out = Vec::new();
-    try_room(&mut out, total, what)?;
     let row = |r: usize| {
         let (column, start) = from(r);
         &column[start..start + (offsets[r + 1] - offsets[r]) as usize]
     };
     if total < PARALLEL_GATHER {
+        let mut out = Vec::new();
+        try_room(&mut out, total, what)?;
         for r in 0..rows {
             out.extend_from_slice(row(r));
         }
         return Ok(out);
     }
-    out.par_extend(
-        (0..total)
-            .into_par_iter()
-            .with_min_len(TASK_ITEMS)
-            .map(|_| T::default()),
-    );
+    let mut out = try_filled_on_every_core(total, T::default(), what)?;
     let mut tasks = Vec::with_capacity(rows / GATHER_ROWS + 1);
     let mut rest = &mut out[..];
     for first in (0..rows).step_by(GATHER_ROWS) {

@@ -19,7 +19,7 @@ use rayon::prelude::*;
 use crate::error::{check_finite, check_len, try_filled, try_room, GeomError, Result};
 use crate::grid::Grid;
 use crate::neighbours::{length, radius_squared, within_squared, wrap_angle};
-use crate::parallel::{map_range, worth_spreading, TASK_ITEMS};
+use crate::parallel::{map_range, try_filled_on_every_core, worth_spreading, TASK_ITEMS};
 
 /// A movement sensor's reach: range (m), full aperture `fov` (rad) about the heading turned by
 /// `direction` (rad); `bearings`: whether the bearings of the robots seen are wanted (an `atan2`
@@ -157,7 +157,7 @@ pub fn perceive(
     // the robots of one cell read the same stretch of the grid).
     let task_rows = TASK_ROWS.max(rows.len().div_ceil(rayon::current_num_threads() * TASKS_A_THREAD));
     // The rows in the grid's cell order (its members, which it sorted by cell, filtered).
-    let mut row_of = try_filled(n, u32::MAX, WHAT)?;
+    let mut row_of = try_filled_on_every_core(n, u32::MAX, WHAT)?;
     for (r, &i) in rows.iter().enumerate() {
         row_of[i as usize] = r as u32;
     }
@@ -215,18 +215,19 @@ pub fn perceive(
     }
     drop(counts);
     let (seen_total, heard_total) = (seen.offsets[rows.len()] as usize, heard.offsets[rows.len()] as usize);
+    let filled = |len: usize| try_filled_on_every_core(len, 0.0, WHAT);
     if sight.is_some() {
-        seen.ids = try_filled(seen_total, 0, WHAT)?;
-        seen.distances = try_filled(seen_total, 0.0, WHAT)?;
+        seen.ids = try_filled_on_every_core(seen_total, 0, WHAT)?;
+        seen.distances = filled(seen_total)?;
         if bearings {
-            seen.bearings = try_filled(seen_total, 0.0, WHAT)?;
+            seen.bearings = filled(seen_total)?;
         }
-        seen.dxs = try_filled(seen_total, 0.0, WHAT)?;
-        seen.dys = try_filled(seen_total, 0.0, WHAT)?;
+        seen.dxs = filled(seen_total)?;
+        seen.dys = filled(seen_total)?;
     }
     if radio.is_some() {
-        heard.ids = try_filled(heard_total, 0, WHAT)?;
-        heard.distances = try_filled(heard_total, 0.0, WHAT)?;
+        heard.ids = try_filled_on_every_core(heard_total, 0, WHAT)?;
+        heard.distances = filled(heard_total)?;
     }
     // The second pass: each task given its rows' stretch of every column.
     let mut tasks = Vec::new();
