@@ -13,9 +13,12 @@ from dream.swarm import put_all, take_all
 
 
 def tables_scene(rng, n):
-    """A robot's memory fields of several types and shapes, as the affine formation's."""
+    """A robot's memory fields of several types and shapes, as the affine formation's: rows of 1,
+    8 and 16 bytes (which the kernel copies a move each) and of other widths."""
     return [
         rng.normal(size=n),
+        rng.random(n) < 0.5,
+        rng.normal(size=(n, 2)),
         rng.integers(-100, 100, (n, 7), dtype=np.int8),
         rng.random((n, 7)) < 0.5,
         rng.normal(size=(n, 3, 3, 2)),
