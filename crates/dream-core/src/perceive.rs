@@ -148,6 +148,8 @@ pub fn perceive(
             Some((_, talking)) => map_range(n, 1.0, |k| talking[grid.members()[k]]),
             None => try_filled(n, false, WHAT)?,
         },
+        sight_within: sight.map_or(-1.0, |s| within_squared(s.range)),
+        radio_within: radio.map_or(-1.0, |(range, _)| within_squared(range)),
     };
     let bearings = sight.is_some_and(|s| s.bearings);
     let spread = rows.len() >= PARALLEL_ROWS;
@@ -372,6 +374,10 @@ struct Find<'a> {
     /// Who is talking, in the grid's cell order (all silent without a radio): read beside the
     /// cell-ordered coordinates, not at each robot's id.
     talking_by_cell: Vec<bool>,
+    /// [`within_squared`] of the sensor's and the radio's ranges, -1 without (no square is
+    /// within): a sensor that sees all around decides by these alone.
+    sight_within: f64,
+    radio_within: f64,
 }
 
 /// A robot within reach (by the squared distance's margin) of the one perceiving: its id, its
@@ -524,9 +530,6 @@ impl Find<'_> {
                 })
             });
         }
-        // Ranges no squared length is within stand for a missing sensor or radio.
-        let sight = self.sight.map_or(-1.0, |s| within_squared(s.range));
-        let radio = self.radio.map_or(-1.0, |(range, _)| within_squared(range));
         let (x, y) = (self.xs[i], self.ys[i]);
         let (sorted_xs, sorted_ys) = self.grid.sorted();
         let members = self.grid.members();
@@ -550,8 +553,8 @@ impl Find<'_> {
                     }
                     continue;
                 }
-                seen += u32::from(near & (squared <= sight));
-                heard += u32::from(near & (squared <= radio) & talking);
+                seen += u32::from(near & (squared <= self.sight_within));
+                heard += u32::from(near & (squared <= self.radio_within) & talking);
             }
         });
         (seen, heard)
