@@ -49,6 +49,33 @@ pub struct Perceived {
     pub carried: Vec<Vec<f64>>,
 }
 
+impl Perceived {
+    /// Room for the entries of the seen rows its offsets hold: every column but the bearings
+    /// unless `bearings`, zeroed on every core (fresh memory).
+    fn room_for_seen(&mut self, bearings: bool) -> Result<()> {
+        let total = self.offsets.last().map_or(0, |&last| last as usize);
+        self.ids = try_filled_on_every_core(total, 0, WHAT)?;
+        self.distances = try_filled_on_every_core(total, 0.0, WHAT)?;
+        if bearings {
+            self.bearings = try_filled_on_every_core(total, 0.0, WHAT)?;
+        }
+        self.dxs = try_filled_on_every_core(total, 0.0, WHAT)?;
+        self.dys = try_filled_on_every_core(total, 0.0, WHAT)?;
+        Ok(())
+    }
+
+    /// Room for the entries of the heard rows its offsets hold: ids and distances.
+    fn room_for_heard(&mut self) -> Result<()> {
+        let total = self.offsets.last().map_or(0, |&last| last as usize);
+        self.ids = try_filled_on_every_core(total, 0, WHAT)?;
+        self.distances = try_filled_on_every_core(total, 0.0, WHAT)?;
+        Ok(())
+    }
+}
+
+/// What a failed allocation names.
+const WHAT: &str = "perceived robots";
+
 /// Rows from which the robots are perceived for on every thread.
 const PARALLEL_ROWS: usize = 512;
 
@@ -73,15 +100,15 @@ fn check_range(arg: &'static str, value: f64) -> Result<()> {
 
 /// The robots `rows` (ids, increasing) see with `sight` and hear within `radio` (range, and who
 /// is talking), among the robots at `(xs[j], ys[j])` heading `headings[j]`. One grid over the
-/// longer range, whose cell-ordered coordinates each robot asked for streams through (three
-/// runs of memory). Two passes over the asked robots, on every core: the first counts what each
-/// sees and hears, which places every row in the output; the second writes the rows in place,
-/// tasks of consecutive rows each filling its own stretch of the columns. The output is
-/// allocated once, on the calling thread, and nothing is copied after: before, each task grew
-/// its own buffers on its worker thread and they were copied into row order on return, a fifth
-/// of the kernel's time, and the allocator kept those buffers on each worker thread (with 16
-/// threads, 190 MiB for 100,000 robots). Each of `carried` holds one value per robot, read at
-/// every robot seen.
+/// longer range, whose cell-ordered coordinates each robot asked for streams through (five runs
+/// of memory). Two passes over the asked robots, on every core: the first counts what each sees
+/// and hears, which places every row in the output; the second writes the rows in place, tasks
+/// of consecutive rows each filling its own stretch of the columns. The output is allocated
+/// once, on the calling thread, and nothing is copied after: before, each task grew its own
+/// buffers on its worker thread and they were copied into row order on return, a fifth of the
+/// kernel's time, and the allocator kept those buffers on each worker thread (with 16 threads,
+/// 190 MiB for 100,000 robots). Each of `carried` holds one value per robot, read at every robot
+/// seen.
 ///
 /// # Errors
 /// Length mismatches, non-finite positions or headings, negative ranges, rows that are not
@@ -95,7 +122,6 @@ pub fn perceive(
     radio: Option<(f64, &[bool])>,
     carried: &[&[f64]],
 ) -> Result<(Perceived, Perceived)> {
-    const WHAT: &str = "perceived robots";
     let n = xs.len();
     check_len("ys", n, ys.len())?;
     check_len("headings", n, headings.len())?;
@@ -158,22 +184,7 @@ pub fn perceive(
     // in row order cost a cache miss each (perceive measured 0.61x in row order; in cell order
     // the robots of one cell read the same stretch of the grid).
     let task_rows = TASK_ROWS.max(rows.len().div_ceil(rayon::current_num_threads() * TASKS_A_THREAD));
-    // The rows in the grid's cell order (its members, which it sorted by cell, filtered).
-    let mut row_of = try_filled_on_every_core(n, u32::MAX, WHAT)?;
-    for (r, &i) in rows.iter().enumerate() {
-        row_of[i as usize] = r as u32;
-    }
-    let asked = |&i: &usize| (row_of[i] != u32::MAX).then_some(row_of[i]);
-    let by_cell: Vec<u32> = if worth_spreading(n, 1.0) {
-        grid.members()
-            .par_iter()
-            .with_min_len(TASK_ITEMS)
-            .filter_map(asked)
-            .collect()
-    } else {
-        grid.members().iter().filter_map(asked).collect()
-    };
-    drop(row_of);
+    let by_cell = rows_by_cell(&grid, rows)?;
     // `order[first + t] = u`: the t-th robot in cell order of the task from row `first` on is
     // its u-th row.
     let mut order = try_filled(rows.len(), 0_u32, WHAT)?;
@@ -203,33 +214,14 @@ pub fn perceive(
             .zip(order.chunks_mut(task_rows).zip(counts.chunks_mut(task_rows)))
             .for_each(first_pass);
     }
-    let mut seen = Perceived {
-        offsets: try_filled(rows.len() + 1, 0_i64, WHAT)?,
-        ..Perceived::default()
-    };
-    let mut heard = Perceived {
-        offsets: try_filled(rows.len() + 1, 0_i64, WHAT)?,
-        ..Perceived::default()
-    };
-    for (r, &(seen_count, heard_count)) in counts.iter().enumerate() {
-        seen.offsets[r + 1] = seen.offsets[r] + i64::from(seen_count);
-        heard.offsets[r + 1] = heard.offsets[r] + i64::from(heard_count);
-    }
+    let (mut seen, mut heard) = (Perceived::default(), Perceived::default());
+    (seen.offsets, heard.offsets) = offsets(&counts)?;
     drop(counts);
-    let (seen_total, heard_total) = (seen.offsets[rows.len()] as usize, heard.offsets[rows.len()] as usize);
-    let filled = |len: usize| try_filled_on_every_core(len, 0.0, WHAT);
     if sight.is_some() {
-        seen.ids = try_filled_on_every_core(seen_total, 0, WHAT)?;
-        seen.distances = filled(seen_total)?;
-        if bearings {
-            seen.bearings = filled(seen_total)?;
-        }
-        seen.dxs = filled(seen_total)?;
-        seen.dys = filled(seen_total)?;
+        seen.room_for_seen(bearings)?;
     }
     if radio.is_some() {
-        heard.ids = try_filled_on_every_core(heard_total, 0, WHAT)?;
-        heard.distances = filled(heard_total)?;
+        heard.room_for_heard()?;
     }
     // The second pass: each task given its rows' stretch of every column.
     let mut tasks = Vec::new();
@@ -265,6 +257,37 @@ pub fn perceive(
         .iter()
         .map(|values| map_range(seen.ids.len(), 1.0, |e| values[seen.ids[e] as usize]))
         .collect();
+    Ok((seen, heard))
+}
+
+/// The rows (places in `rows`, robot ids) in the grid's cell order: its members, which it sorted
+/// by cell, filtered.
+fn rows_by_cell(grid: &Grid, rows: &[i64]) -> Result<Vec<u32>> {
+    let n = grid.members().len();
+    let mut row_of = try_filled_on_every_core(n, u32::MAX, WHAT)?;
+    for (r, &i) in rows.iter().enumerate() {
+        row_of[i as usize] = r as u32;
+    }
+    let asked = |&i: &usize| (row_of[i] != u32::MAX).then_some(row_of[i]);
+    Ok(if worth_spreading(n, 1.0) {
+        grid.members()
+            .par_iter()
+            .with_min_len(TASK_ITEMS)
+            .filter_map(asked)
+            .collect()
+    } else {
+        grid.members().iter().filter_map(asked).collect()
+    })
+}
+
+/// The seen and the heard offsets of rows with `counts` (seen, heard) each.
+fn offsets(counts: &[(u32, u32)]) -> Result<(Vec<i64>, Vec<i64>)> {
+    let mut seen = try_filled(counts.len() + 1, 0_i64, WHAT)?;
+    let mut heard = try_filled(counts.len() + 1, 0_i64, WHAT)?;
+    for (r, &(seen_count, heard_count)) in counts.iter().enumerate() {
+        seen[r + 1] = seen[r] + i64::from(seen_count);
+        heard[r + 1] = heard[r] + i64::from(heard_count);
+    }
     Ok((seen, heard))
 }
 
