@@ -219,6 +219,47 @@ def test_bearings_are_read_whether_or_not_the_step_needs_them(noise, one_by_one)
         assert len(seen[3]) > 30 and np.allclose(view.seen["bearing"], seen[3], rtol=0, atol=1e-15)
 
 
+class VelocityReader(Reader):
+    """A :class:`Reader` whose decision reads the velocities of the robots it sees."""
+
+    def decide(self, view):
+        self.read = (view.seen["vx"].copy(), view.seen["vy"].copy())
+        return super().decide(view)
+
+
+@pytest.mark.parametrize("one_by_one", [False, True])
+def test_the_velocities_seen_are_worked_out_only_once_read(monkeypatch, one_by_one):
+    # Without HRVO or noise the engine leaves the velocities of the robots seen to the decision
+    # that reads them (every robot's command converted); read once, they are carried from then on.
+    from dream.swarm import engine as engine_module
+
+    calls = []
+
+    def counted(commands, headings):
+        calls.append(len(headings))
+        return dream.sensors.seen_velocity(commands, headings)
+
+    monkeypatch.setattr(engine_module, "seen_velocity", counted)
+    rng = np.random.default_rng(5)
+    x = np.vstack((rng.uniform(-1.0, 1.0, (2, 30)), rng.uniform(-np.pi, np.pi, 30)))
+    commands = np.vstack((rng.uniform(-0.1, 0.1, 30), rng.uniform(-1.0, 1.0, 30)))
+    sight = Movement(range=0.8)
+    blind = Engine(Reader(movement=sight), 30, 0, ROBOTARIUM, one_by_one=one_by_one)
+    blind.step(1, x, commands, None)
+    assert calls == [] and not blind.velocities_read
+    robot = VelocityReader(movement=sight)
+    engine = Engine(robot, 30, 0, ROBOTARIUM, one_by_one=one_by_one)
+    carried = dream.sensors.seen_velocity(commands, x[2])
+    for t, want_calls in ((1, [30]), (2, [30, 30])):
+        robot.views.clear()
+        engine.step(t, x, commands, None)
+        assert calls == want_calls and engine.velocities_read  # read lazily once, then carried
+        ids = np.concatenate([view.ids for view in robot.views])
+        (*_, vx, vy), _ = kernels.perceive(x[:2].T, x[2], ids, sight=(0.8, 2 * np.pi, 0.0), carried=carried)
+        assert len(vx) > 30 and np.array_equal(robot.read[0], vx[-len(robot.read[0]) :])
+        assert np.array_equal(robot.read[1], vy[-len(robot.read[1]) :])
+
+
 @pytest.mark.parametrize("faults", [None, Faults(loss=0.2, latency=2)], ids=["lossless", "lossy"])
 def test_runs_are_the_same_whether_or_not_the_messages_are_counted(tmp_path, faults):
     # Without an output that shows the message counts (a trajectory log, a recording) the runner
