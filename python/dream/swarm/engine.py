@@ -25,8 +25,7 @@ from __future__ import annotations
 import math
 import operator
 import os
-import threading
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from functools import cache, partial
 from typing import Any
@@ -42,7 +41,7 @@ from dream.obstacles import sensed
 from dream.sensors import seen_velocity
 from dream.specs import ArenaSpec, SimulatorSpec
 from dream.swarm import byrobot, draws
-from dream.swarm.neighbourhood import Deferred, Neighbourhood
+from dream.swarm.neighbourhood import Deferred, Loaded, Neighbourhood
 from dream.swarm.robot import SwarmRobot, View
 from dream.swarm.rows import at_rows, put_all, put_rows, take_all, take_rows
 from dream.swarm.safety import drive
@@ -168,12 +167,8 @@ class Engine:
         self._cut = (None, [], [])
         if not len(rows):
             return []
-        # What the sensors see of the others' motion: their commands before anyone decides now.
-        velocities: tuple[np.ndarray, ...] = ()
-        if self.robot.movement is not None and self._velocities_carried(faults):
-            velocities = seen_velocity(commands, x[2])
         talking = self.sent_at >= 0
-        whole = self._view(t, rows, clock[rows], x, commands, velocities, talking, faults)
+        whole = self._view(t, rows, clock[rows], x, commands, talking, faults)
         if not self.one_by_one:
             return [whole]
         return self._pieces(whole, range(len(whole) + 1))  # perceived at once, decided one by one
@@ -214,13 +209,17 @@ class Engine:
         clock: np.ndarray,
         x: np.ndarray,
         commands: np.ndarray,
-        velocities: tuple[np.ndarray, ...],
         talking: np.ndarray,
         faults: FaultState | None,
     ) -> View:
-        """What the robots ``rows`` perceive and hear (``velocities``: every robot's ``(vx, vy)`` as
-        the movement sensor reports them, none without one)."""
+        """What the robots ``rows`` perceive and hear."""
         movement, radio = self.robot.movement, self.robot.radio
+        # What the sensors see of the others' motion: their commands before anyone decides now,
+        # every robot's, carried to the robots seen or worked out when first read (see
+        # _velocities_carried).
+        reported = partial(seen_velocity, commands, x[2])
+        carried = movement is not None and self._velocities_carried(faults)
+        velocities = reported() if carried else ()
         by_range = radio is not None and radio.graph is None
         lossless = by_range and self._lossless(faults)
         # Without losses and counts to keep, the inbox is found only if the decision reads it
@@ -259,7 +258,7 @@ class Engine:
             ids,
             clock.copy(),
             take_rows(self.belief, at),
-            self._sense(t, rows, seen, faults, partial(seen_velocity, commands, x[2])).frozen(),
+            self._sense(t, rows, seen, faults, reported).frozen(),
             inbox,
             take_all(self.memory, at),
             self._obstacles(t, rows, x, faults).frozen(),
@@ -425,7 +424,7 @@ class Engine:
             return Neighbourhood(offsets, {name: np.zeros(0) for name in (*SENSED, "dx", "dy")})
         if not self._bearings_read(faults):  # worked out only if the decision reads them
             if not moving:
-                velocities = _Reported(reported, self)
+                velocities = Loaded(("vx", "vy"), partial(self._reported, reported))
                 columns = {"distance": gaps, "dx": dx, "dy": dy}
                 return Neighbourhood(offsets, columns, (others, velocities), derived={"bearing": _bearings})
             columns = {"distance": gaps, "vx": moving[0], "vy": moving[1], "dx": dx, "dy": dy}
@@ -446,6 +445,11 @@ class Engine:
         """The movement sensor's noise with the world's (standard deviation of each value)."""
         assert self.robot.movement is not None
         return math.hypot(self.robot.movement.noise, 0.0 if faults is None else faults.faults.sensor_noise)
+
+    def _reported(self, reported: Callable[[], tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+        """``reported()``, read by a decision: from the next step on, carried."""
+        self.velocities_read = True
+        return reported()
 
     def _velocities_carried(self, faults: FaultState | None) -> bool:
         """Whether the step reads the velocities of the robots seen whatever the decision does
@@ -649,33 +653,6 @@ def _linked(
     if len(graph[0]) - 1 != x.shape[1]:
         raise ValueError(f"the radio's graph links {len(graph[0]) - 1} robots, but the run has {x.shape[1]}")
     return kernels.linked(rows, graph, talking, positions=x[:2].T if measured else None)
-
-
-class _Reported(Mapping[str, np.ndarray]):
-    """The velocities ``vx``, ``vy`` ``(n,)`` the movement sensor reports of every robot, worked
-    out by ``reported()`` the first time either is read (then the engine carries them from the
-    next step on)."""
-
-    def __init__(self, reported: Callable[[], tuple[np.ndarray, np.ndarray]], engine: Engine) -> None:
-        self._reported, self._engine = reported, engine
-        self._values: dict[str, np.ndarray] = {}
-
-    def __getitem__(self, name: str) -> np.ndarray:
-        with _REPORTING:  # blocks of a swarm deciding on several threads may read them at once
-            if not self._values:
-                self._values = dict(zip(("vx", "vy"), self._reported(), strict=True))
-                self._engine.velocities_read = True
-        return self._values[name]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(("vx", "vy"))
-
-    def __len__(self) -> int:
-        return 2
-
-
-#: Held while :class:`_Reported` works the velocities out.
-_REPORTING = threading.Lock()
 
 
 def _bearings(seen: Neighbourhood) -> np.ndarray:

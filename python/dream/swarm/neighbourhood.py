@@ -13,7 +13,7 @@ radio delivered (sender and the message's fields). Reductions run in the Rust ke
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -258,3 +258,25 @@ class Deferred(Neighbourhood):
 
 #: Held while a :class:`Deferred` loads (reentrant: a block's inbox loads the whole one's).
 _LOADING = threading.RLock()
+
+
+class Loaded(Mapping[str, np.ndarray]):
+    """Per-robot arrays ``names``, all given by ``load()`` the first time one is read: a
+    neighbourhood's gathered sources that its decision may never read (the velocities of the
+    robots seen, every robot's command converted)."""
+
+    def __init__(self, names: Sequence[str], load: Callable[[], Sequence[np.ndarray]]) -> None:
+        self._names, self._load = tuple(names), load
+        self._values: dict[str, np.ndarray] = {}
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        with _LOADING:  # blocks of a swarm deciding on several threads may read them at once
+            if not self._values:
+                self._values = dict(zip(self._names, self._load(), strict=True))
+        return self._values[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._names)
+
+    def __len__(self) -> int:
+        return len(self._names)
