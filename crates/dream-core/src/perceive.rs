@@ -163,13 +163,11 @@ pub fn perceive(
     );
     let find = Find {
         grid: &grid,
-        xs,
-        ys,
         headings,
         reach,
         reach_squared: radius_squared(reach),
         sight,
-        radio,
+        radio_range: radio.map(|(range, _)| range),
         talking_by_cell: match radio {
             Some((_, talking)) => map_range(n, 1.0, |k| talking[grid.members()[k]]),
             None => try_filled(n, false, WHAT)?,
@@ -185,21 +183,21 @@ pub fn perceive(
     // the robots of one cell read the same stretch of the grid).
     let task_rows = TASK_ROWS.max(rows.len().div_ceil(rayon::current_num_threads() * TASKS_A_THREAD));
     let by_cell = rows_by_cell(&grid, rows)?;
-    // `order[first + t] = u`: the t-th robot in cell order of the task from row `first` on is
-    // its u-th row.
-    let mut order = try_filled(rows.len(), 0_u32, WHAT)?;
+    // `order[first + t] = (u, k)`: the t-th robot in cell order of the task from row `first` on
+    // is its u-th row, at place k of the grid's cell order.
+    let mut order = try_filled(rows.len(), (0_u32, 0_u32), WHAT)?;
     let mut counts = try_filled(rows.len(), (0_u32, 0_u32), WHAT)?;
     // The first pass: each row's counts, seen and heard, and from them the offsets.
-    let first_pass = |(first, (order, counts)): (usize, (&mut [u32], &mut [(u32, u32)]))| {
+    let first_pass = |(first, (order, counts)): (usize, (&mut [(u32, u32)], &mut [(u32, u32)]))| {
         let rows_here = first as u32..(first + order.len()) as u32;
         let mut places = order.iter_mut();
-        for r in by_cell.iter().filter(|r| rows_here.contains(r)) {
+        for &(r, k) in by_cell.iter().filter(|(r, _)| rows_here.contains(r)) {
             if let Some(place) = places.next() {
-                *place = r - rows_here.start;
+                *place = (r - rows_here.start, k);
             }
         }
-        for &u in order.iter() {
-            counts[u as usize] = find.count(rows[first + u as usize] as usize);
+        for &(u, k) in order.iter() {
+            counts[u as usize] = find.count(&find.asked(k as usize));
         }
     };
     if spread {
@@ -241,7 +239,6 @@ pub fn perceive(
         let head;
         (head, rest) = rest.split_at(seen_len, heard_len);
         let task = Task {
-            rows: &rows[first..last],
             order: task_order,
             seen_offsets: &seen.offsets[first..=last],
             heard_offsets: &heard.offsets[first..=last],
@@ -260,23 +257,24 @@ pub fn perceive(
     Ok((seen, heard))
 }
 
-/// The rows (places in `rows`, robot ids) in the grid's cell order: its members, which it sorted
-/// by cell, filtered.
-fn rows_by_cell(grid: &Grid, rows: &[i64]) -> Result<Vec<u32>> {
+/// The rows (places in `rows`, robot ids) in the grid's cell order, each with its robot's place in
+/// that order: its members, which it sorted by cell, filtered.
+fn rows_by_cell(grid: &Grid, rows: &[i64]) -> Result<Vec<(u32, u32)>> {
     let n = grid.members().len();
     let mut row_of = try_filled_on_every_core(n, u32::MAX, WHAT)?;
     for (r, &i) in rows.iter().enumerate() {
         row_of[i as usize] = r as u32;
     }
-    let asked = |&i: &usize| (row_of[i] != u32::MAX).then_some(row_of[i]);
+    let asked = |(k, &i): (usize, &usize)| (row_of[i] != u32::MAX).then_some((row_of[i], k as u32));
     Ok(if worth_spreading(n, 1.0) {
         grid.members()
             .par_iter()
+            .enumerate()
             .with_min_len(TASK_ITEMS)
             .filter_map(asked)
             .collect()
     } else {
-        grid.members().iter().filter_map(asked).collect()
+        grid.members().iter().enumerate().filter_map(asked).collect()
     })
 }
 
@@ -386,14 +384,12 @@ pub fn linked(
 /// One perception's inputs, shared by every task.
 struct Find<'a> {
     grid: &'a Grid,
-    xs: &'a [f64],
-    ys: &'a [f64],
     headings: &'a [f64],
     reach: f64,
     /// A hair above reach^2: beyond it a robot is surely out; below it `sqrt` decides exactly.
     reach_squared: f64,
     sight: Option<Sight>,
-    radio: Option<(f64, &'a [bool])>,
+    radio_range: Option<f64>,
     /// Who is talking, in the grid's cell order (all silent without a radio): read beside the
     /// cell-ordered coordinates, not at each robot's id.
     talking_by_cell: Vec<bool>,
@@ -403,14 +399,25 @@ struct Find<'a> {
     radio_within: f64,
 }
 
-/// A robot within reach (by the squared distance's margin) of the one perceiving: its id, its
-/// offset from it and the offset's squared length.
+/// A robot within reach (by the squared distance's margin) of the one perceiving: its id, whether
+/// it is talking, its offset from it and the offset's squared length.
 #[derive(Debug, Clone, Copy, Default)]
 struct Near {
     j: usize,
+    talking: bool,
     dx: f64,
     dy: f64,
     squared: f64,
+}
+
+/// A robot perceiving: its id and position, read at its place in the grid's cell order (its
+/// neighbours' stretch of the grid), not at its id (a cache miss each at a million robots).
+struct Asked {
+    i: usize,
+    /// Its place in the grid's cell order.
+    at: usize,
+    x: f64,
+    y: f64,
 }
 
 /// What a robot near the one perceiving is to it: seen (with the bearing, where wanted) and
@@ -471,13 +478,23 @@ impl<'a> Out<'a> {
 }
 
 impl Find<'_> {
+    /// The robot at place `k` of the grid's cell order, perceiving.
+    fn asked(&self, k: usize) -> Asked {
+        let (sorted_xs, sorted_ys) = self.grid.sorted();
+        Asked {
+            i: self.grid.members()[k],
+            at: k,
+            x: sorted_xs[k],
+            y: sorted_ys[k],
+        }
+    }
+
     /// The robots within reach of robot i (by the squared distance's margin) as keys `j << 32 |
     /// k` (robot j at place k of the grid's cell order), in the grid's order: its 3x3 block of
     /// cells streamed from the grid's cell-ordered coordinates. Sorted, the keys go by id; 8
     /// bytes each sort faster than the robots' offsets with them (measured 1.12x on the
     /// rendezvous example's perception).
-    fn near(&self, i: usize, keys: &mut Vec<u64>) {
-        let (x, y) = (self.xs[i], self.ys[i]);
+    fn near(&self, &Asked { i, x, y, .. }: &Asked, keys: &mut Vec<u64>) {
         let (sorted_xs, sorted_ys) = self.grid.sorted();
         let members = self.grid.members();
         keys.clear();
@@ -498,12 +515,13 @@ impl Find<'_> {
 
     /// The robot of a key of [`Find::near`] and its offset from robot i, with the offset's
     /// squared length.
-    fn unkey(&self, i: usize, key: u64) -> Near {
+    fn unkey(&self, asked: &Asked, key: u64) -> Near {
         let (sorted_xs, sorted_ys) = self.grid.sorted();
         let k = (key & u64::from(u32::MAX)) as usize;
-        let (dx, dy) = (sorted_xs[k] - self.xs[i], sorted_ys[k] - self.ys[i]);
+        let (dx, dy) = (sorted_xs[k] - asked.x, sorted_ys[k] - asked.y);
         Near {
             j: (key >> 32) as usize,
+            talking: self.talking_by_cell[k],
             dx,
             dy,
             squared: dx * dx + dy * dy,
@@ -512,7 +530,13 @@ impl Find<'_> {
 
     /// What robot i makes of robot `other` near it.
     fn sort(&self, i: usize, other: &Near) -> Sorted {
-        let &Near { j, dx, dy, squared } = other;
+        let &Near {
+            talking,
+            dx,
+            dy,
+            squared,
+            ..
+        } = other;
         let distance = length(squared, dx, dy);
         let mut sorted = Sorted {
             distance,
@@ -533,8 +557,8 @@ impl Find<'_> {
                     || wrap_angle(sorted.bearing - (self.headings[i] + s.direction)).abs() <= s.fov / 2.0;
             }
         }
-        if let Some((range, talking)) = self.radio {
-            sorted.heard = distance <= range && talking[j];
+        if let Some(range) = self.radio_range {
+            sorted.heard = distance <= range && talking;
         }
         sorted
     }
@@ -543,17 +567,17 @@ impl Find<'_> {
     /// list of the robots near. A sensor that sees all around (or none) needs no bearing, and
     /// then the count is one pass over the block without a data-dependent branch, nor a root:
     /// `squared <= within_squared(range)` decides as `sqrt(squared) <= range`.
-    fn count(&self, i: usize) -> (u32, u32) {
+    fn count(&self, asked: &Asked) -> (u32, u32) {
+        let &Asked { i, at, x, y } = asked;
         if self.sight.is_some_and(|s| s.fov < TAU) {
             return KEYS.with_borrow_mut(|keys| {
-                self.near(i, keys);
+                self.near(asked, keys);
                 keys.iter().fold((0, 0), |(seen, heard), &key| {
-                    let sorted = self.sort(i, &self.unkey(i, key));
+                    let sorted = self.sort(i, &self.unkey(asked, key));
                     (seen + u32::from(sorted.seen), heard + u32::from(sorted.heard))
                 })
             });
         }
-        let (x, y) = (self.xs[i], self.ys[i]);
         let (sorted_xs, sorted_ys) = self.grid.sorted();
         let members = self.grid.members();
         let (mut seen, mut heard) = (0, 0);
@@ -561,16 +585,24 @@ impl Find<'_> {
             let candidates = sorted_xs[run.clone()]
                 .iter()
                 .zip(&sorted_ys[run.clone()])
-                .zip(members[run.clone()].iter().zip(&self.talking_by_cell[run]));
-            for ((&cx, &cy), (&j, &talking)) in candidates {
+                .zip(run.clone().zip(&self.talking_by_cell[run]));
+            for ((&cx, &cy), (k, &talking)) in candidates {
                 let (dx, dy) = (cx - x, cy - y);
                 let squared = dx * dx + dy * dy;
-                // The robots near() keeps, as it keeps them.
-                let near = (squared <= self.reach_squared) & (j != i);
+                // The robots near() keeps, as it keeps them (itself by its place, not its id:
+                // the ids are not read here).
+                let near = (squared <= self.reach_squared) & (k != at);
                 if !squared.is_finite() {
                     // Past ~1.3e154 m the squares overflow: the rule itself decides.
                     if near {
-                        let sorted = self.sort(i, &Near { j, dx, dy, squared });
+                        let other = Near {
+                            j: members[k],
+                            talking,
+                            dx,
+                            dy,
+                            squared,
+                        };
+                        let sorted = self.sort(i, &other);
                         seen += u32::from(sorted.seen);
                         heard += u32::from(sorted.heard);
                     }
@@ -590,16 +622,16 @@ impl Find<'_> {
         let bearings = self.sight.is_some_and(|s| s.bearings);
         let (seen_first, heard_first) = (task.seen_offsets[0], task.heard_offsets[0]);
         KEYS.with_borrow_mut(|keys| {
-            for &t in task.order {
+            for &(t, k) in task.order {
                 let t = t as usize;
-                let i = task.rows[t] as usize;
+                let asked = self.asked(k as usize);
                 let mut seen_at = (task.seen_offsets[t] - seen_first) as usize;
                 let mut heard_at = (task.heard_offsets[t] - heard_first) as usize;
-                self.near(i, keys);
+                self.near(&asked, keys);
                 keys.sort_unstable();
                 for &key in keys.iter() {
-                    let other = self.unkey(i, key);
-                    let sorted = self.sort(i, &other);
+                    let other = self.unkey(&asked, key);
+                    let sorted = self.sort(asked.i, &other);
                     if sorted.seen {
                         let e = seen_at;
                         out.seen_ids[e] = other.j as i64;
@@ -629,11 +661,11 @@ impl Find<'_> {
     }
 }
 
-/// A task of the second pass: consecutive `rows`, their `order` (places in `rows`, by cell) and
-/// their offsets into the seen and heard columns (one more than the rows).
+/// A task of the second pass: consecutive rows in `order` (their places among them, by cell, each
+/// with its robot's place in the grid's cell order) and their offsets into the seen and heard
+/// columns (one more than the rows).
 struct Task<'a> {
-    rows: &'a [i64],
-    order: &'a [u32],
+    order: &'a [(u32, u32)],
     seen_offsets: &'a [i64],
     heard_offsets: &'a [i64],
 }
