@@ -163,9 +163,12 @@ def perceive(
     talking: NDArray[np.bool_] | None = None,
     carried: Sequence[_Floats] | None = None,
     bearings: bool = True,
-) -> tuple[tuple[NDArray[Any], ...], tuple[_Ints, _Ints, _Floats]]:
-    """(seen (offsets, ids, distances, bearings, dx, dy, *carried), heard (offsets, ids, distances)) of
-    the robots `rows`; each of `carried` (n,) is read at the robots seen; bearings empty unless `bearings`."""
+    summed: Sequence[_Floats] | None = None,
+) -> tuple[tuple[NDArray[Any], ...], tuple[NDArray[Any], ...]]:
+    """(seen (offsets, ids, distances, bearings, dx, dy, *carried), heard (offsets, ids, distances,
+    *summed)) of the robots `rows`; each of `carried` (n,) is read at the robots seen; bearings empty
+    unless `bearings`; each of `summed` (n,) is added up over each row heard, whose ids and distances
+    are then left empty."""
 
 def segment_reduce(values: _Floats, offsets: _Ints, op: str, index: _Ints | None = None) -> _Floats:
     """op (sum, mean, min, max) of each row's entries of values (k, w): (m, w)."""

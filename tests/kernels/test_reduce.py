@@ -338,6 +338,31 @@ def test_perceive_counts_alike_at_the_ranges_edge(rng, scale, kinds, fov):
     assert h_offsets[-1] > 0 if "radio" in kinds else h_offsets[-1] == 0
 
 
+@pytest.mark.parametrize("n", [1, 40, 3000])
+@pytest.mark.parametrize("scale", [1.0, 1e154], ids=["metres", "squares overflow"])
+def test_perceive_sums_what_is_heard_as_the_reduction_of_its_rows(rng, n, scale):
+    """A radio that sums (a decision reading only its inbox's sums): each row's sums are the
+    reduction of the rows it would list, to the bit (NaN and huge values carried), as the
+    reference's; the sensor's rows are untouched and the heard rows are left out."""
+    positions, headings, talking = perceive_scene(rng, n)
+    positions *= scale
+    rows = np.sort(rng.choice(n, size=max(n // 2, 1), replace=False))
+    values = [rng.normal(size=n), np.where(rng.random(n) < 0.05, np.nan, 1e300 * rng.normal(size=n))]
+    options = dict(sight=(0.4 * scale, 1.5, 0.3), radio_range=0.7 * scale, talking=talking)
+    listed = _core.perceive(positions, headings, rows, **options)
+    got = _core.perceive(positions, headings, rows, **options, summed=values)
+    want = _reference.perceive(positions, headings, rows, **options, summed=values)
+    for a, b in zip(got[0], listed[0], strict=True):
+        assert_array_equal(a, b)
+    (offsets, ids, distances, *sums), (listed_offsets, senders, _) = got[1], listed[1]
+    assert_array_equal(offsets, listed_offsets) and ids.shape == distances.shape == (0,)
+    reduced = kernels.segment_reduce(np.column_stack(values), offsets, "sum", senders)
+    for column, (mine, theirs) in enumerate(zip(sums, want[1][3:], strict=True)):
+        assert_array_equal(mine, reduced[:, column])  # NaN where a row heard one
+        assert_array_equal(mine, theirs)
+    assert n < 3000 or (np.isnan(sums[1]).any() and offsets[-1] > len(rows))  # the cases arose
+
+
 @pytest.mark.parametrize(
     ("options", "message"),
     [
@@ -349,6 +374,11 @@ def test_perceive_counts_alike_at_the_ranges_edge(rng, scale, kinds, fov):
         (dict(rows=[0], radio_range=1.0, talking=[True]), "`talking` must"),
         (dict(rows=[0], carried=[np.zeros(2)]), r"`carried` must hold arrays of shape \(3,\)"),
         (dict(rows=[0], carried=[["a", "b", "c"]]), "`carried` must hold float arrays"),
+        (dict(rows=[0], summed=[np.zeros(3)]), "`summed` needs a radio"),
+        (
+            dict(rows=[0], radio_range=1.0, talking=[True] * 3, summed=[np.zeros(4)]),
+            r"`summed` must hold arrays of shape \(3,\)",
+        ),
     ],
 )
 def test_perceive_bad_input_is_named(options, message):

@@ -485,3 +485,29 @@ def test_a_row_chooses_its_side_and_stops_stepping_aside():
     np.testing.assert_array_equal(engine.side, -1.0)
     with pytest.raises(ValueError, match="Avoid horizon"):
         Avoid(horizon=-1.0)
+
+
+def test_an_inbox_only_summed_is_summed_in_the_perception_pass(monkeypatch):
+    # The rendezvous robot reads its inbox only through heard.sum and heard.count: after its first
+    # decision the engine sums it in the perception's pass, without its rows. A run whose inbox is
+    # listed at every step instead (as a decision that reads more of it gets it) is the same, bit
+    # for bit.
+    summed = []
+    perceive = dream.kernels.perceive
+
+    def spy(*args, **kwargs):
+        summed.append(len(kwargs.get("summed", ())))
+        return perceive(*args, **kwargs)
+
+    monkeypatch.setattr(dream.kernels, "perceive", spy)
+    runs = []
+    for learns in (True, False):
+        if not learns:  # every load taken for more than a sum: the inbox is listed from then on
+            monkeypatch.setattr(dream.swarm.engine, "summing", lambda: False)
+        summed.clear()
+        runs.append(dream.run(rendezvous(), n=60, seed=3, steps=250, backend="fast", swarm=True, trace=True))
+        # Both fields, x and y, at every step after the first decisions (which load the inbox).
+        assert len(summed) > 50 and all(s == (2 if learns else 0) for s in summed[2:])
+    in_pass, listed = runs
+    assert np.array_equal(in_pass.trace, listed.trace)
+    assert np.ptp(in_pass.trace[:, :2], axis=0).max() > 0.1  # the robots did move

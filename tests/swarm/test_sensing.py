@@ -170,6 +170,35 @@ def test_a_deferred_neighbourhood_is_found_once_and_only_when_read():
     assert calls == [1]
 
 
+def test_a_summed_inbox_answers_its_counts_sums_and_means_without_its_rows():
+    # The sums the perception's pass found (Summed) give each row's count, sums and means, to the
+    # bit, an empty row's mean NaN, in blocks of rows too; anything else loads the rows, once.
+    rng = np.random.default_rng(5)
+    board = {"x": rng.normal(size=20), "y": rng.normal(size=20)}
+    offsets = np.array([0, 3, 3, 7, 12])
+    senders = np.sort(rng.choice(20, 12))
+    rows = dream.swarm.Neighbourhood(offsets, {"sender": senders}, (senders, board)).frozen()
+    calls = []
+
+    def load():
+        calls.append(1)
+        return rows
+
+    sums = {name: kernels.segment_reduce(values, offsets, "sum", senders) for name, values in board.items()}
+    summed = dream.swarm.neighbourhood.Summed(np.diff(offsets), sums)
+    hood = dream.swarm.neighbourhood.Deferred(load, summed)
+    for op in ("sum", "mean"):
+        for what in ("x", ["x", "y"], ("y",)):
+            got, want = getattr(hood, op)(what), getattr(rows, op)(what)
+            assert got.shape == want.shape and np.array_equal(got, want, equal_nan=True), (op, what)
+    assert np.isnan(hood.mean("x")[1]) and hood.count.tolist() == [3, 0, 4, 5]
+    blocks = dream.swarm.byrobot._rows(hood, [0, 1, 4])
+    assert np.array_equal(blocks[1].sum(["x", "y"]), rows.sum(["x", "y"])[1:]) and blocks[1].count.tolist() == [0, 4, 5]
+    assert calls == []
+    assert hood.sum(np.ones(12)).tolist() == [3.0, 0.0, 4.0, 5.0] and calls == [1]  # not a column summed: loaded
+    assert hood.nearest_to(["x", "y"], np.zeros((4, 2)), 1).shape == (4, 1) and calls == [1]
+
+
 def test_a_derived_column_is_worked_out_when_read_and_kept_through_where_and_rows():
     calls = []
 

@@ -38,6 +38,8 @@ pub struct Sight {
 /// less the perceiving robot's); those three are empty for the heard ones, whom no one needs the
 /// direction of.
 /// `carried[c]` holds the `c`-th carried column's values at the robots seen (none for the heard).
+/// `summed[c]`, for the heard rows of a radio that sums ([`Radio::summed`]), holds each row's sum
+/// of the `c`-th summed column; the rows' ids and distances are then left empty.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Perceived {
     pub offsets: Vec<i64>,
@@ -47,6 +49,19 @@ pub struct Perceived {
     pub dxs: Vec<f64>,
     pub dys: Vec<f64>,
     pub carried: Vec<Vec<f64>>,
+    pub summed: Vec<Vec<f64>>,
+}
+
+/// A range radio: its `range` (m), who is `talking` (has a message out), and the per-robot
+/// values `summed` over each row of what is heard instead of listing the rows (where empty, the
+/// rows are listed). A sum adds the values of the robots heard in increasing id from +0.0, as
+/// `reduce::reduce` adds a listed row's: the same bits, without the rows written (a robot in a
+/// crowd hears tens of messages, and a consensus rule reads only their sum).
+#[derive(Debug, Clone, Copy)]
+pub struct Radio<'a> {
+    pub range: f64,
+    pub talking: &'a [bool],
+    pub summed: &'a [&'a [f64]],
 }
 
 impl Perceived {
@@ -119,7 +134,7 @@ pub fn perceive(
     headings: &[f64],
     rows: &[i64],
     sight: Option<Sight>,
-    radio: Option<(f64, &[bool])>,
+    radio: Option<Radio<'_>>,
     carried: &[&[f64]],
 ) -> Result<(Perceived, Perceived)> {
     let n = xs.len();
@@ -136,9 +151,12 @@ pub fn perceive(
         check_range("fov", s.fov)?;
         check_finite("direction", &[s.direction])?;
     }
-    if let Some((range, talking)) = radio {
-        check_range("radio range", range)?;
-        check_len("talking", n, talking.len())?;
+    if let Some(radio) = radio {
+        check_range("radio range", radio.range)?;
+        check_len("talking", n, radio.talking.len())?;
+        for values in radio.summed {
+            check_len("summed", n, values.len())?;
+        }
     }
     check_rows(rows, n)?;
     if n > u32::MAX as usize {
@@ -149,7 +167,7 @@ pub fn perceive(
             got: n as f64,
         });
     }
-    let reach = sight.map_or(0.0, |s| s.range).max(radio.map_or(0.0, |r| r.0));
+    let reach = sight.map_or(0.0, |s| s.range).max(radio.map_or(0.0, |r| r.range));
     // Cells half the reach: the 5x5 block around a robot holds 0.69 times the robots of the 3x3
     // block of cells as wide as the reach. Reach 0 only needs identical points together.
     let grid = Grid::new(
@@ -167,13 +185,19 @@ pub fn perceive(
         reach,
         reach_squared: radius_squared(reach),
         sight,
-        radio_range: radio.map(|(range, _)| range),
+        radio_range: radio.map(|r| r.range),
         talking_by_cell: match radio {
-            Some((_, talking)) => map_range(n, 1.0, |k| talking[grid.members()[k]]),
+            Some(r) => map_range(n, 1.0, |k| r.talking[grid.members()[k]]),
             None => try_filled(n, false, WHAT)?,
         },
+        summed_by_cell: radio.map_or(Vec::new(), |r| {
+            r.summed
+                .iter()
+                .map(|values| map_range(n, 1.0, |k| values[grid.members()[k]]))
+                .collect()
+        }),
         sight_within: sight.map_or(-1.0, |s| within_squared(s.range)),
-        radio_within: radio.map_or(-1.0, |(range, _)| within_squared(range)),
+        radio_within: radio.map_or(-1.0, |r| within_squared(r.range)),
     };
     let bearings = sight.is_some_and(|s| s.bearings);
     let spread = rows.len() >= PARALLEL_ROWS;
@@ -218,7 +242,14 @@ pub fn perceive(
     if sight.is_some() {
         seen.room_for_seen(bearings)?;
     }
-    if radio.is_some() {
+    let summing = radio.is_some_and(|r| !r.summed.is_empty());
+    if summing {
+        heard.summed = find
+            .summed_by_cell
+            .iter()
+            .map(|_| try_filled(rows.len(), 0.0, WHAT))
+            .collect::<Result<_>>()?;
+    } else if radio.is_some() {
         heard.room_for_heard()?;
     }
     // The second pass: each task given its rows' stretch of every column.
@@ -231,13 +262,14 @@ pub fn perceive(
         dys: &mut seen.dys,
         heard_ids: &mut heard.ids,
         heard_distances: &mut heard.distances,
+        sums: heard.summed.iter_mut().map(|column| &mut column[..]).collect(),
     };
     for (first, task_order) in (0..rows.len()).step_by(task_rows).zip(order.chunks(task_rows)) {
         let last = (first + task_rows).min(rows.len());
         let seen_len = (seen.offsets[last] - seen.offsets[first]) as usize;
         let heard_len = (heard.offsets[last] - heard.offsets[first]) as usize;
         let head;
-        (head, rest) = rest.split_at(seen_len, heard_len);
+        (head, rest) = rest.split_at(seen_len, heard_len, last - first);
         let task = Task {
             order: task_order,
             seen_offsets: &seen.offsets[first..=last],
@@ -393,6 +425,8 @@ struct Find<'a> {
     /// Who is talking, in the grid's cell order (all silent without a radio): read beside the
     /// cell-ordered coordinates, not at each robot's id.
     talking_by_cell: Vec<bool>,
+    /// The radio's summed columns, in the grid's cell order (none where the rows are listed).
+    summed_by_cell: Vec<Vec<f64>>,
     /// [`within_squared`] of the sensor's and the radio's ranges, -1 without (no square is
     /// within): a sensor that sees all around decides by these alone.
     sight_within: f64,
@@ -438,12 +472,14 @@ struct Out<'a> {
     dys: &'a mut [f64],
     heard_ids: &'a mut [i64],
     heard_distances: &'a mut [f64],
+    /// Each summed column's stretch, one value a row.
+    sums: Vec<&'a mut [f64]>,
 }
 
 impl<'a> Out<'a> {
-    /// The first `seen` seen entries and `heard` heard ones, and the rest (a column left empty
-    /// stays empty).
-    fn split_at(self, seen: usize, heard: usize) -> (Self, Self) {
+    /// The first `seen` seen entries, `heard` heard ones and `rows` rows' sums, and the rest (a
+    /// column left empty stays empty).
+    fn split_at(self, seen: usize, heard: usize, rows: usize) -> (Self, Self) {
         fn cut<T>(column: &mut [T], at: usize) -> (&mut [T], &mut [T]) {
             column.split_at_mut(at.min(column.len()))
         }
@@ -454,6 +490,7 @@ impl<'a> Out<'a> {
         let (dys, dys_rest) = cut(self.dys, seen);
         let (heard_ids, heard_ids_rest) = cut(self.heard_ids, heard);
         let (heard_distances, heard_distances_rest) = cut(self.heard_distances, heard);
+        let (sums, sums_rest) = self.sums.into_iter().map(|column| cut(column, rows)).unzip();
         (
             Out {
                 seen_ids,
@@ -463,6 +500,7 @@ impl<'a> Out<'a> {
                 dys,
                 heard_ids,
                 heard_distances,
+                sums,
             },
             Out {
                 seen_ids: seen_ids_rest,
@@ -472,6 +510,7 @@ impl<'a> Out<'a> {
                 dys: dys_rest,
                 heard_ids: heard_ids_rest,
                 heard_distances: heard_distances_rest,
+                sums: sums_rest,
             },
         )
     }
@@ -618,9 +657,11 @@ impl Find<'_> {
     /// Writes what the robots of `task` see and hear into `out`, its rows' stretch of the
     /// columns, each row by increasing id; the stretch holds exactly what [`Find::count`]
     /// counted for them (the same robots near, sorted out alike: the writes stay within it).
-    fn fill(&self, task: &Task<'_>, out: Out<'_>) {
+    fn fill(&self, task: &Task<'_>, mut out: Out<'_>) {
         let bearings = self.sight.is_some_and(|s| s.bearings);
         let (seen_first, heard_first) = (task.seen_offsets[0], task.heard_offsets[0]);
+        let summing = !self.summed_by_cell.is_empty();
+        let mut sums = vec![0.0; self.summed_by_cell.len()];
         KEYS.with_borrow_mut(|keys| {
             for &(t, k) in task.order {
                 let t = t as usize;
@@ -629,6 +670,7 @@ impl Find<'_> {
                 let mut heard_at = (task.heard_offsets[t] - heard_first) as usize;
                 self.near(&asked, keys);
                 keys.sort_unstable();
+                sums.fill(0.0);
                 for &key in keys.iter() {
                     let other = self.unkey(&asked, key);
                     let sorted = self.sort(asked.i, &other);
@@ -643,11 +685,21 @@ impl Find<'_> {
                         out.dys[e] = other.dy;
                         seen_at += 1;
                     }
-                    if sorted.heard {
+                    if sorted.heard && summing {
+                        // In increasing id, from +0.0: as `reduce` adds a listed row.
+                        let at = (key & u64::from(u32::MAX)) as usize;
+                        for (sum, column) in sums.iter_mut().zip(&self.summed_by_cell) {
+                            *sum += column[at];
+                        }
+                        heard_at += 1;
+                    } else if sorted.heard {
                         out.heard_ids[heard_at] = other.j as i64;
                         out.heard_distances[heard_at] = sorted.distance;
                         heard_at += 1;
                     }
+                }
+                for (column, &sum) in out.sums.iter_mut().zip(&sums) {
+                    column[t] = sum;
                 }
                 debug_assert_eq!(
                     (seen_at as i64, heard_at as i64),
@@ -708,7 +760,26 @@ mod tests {
                 direction: 0.3,
                 bearings: true,
             };
-            let (seen, heard) = perceive(&xs, &ys, &headings, &rows, Some(sight), Some((0.7, &talking)), &[]).unwrap();
+            let radio = Radio {
+                range: 0.7,
+                talking: &talking,
+                summed: &[],
+            };
+            let (seen, heard) = perceive(&xs, &ys, &headings, &rows, Some(sight), Some(radio), &[]).unwrap();
+            // The same radio summing two columns: each row's sums in increasing id from +0.0.
+            let (values, signs): (Vec<f64>, Vec<f64>) = (0..n).map(|j| (next() - 0.5, -(j as f64))).unzip();
+            let summed: &[&[f64]] = &[&values, &signs];
+            let summing = Radio { summed, ..radio };
+            let (_, sums) = perceive(&xs, &ys, &headings, &rows, Some(sight), Some(summing), &[]).unwrap();
+            assert_eq!(sums.offsets, heard.offsets);
+            assert!(sums.ids.is_empty() && sums.distances.is_empty());
+            for r in 0..rows.len() {
+                let listed = &heard.ids[heard.offsets[r] as usize..heard.offsets[r + 1] as usize];
+                for (column, got) in summed.iter().zip(&sums.summed) {
+                    let want = listed.iter().fold(0.0, |sum, &j| sum + column[j as usize]);
+                    assert_eq!(got[r].to_bits(), want.to_bits(), "row {r}'s sum");
+                }
+            }
             for (r, &i) in rows.iter().enumerate() {
                 let i = i as usize;
                 let row = |p: &Perceived| p.ids[p.offsets[r] as usize..p.offsets[r + 1] as usize].to_vec();
@@ -748,7 +819,11 @@ mod tests {
             &headings,
             &[0, 3],
             Some(sight),
-            Some((1.0, &talking)),
+            Some(Radio {
+                range: 1.0,
+                talking: &talking,
+                summed: &[],
+            }),
             &[speeds],
         )
         .unwrap();

@@ -174,7 +174,11 @@ proptest! {
             direction: 0.0,
             bearings: false,
         });
-        let radio = radio.map(|range: f64| ((range * scale).min(f64::MAX), &talking[..]));
+        let radio = radio.map(|range: f64| perceive::Radio {
+            range: (range * scale).min(f64::MAX),
+            talking: &talking[..],
+            summed: &[],
+        });
         let rows: Vec<i64> = (0..n as i64).collect();
         let headings = vec![0.0; n];
         let (seen, heard) = perceive::perceive(&xs, &ys, &headings, &rows, sight, radio, &[]).unwrap();
@@ -189,7 +193,7 @@ proptest! {
                 None => Vec::new(),
             };
             let want_heard: Vec<i64> = match radio {
-                Some((range, _)) => (0..n).filter(|&j| within(i, j, range) && talking[j]).map(|j| j as i64).collect(),
+                Some(r) => (0..n).filter(|&j| within(i, j, r.range) && talking[j]).map(|j| j as i64).collect(),
                 None => Vec::new(),
             };
             prop_assert_eq!(row(&seen), want_seen);
@@ -198,6 +202,18 @@ proptest! {
                 perceive::perceive(&xs, &ys, &headings, &[i as i64], sight, radio, &[]).unwrap();
             prop_assert_eq!(alone_seen.ids, row(&seen));
             prop_assert_eq!(alone_heard.ids, row(&heard));
+        }
+        // Summed instead of listed: each row's listed values added in increasing id from +0.0.
+        if let Some(radio) = radio {
+            let summed: &[&[f64]] = &[&xs];
+            let summing = perceive::Radio { summed, ..radio };
+            let (_, sums) = perceive::perceive(&xs, &ys, &headings, &rows, sight, Some(summing), &[]).unwrap();
+            prop_assert_eq!(&sums.offsets, &heard.offsets);
+            for i in 0..n {
+                let listed = &heard.ids[heard.offsets[i] as usize..heard.offsets[i + 1] as usize];
+                let want = listed.iter().fold(0.0, |sum: f64, &j| sum + xs[j as usize]);
+                prop_assert_eq!(sums.summed[0][i].to_bits(), want.to_bits());
+            }
         }
     }
 

@@ -1,7 +1,7 @@
 //! Bindings of `dream_core::neighbours`: range and field-of-view queries as CSR arrays.
 
 use dream_core::neighbours::{self as core, FieldOfView, RowsOf};
-use dream_core::perceive::{linked as core_linked, perceive as core_perceive, Perceived, Sight};
+use dream_core::perceive::{linked as core_linked, perceive as core_perceive, Perceived, Radio, Sight};
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
@@ -86,9 +86,10 @@ pub fn far_from<'py>(
 
 /// Who the robots `rows` see and hear: `(seen, heard)`, `(offsets, ids, distances, bearings, dx,
 /// dy, *carried)` (each of `carried` `(n,)` read at the robots seen; bearings empty unless
-/// `bearings`) and `(offsets, ids, distances)`.
+/// `bearings`) and `(offsets, ids, distances, *summed)` (each of `summed` `(n,)` added up over
+/// each row heard, whose ids and distances are then left empty).
 #[pyfunction]
-#[pyo3(signature = (positions, headings, rows, *, sight=None, radio_range=None, talking=None, carried=None, bearings=true))]
+#[pyo3(signature = (positions, headings, rows, *, sight=None, radio_range=None, talking=None, carried=None, bearings=true, summed=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn perceive<'py>(
     py: Python<'py>,
@@ -100,7 +101,8 @@ pub fn perceive<'py>(
     talking: Option<Bound<'py, PyAny>>,
     carried: Option<Vec<Bound<'py, PyAny>>>,
     bearings: bool,
-) -> PyDreamResult<(Bound<'py, PyTuple>, CsrArrays<'py>)> {
+    summed: Option<Vec<Bound<'py, PyAny>>>,
+) -> PyDreamResult<(Bound<'py, PyTuple>, Bound<'py, PyTuple>)> {
     let positions = columns_in::<2>("positions", &positions)?;
     let [xs, ys] = positions.get();
     let n = xs.len();
@@ -110,11 +112,26 @@ pub fn perceive<'py>(
         .iter()
         .map(|column| vector_in("carried", column, Some(n)))
         .collect::<PyDreamResult<Vec<_>>>()?;
+    let summed = summed.unwrap_or_default();
+    let summed = summed
+        .iter()
+        .map(|column| vector_in("summed", column, Some(n)))
+        .collect::<PyDreamResult<Vec<_>>>()?;
+    let summed: Vec<&[f64]> = summed.iter().map(|c| &c[..]).collect();
     let rows = indices_of("rows", &rows)?;
     let talking = talking.map(|t| flags_of("talking", &t, n)).transpose()?;
     let radio = match (radio_range, talking.as_deref()) {
-        (Some(range), Some(talking)) => Some((range, talking)),
-        (None, None) => None,
+        (Some(range), Some(talking)) => Some(Radio {
+            range,
+            talking,
+            summed: &summed,
+        }),
+        (None, None) if summed.is_empty() => None,
+        (None, None) => {
+            return Err(value_error(
+                "`summed` needs a radio: give `radio_range` and `talking`".into(),
+            ))
+        }
         _ => return Err(value_error("give both `radio_range` and `talking`, or neither".into())),
     };
     let sight = sight.map(|(range, fov, direction)| Sight {
@@ -134,18 +151,23 @@ pub fn perceive<'py>(
         dxs,
         dys,
         carried,
+        ..
     } = seen;
     let mut items: Vec<Bound<'py, PyAny>> = vec![offsets.into_pyarray(py).into_any(), ids.into_pyarray(py).into_any()];
     items.extend([distances, bearings, dxs, dys].map(|column| column.into_pyarray(py).into_any()));
     items.extend(carried.into_iter().map(|column| column.into_pyarray(py).into_any()));
-    Ok((
-        PyTuple::new(py, items)?,
-        (
-            heard.offsets.into_pyarray(py),
-            heard.ids.into_pyarray(py),
-            heard.distances.into_pyarray(py),
-        ),
-    ))
+    let mut heard_items: Vec<Bound<'py, PyAny>> = vec![
+        heard.offsets.into_pyarray(py).into_any(),
+        heard.ids.into_pyarray(py).into_any(),
+        heard.distances.into_pyarray(py).into_any(),
+    ];
+    heard_items.extend(
+        heard
+            .summed
+            .into_iter()
+            .map(|column| column.into_pyarray(py).into_any()),
+    );
+    Ok((PyTuple::new(py, items)?, PyTuple::new(py, heard_items)?))
 }
 
 /// What the robots `rows` (increasing ids) hear over the communication graph `(indptr, indices)`

@@ -8,6 +8,7 @@ import numpy as np
 
 from dream._checks import FloatArray
 from dream._csr import spans
+from dream._reference.reduce import segment_reduce
 
 
 def neighbours_of(
@@ -111,12 +112,14 @@ def perceive(
     talking: np.ndarray | None = None,
     carried: Sequence[FloatArray] | None = None,
     bearings: bool = True,
+    summed: Sequence[FloatArray] | None = None,
 ) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
     """Who the robots ``rows`` see (``sight``: range, fov, direction) and hear (within
     ``radio_range``, among the ``talking``): ``(seen, heard)``, ``(offsets, ids, distances,
     bearings, dx, dy, *carried)`` (each of ``carried`` ``(n,)`` read at the robots seen; the
-    bearings empty unless ``bearings``) and ``(offsets, ids, distances)`` over those rows, ids
-    increasing in each row."""
+    bearings empty unless ``bearings``) and ``(offsets, ids, distances, *summed)`` over those
+    rows, ids increasing in each row; each of ``summed`` ``(n,)`` added up over each row heard
+    (in increasing id), whose ids and distances are then left empty."""
     n = len(positions)
     reach = max(0.0 if sight is None else sight[0], 0.0 if radio_range is None else radio_range)
     asked = np.zeros(n, dtype=bool)
@@ -149,7 +152,15 @@ def perceive(
     if not bearings:
         seen_csr = (*seen_csr[:3], np.zeros(0), *seen_csr[4:])
     ids = seen_csr[1]
-    return (*seen_csr, *(np.asarray(values, dtype=np.float64)[ids] for values in carried or ())), csr(heard, 2)
+    heard_csr = csr(heard, 2)
+    if summed:
+        offsets, senders = heard_csr[:2]
+        sums = [
+            segment_reduce(np.asarray(values, dtype=np.float64)[:, None], offsets, "sum", senders)[:, 0]
+            for values in summed
+        ]
+        heard_csr = (offsets, np.zeros(0, dtype=np.int64), np.zeros(0), *sums)
+    return (*seen_csr, *(np.asarray(values, dtype=np.float64)[ids] for values in carried or ())), heard_csr
 
 
 def linked(

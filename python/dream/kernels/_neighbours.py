@@ -112,8 +112,8 @@ def far_from(points: Any, others: Any, distance: float, *, offsets: tuple[Any, A
 #: What the asked robots see: ``(offsets, ids, distances, bearings, dx, dy, *carried)`` over
 #: their rows.
 Perceived = tuple[np.ndarray, ...]
-#: What they hear: ``(offsets, ids, distances)``.
-Heard = tuple[np.ndarray, np.ndarray, FloatArray]
+#: What they hear: ``(offsets, ids, distances, *summed)`` over their rows.
+Heard = tuple[np.ndarray, ...]
 
 
 def perceive(
@@ -126,6 +126,7 @@ def perceive(
     talking: Any = None,
     carried: Sequence[Any] = (),
     bearings: bool = True,
+    summed: Sequence[Any] = (),
 ) -> tuple[Perceived, Heard]:
     """Who the robots ``rows`` ``(m,)`` (increasing ids) see and hear, in one neighbour query.
 
@@ -140,6 +141,11 @@ def perceive(
     say), its values at the robots seen. A row does not depend on which other rows are asked.
     Without ``bearings`` the bearings column is empty (an ``atan2`` a robot seen, 15-20 % of a
     crowd's perception, saved where no one reads them).
+
+    Each array of ``summed`` (``(n,)``, one value per robot) is added up over each row heard,
+    ``(m,)`` after the heard columns, which are then left empty but for the offsets: a radio's
+    inbox that a decision only sums (a consensus) needs no rows. The values add in increasing id
+    from +0.0, as :func:`segment_reduce` adds a listed row: the same bits.
     """
     p = kernel_input(positions, "positions", (None, 2))
     n = p.shape[0]
@@ -150,13 +156,24 @@ def perceive(
         check_nonnegative(sight[1], "fov")
     if (radio_range is None) != (talking is None):
         raise ValueError("give both `radio_range` and `talking`, or neither")
+    if summed and radio_range is None:
+        raise ValueError("`summed` needs a radio: give `radio_range` and `talking`")
     flags = None
     if radio_range is not None:
         check_nonnegative(radio_range, "radio range")
         flags = as_flags(talking, "talking", n)
-    columns = [_carried(values, n) for values in carried]
+    columns = [_per_robot(values, n, "carried") for values in carried]
+    sums = [_per_robot(values, n, "summed") for values in summed]
     return implementation("perceive")(
-        p, h, asked, sight=sight, radio_range=radio_range, talking=flags, carried=columns or None, bearings=bearings
+        p,
+        h,
+        asked,
+        sight=sight,
+        radio_range=radio_range,
+        talking=flags,
+        carried=columns or None,
+        bearings=bearings,
+        summed=sums or None,
     )
 
 
@@ -200,13 +217,13 @@ def _asked(rows: Any, n: int) -> np.ndarray:
     return asked
 
 
-def _carried(values: Any, n: int) -> FloatArray:
-    """``values`` as a C-contiguous ``(n,)`` float64 array: data carried to the robots seen, not
-    geometry, so NaN goes through as it is."""
+def _per_robot(values: Any, n: int, arg: str) -> FloatArray:
+    """``values`` as a C-contiguous ``(n,)`` float64 array: data carried to the robots seen or
+    summed over those heard, not geometry, so NaN goes through as it is."""
     try:
         array = np.ascontiguousarray(values, dtype=np.float64)
     except (TypeError, ValueError) as err:
-        raise ValueError(f"`carried` must hold float arrays of shape ({n},): {err}") from None
+        raise ValueError(f"`{arg}` must hold float arrays of shape ({n},): {err}") from None
     if array.shape != (n,):
-        raise ValueError(f"`carried` must hold arrays of shape ({n},), one value per robot, got {array.shape}")
+        raise ValueError(f"`{arg}` must hold arrays of shape ({n},), one value per robot, got {array.shape}")
     return array

@@ -65,7 +65,11 @@ def _rows(hood: Neighbourhood, bounds: Sequence[int]) -> list[Neighbourhood]:
     sensor the robot lacks, say) are cut when a block first reads it: most decisions never read
     them."""
     if isinstance(hood, Deferred) or not hood.offsets[-1]:
-        return [Deferred(partial(_block_of, hood, a, b)) for a, b in zip(bounds[:-1], bounds[1:])]
+        summed = hood._summed if isinstance(hood, Deferred) else None
+        return [
+            Deferred(partial(_block_of, hood, a, b), None if summed is None else summed.rows(a, b))
+            for a, b in zip(bounds[:-1], bounds[1:])
+        ]
     starts = hood.offsets[np.asarray(bounds)].tolist()
     return [
         _block(hood, a, b, start, end) for a, b, start, end in zip(bounds[:-1], bounds[1:], starts[:-1], starts[1:])

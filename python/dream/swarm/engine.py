@@ -41,7 +41,7 @@ from dream.obstacles import sensed
 from dream.sensors import seen_velocity
 from dream.specs import ArenaSpec, SimulatorSpec
 from dream.swarm import byrobot, draws
-from dream.swarm.neighbourhood import Deferred, Loaded, Neighbourhood
+from dream.swarm.neighbourhood import Deferred, Loaded, Neighbourhood, Summed, summing
 from dream.swarm.robot import SwarmRobot, View
 from dream.swarm.rows import at_rows, put_all, put_rows, take_all, take_rows
 from dream.swarm.safety import drive
@@ -116,6 +116,10 @@ class Engine:
         #: whether a decision has read a deferred inbox: from then on it is found with the robots
         #: seen, in the same neighbour query (one pass where two would be made)
         self.inbox_read = False
+        #: whether a decision has read a deferred inbox for its count, sums or means only: from
+        #: then on those are found in the perception's pass, without the inbox's rows, until a
+        #: decision reads more of it (then it is read, as above)
+        self.inbox_summed = False
         #: whether a decision has read the velocities of the robots seen: from then on they are
         #: carried to them in the perception's pass
         self.velocities_read = False
@@ -223,17 +227,23 @@ class Engine:
         by_range = radio is not None and radio.graph is None
         lossless = by_range and self._lossless(faults)
         # Without losses and counts to keep, the inbox is found only if the decision reads it
-        # (View.cells need not: a robot in a crowd hears hundreds of messages), until one does.
+        # (View.cells need not: a robot in a crowd hears hundreds of messages), until one does;
+        # a decision that has only counted or summed it gets those from the perception's pass.
         deferred = lossless and not self.count_traffic and not self.inbox_read
+        floats = [name for name, kind in self.kinds.items() if kind.kind == "f"]
+        in_pass = deferred and self.inbox_summed and bool(floats)
+        summed = floats if in_pass else []
+        listened = by_range and (not deferred or in_pass)
         seen, heard = kernels.perceive(
             x[:2].T,
             x[2],
             rows,
             sight=None if movement is None else (movement.range, movement.fov, movement.direction),
-            radio_range=radio.range if radio is not None and by_range and not deferred else None,
-            talking=talking if by_range and not deferred else None,
+            radio_range=radio.range if radio is not None and listened else None,
+            talking=talking if listened else None,
             carried=velocities,  # read at the robots seen, in the same pass
             bearings=self._bearings_read(faults),
+            summed=[self.board[name] for name in summed],
         )
         if radio is not None and radio.graph is not None:
             heard = _linked(
@@ -242,13 +252,17 @@ class Engine:
         inbox: Neighbourhood
         if deferred:
             assert radio is not None
+            sums = Summed(np.diff(heard[0]), dict(zip(summed, heard[3:], strict=True))) if in_pass else None
 
             def load() -> Neighbourhood:
-                self.inbox_read = True
+                if sums is None and summing():  # counted or summed only, so far
+                    self.inbox_summed = True
+                else:
+                    self.inbox_read = True
                 heard = kernels.perceive(x[:2].T, x[2], rows, radio_range=radio.range, talking=talking)[1]
                 return self._hear(t, rows, heard, faults).frozen()
 
-            inbox = Deferred(load)
+            inbox = Deferred(load, sums)
         else:
             inbox = self._hear(t, rows, heard, faults).frozen()
         ids, command = rows.copy(), commands[:, rows].T.copy()

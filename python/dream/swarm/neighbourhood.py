@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -239,25 +240,91 @@ class Neighbourhood:
         return self
 
 
+class Summed:
+    """Each row's ``counts`` ``(k,)`` and its ``sums`` of named per-robot columns (name to
+    ``(k,)``) over its entries, added in entry order from +0.0: what a neighbourhood's count,
+    sums and means give, found without its rows (a radio's inbox summed in the perception's
+    pass, :func:`dream.kernels.perceive`'s ``summed``)."""
+
+    def __init__(self, counts: np.ndarray, sums: Mapping[str, np.ndarray]) -> None:
+        self.counts, self.sums = counts, dict(sums)
+
+    def rows(self, a: int, b: int) -> Summed:
+        """Rows ``a:b``."""
+        return Summed(self.counts[a:b], {name: values[a:b] for name, values in self.sums.items()})
+
+    def reduce(self, what: Any, op: str) -> FloatArray | None:
+        """:meth:`Neighbourhood.sum` (``op`` "sum") or :meth:`Neighbourhood.mean` ("mean") of
+        ``what``, or None where it names a column not summed here (or is not a name)."""
+        names = [what] if isinstance(what, str) else None if isinstance(what, np.ndarray) else list(what)
+        if not names or any(not isinstance(name, str) or name not in self.sums for name in names):
+            return None
+        sums = np.column_stack([self.sums[name] for name in names]).reshape(len(self.counts), len(names))
+        if op == "mean":  # the division segment_reduce makes, NaN for an empty row
+            count = self.counts[:, None].astype(np.float64)
+            sums = np.divide(sums, count, out=np.full(sums.shape, np.nan), where=count > 0)
+        return sums[:, 0].copy() if isinstance(what, str) else sums
+
+
 class Deferred(Neighbourhood):
     """A neighbourhood found on first use: ``load()`` gives the one it stands for, the first time
-    any of its rows or columns is read (a robot's inbox that its decision may never read)."""
+    any of its rows or columns is read (a robot's inbox that its decision may never read). With
+    ``summed``, its count and the sums and means of the columns summed are answered without it."""
 
-    def __init__(self, load: Callable[[], Neighbourhood]) -> None:
-        self._load = load
+    def __init__(self, load: Callable[[], Neighbourhood], summed: Summed | None = None) -> None:
+        self._load, self._summed = load, summed
 
     def __getattr__(self, name: str) -> Any:
         # Called only for what the instance lacks: every attribute of a neighbourhood, until loaded.
-        if name.startswith("__") or name == "_load":
+        if name.startswith("__") or name in ("_load", "_summed"):
             raise AttributeError(name)
         with _LOADING:  # blocks of a swarm deciding on several threads read their inboxes at once
             if "offsets" not in self.__dict__:
                 self.__dict__.update(vars(self._load()))
         return object.__getattribute__(self, name)
 
+    @property
+    def count(self) -> np.ndarray:
+        if self._summed is not None:
+            return self._summed.counts.copy()
+        with _summing():
+            return super().count
+
+    def sum(self, what: str | Sequence[str] | np.ndarray) -> FloatArray:
+        found = None if self._summed is None else self._summed.reduce(what, "sum")
+        if found is not None:
+            return found
+        with _summing():
+            return super().sum(what)
+
+    def mean(self, what: str | Sequence[str] | np.ndarray) -> FloatArray:
+        found = None if self._summed is None else self._summed.reduce(what, "mean")
+        if found is not None:
+            return found
+        with _summing():
+            return super().mean(what)
+
 
 #: Held while a :class:`Deferred` loads (reentrant: a block's inbox loads the whole one's).
 _LOADING = threading.RLock()
+#: Whether this thread is loading a :class:`Deferred` for its count, a sum or a mean.
+_SUMMING = threading.local()
+
+
+@contextmanager
+def _summing() -> Iterator[None]:
+    before = getattr(_SUMMING, "on", False)
+    _SUMMING.on = True
+    try:
+        yield
+    finally:
+        _SUMMING.on = before
+
+
+def summing() -> bool:
+    """Whether a :class:`Deferred` loading now on this thread was read for its count, a sum or a
+    mean only (what a perception can find without its rows, see :class:`Summed`)."""
+    return bool(getattr(_SUMMING, "on", False))
 
 
 class Loaded(Mapping[str, np.ndarray]):
