@@ -290,19 +290,14 @@ class Deferred(Neighbourhood):
         with _summing():
             return super().count
 
-    def sum(self, what: str | Sequence[str] | np.ndarray) -> FloatArray:
-        found = None if self._summed is None else self._summed.reduce(what, "sum")
+    def _reduce(self, what: str | Sequence[str] | np.ndarray, op: str) -> FloatArray:
+        if op not in ("sum", "mean"):
+            return super()._reduce(what, op)
+        found = None if self._summed is None else self._summed.reduce(what, op)
         if found is not None:
             return found
         with _summing():
-            return super().sum(what)
-
-    def mean(self, what: str | Sequence[str] | np.ndarray) -> FloatArray:
-        found = None if self._summed is None else self._summed.reduce(what, "mean")
-        if found is not None:
-            return found
-        with _summing():
-            return super().mean(what)
+            return super()._reduce(what, op)
 
 
 #: Held while a :class:`Deferred` loads (reentrant: a block's inbox loads the whole one's).
