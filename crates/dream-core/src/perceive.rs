@@ -7,7 +7,8 @@
 //! lists ids in increasing order, and a row is the same whichever other rows are asked: the
 //! robots can be perceived for one at a time or all at once. Distances are the neighbour
 //! query's, to the bit. Per-robot values `carried` (the velocities a movement sensor reports,
-//! say) are read at each robot seen, on every core.
+//! say) are read at each robot seen, on every core; a radio that sums ([`Radio::summed`]) adds
+//! per-robot values up over each row heard instead of listing it (an inbox only summed).
 //!
 //! A radio over a communication graph ([`linked`]) is heard by its links instead, whatever the
 //! distance.
@@ -123,7 +124,7 @@ fn check_range(arg: &'static str, value: f64) -> Result<()> {
 /// buffers on its worker thread and they were copied into row order on return, a fifth of the
 /// kernel's time, and the allocator kept those buffers on each worker thread (with 16 threads,
 /// 190 MiB for 100,000 robots). Each of `carried` holds one value per robot, read at every robot
-/// seen.
+/// seen; each of the radio's `summed`, one value per robot, is added up over every row heard.
 ///
 /// # Errors
 /// Length mismatches, non-finite positions or headings, negative ranges, rows that are not
