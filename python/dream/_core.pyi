@@ -35,6 +35,8 @@ __all__ = [
     "segment_nearest",
     "segment_nearest_to",
     "motion_guard",
+    "sidestep_ask",
+    "sidestep_mark",
     "take_rows",
     "put_rows",
 ]
@@ -252,6 +254,12 @@ def distance_rays(
     robots: _Ints | None = None,
 ) -> _Floats:
     """Readings (k, n) of the rays (3, k) of every robot (or of `robots`) against walls (m, 4) and the other robots; -1 for nothing."""
+
+def sidestep_ask(want: _Floats, rows: _Ints, counters: _Ints, sides: _Floats) -> _Floats:
+    """What robots `rows` (increasing) ask HRVO for (k, 2): `want` (k, 2), turned to their side while their counter is above zero; counters (n,) int64 counted down in place."""
+
+def sidestep_mark(chosen: _Floats, want: _Floats, rows: _Ints, counters: _Ints, sides: _Floats, updates: int) -> None:
+    """Robots `rows` stopped (`chosen` zero) though they wished to move: counters set to `updates`, sides (n,) set right or flipped, in place."""
 
 def take_rows(tables: Sequence[NDArray[np.uint8]], rows: _Ints) -> list[NDArray[np.uint8]]:
     """The rows `rows` (increasing) of each table (n, width) uint8: one (len(rows), width) array each."""

@@ -79,6 +79,9 @@ def test_every_public_kernel_goes_through_the_dispatch(monkeypatch):
     kernels.motion_guard(np.zeros(2), np.zeros(2), offsets, points[:, 0], points[:, 1], near=0.1, horizon=0.2)
     kernels.take_rows([points], [1])
     kernels.put_rows([points], [1], [points[:1]])
+    counters, sides = np.zeros(2, dtype=np.int64), np.ones(2)
+    kernels.sidestep_ask(points, [0, 1], counters, sides)
+    kernels.sidestep_mark(points, points, [0, 1], counters, sides, 10)
     assert recorder.asked == set(CORE_KERNELS)
 
 

@@ -29,6 +29,24 @@ pub fn check_offsets(arg: &'static str, offsets: &[i64], len: usize, what: &str)
     }
 }
 
+/// Fails with [`GeomError::InvalidCsr`] unless `rows` are increasing ids of the `n` robots (fewer
+/// than `u32::MAX` of them): the robots a kernel reads and writes at.
+///
+/// # Errors
+/// [`GeomError::InvalidCsr`] naming the first bad row.
+pub fn check_rows(rows: &[i64], n: usize) -> Result<()> {
+    for (r, &i) in rows.iter().enumerate() {
+        if i < 0 || i as usize >= n || (r > 0 && i <= rows[r - 1]) || r >= u32::MAX as usize {
+            return Err(GeomError::InvalidCsr {
+                arg: "rows",
+                rows: rows.len(),
+                reason: format!("row {r} is {i}: rows must be increasing robot ids below {n}"),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Checks that `(indptr, indices)` has `n` rows of ids in `[0, n)`.
 ///
 /// # Errors

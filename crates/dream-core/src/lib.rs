@@ -25,6 +25,7 @@
 //! - [`heard`]: Voronoi cells of robots that know the others by range radio, in one pass.
 //! - [`obstacles`]: virtual agents that keep robots off convex obstacles.
 //! - [`raycast`]: the GRITSbot's infrared distance sensors for the whole swarm (rps 2.1's model).
+//! - [`sidestep`]: the side-step counters and sides of the robots deciding, read and written in place.
 //! - [`tables`]: rows of per-robot tables copied out and back (the swarm engine's memory).
 
 pub mod csr;
@@ -42,6 +43,7 @@ pub mod parallel;
 pub mod perceive;
 pub mod raycast;
 pub mod reduce;
+pub mod sidestep;
 pub mod tables;
 pub mod voronoi;
 

@@ -17,6 +17,7 @@ use std::f64::consts::TAU;
 
 use rayon::prelude::*;
 
+use crate::csr::check_rows;
 use crate::error::{check_finite, check_len, try_filled, try_room, GeomError, Result};
 use crate::grid::Grid;
 use crate::neighbours::{length, radius_squared, within_squared, wrap_angle};
@@ -320,20 +321,6 @@ fn offsets(counts: &[(u32, u32)]) -> Result<(Vec<i64>, Vec<i64>)> {
         heard[r + 1] = heard[r] + i64::from(heard_count);
     }
     Ok((seen, heard))
-}
-
-/// Fails unless `rows` are increasing ids of the `n` robots (fewer than `u32::MAX`).
-fn check_rows(rows: &[i64], n: usize) -> Result<()> {
-    for (r, &i) in rows.iter().enumerate() {
-        if i < 0 || i as usize >= n || (r > 0 && i <= rows[r - 1]) || r >= u32::MAX as usize {
-            return Err(GeomError::InvalidCsr {
-                arg: "rows",
-                rows: rows.len(),
-                reason: format!("row {r} is {i}: rows must be increasing robot ids below {n}"),
-            });
-        }
-    }
-    Ok(())
 }
 
 /// What the robots `rows` (ids, increasing) hear over the communication `graph` `(indptr,

@@ -8,6 +8,7 @@
 
 use rayon::prelude::*;
 
+use crate::csr::check_rows;
 use crate::error::{try_filled, GeomError, Result};
 use crate::parallel::worth_spreading;
 
@@ -39,16 +40,7 @@ fn check(widths_and_lengths: impl Iterator<Item = (usize, usize)>, n: usize, row
             });
         }
     }
-    for (r, &i) in rows.iter().enumerate() {
-        if i < 0 || i as usize >= n || (r > 0 && i <= rows[r - 1]) {
-            return Err(GeomError::InvalidCsr {
-                arg: "rows",
-                rows: rows.len(),
-                reason: format!("row {r} is {i}: rows must be increasing indices below {n}"),
-            });
-        }
-    }
-    Ok(())
+    check_rows(rows, n)
 }
 
 /// The rows `rows` (strictly increasing, below `n`) of each of `tables` (`n` rows each), one

@@ -271,3 +271,28 @@ pub fn same_count(arg: &str, expected: usize, got: usize, rows: usize) -> PyDrea
         Err(shape_error(arg, &format!("({rows}, {expected})"), &[rows, got]))
     }
 }
+
+/// A 1-D C-contiguous array of `kind` (`T`) of `len` values, written in place: a table of the
+/// swarm engine's that a kernel updates at some rows.
+pub fn writable_in<'py, T: numpy::Element>(
+    arg: &str,
+    object: &Bound<'py, PyAny>,
+    kind: &str,
+    len: Option<usize>,
+) -> PyDreamResult<numpy::PyReadwriteArray1<'py, T>> {
+    let array = object
+        .cast::<numpy::PyArray1<T>>()
+        .map_err(|_| value_error(format!("`{arg}` must be a 1-D NumPy array of {kind}")))?;
+    let writable = array
+        .try_readwrite()
+        .map_err(|e| value_error(format!("`{arg}` must be writable: {e}")))?;
+    if !writable.is_c_contiguous() {
+        return Err(value_error(format!(
+            "`{arg}` must be C-contiguous (it is written in place)"
+        )));
+    }
+    if let Some(want) = len.filter(|&want| writable.len() != want) {
+        return Err(shape_error(arg, &format!("({want},)"), writable.shape()));
+    }
+    Ok(writable)
+}

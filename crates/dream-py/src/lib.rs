@@ -12,6 +12,7 @@ mod neighbours;
 mod obstacles;
 mod raycast;
 mod reduce;
+mod sidestep;
 mod tables;
 mod voronoi;
 
@@ -49,6 +50,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(reduce::segment_nearest, m)?)?;
     m.add_function(wrap_pyfunction!(reduce::segment_nearest_to, m)?)?;
     m.add_function(wrap_pyfunction!(guard::motion_guard, m)?)?;
+    m.add_function(wrap_pyfunction!(sidestep::sidestep_ask, m)?)?;
+    m.add_function(wrap_pyfunction!(sidestep::sidestep_mark, m)?)?;
     m.add_function(wrap_pyfunction!(tables::take_rows, m)?)?;
     m.add_function(wrap_pyfunction!(tables::put_rows, m)?)?;
     Ok(())

@@ -33,10 +33,13 @@ from dream._reference.neighbours import far_from, linked, neighbours, neighbours
 from dream._reference.obstacles import agents_from_closest, mirrored, virtual_agents
 from dream._reference.raycast import distance_rays
 from dream._reference.reduce import segment_any, segment_nearest, segment_nearest_to, segment_reduce
+from dream._reference.sidestep import sidestep_ask, sidestep_mark
 from dream._reference.tables import put_rows, take_rows
 from dream._reference.voronoi import heard_cells, voronoi_cell, voronoi_cells
 
 __all__ = [
+    "sidestep_ask",
+    "sidestep_mark",
     "take_rows",
     "put_rows",
     "perceive",

@@ -36,6 +36,7 @@ from dream.kernels._neighbours import far_from, linked, neighbours, neighbours_o
 from dream.kernels._obstacles import obstacle_agents, virtual_agents
 from dream.kernels._raycast import distance_rays
 from dream.kernels._reduce import segment_any, segment_nearest, segment_nearest_to, segment_reduce
+from dream.kernels._sidestep import sidestep_ask, sidestep_mark
 from dream.kernels._tables import put_rows, take_rows
 from dream.kernels._voronoi import VoronoiCells, heard_cells, voronoi_cell, voronoi_cells
 
@@ -77,6 +78,8 @@ __all__ = [
     "segment_nearest",
     "segment_nearest_to",
     "motion_guard",
+    "sidestep_ask",
+    "sidestep_mark",
     "take_rows",
     "put_rows",
 ]

@@ -18,6 +18,7 @@ import numpy as np
 
 from dream import kernels
 from dream._checks import Bounds, FloatArray
+from dream._reference import sidestep as _sidestep
 from dream.rules.ring import (  # noqa: F401 (read from dream.rules too)
     BAND_MARGIN,
     arc_merge,
@@ -238,12 +239,7 @@ def sidestep_preference(desired: Any, sidestep: Any, side: Any) -> tuple[FloatAr
         else:
             wanted = desired.copy()
         return wanted, np.int64(max(int(sidestep) - 1, 0))
-    desired = np.asarray(desired, dtype=np.float64)
-    sidestep = np.asarray(sidestep)
-    right = np.stack((desired[..., 1], -desired[..., 0]), axis=-1)
-    aside = (sidestep > 0)[..., None]
-    wanted = np.where(aside, np.asarray(side, dtype=np.float64)[..., None] * right, desired)
-    return wanted, np.maximum(sidestep - 1, 0)
+    return _sidestep.preference(desired, sidestep, side)  # many robots: the array rule
 
 
 def sidestep_update(chosen: Any, desired: Any, sidestep: Any, side: Any, updates: int) -> tuple[Any, Any]:
@@ -272,11 +268,7 @@ def sidestep_update(chosen: Any, desired: Any, sidestep: Any, side: Any, updates
         if chosen[0] or chosen[1] or not (desired[0] or desired[1]):  # not blocked
             return np.int64(sidestep), np.float64(side)
         return np.int64(updates), np.float64(-float(side) if sidestep > 0 else 1.0)
-    blocked = ~nonzero(chosen) & nonzero(desired)
-    sidestep = np.asarray(sidestep)
-    side = np.asarray(side, dtype=np.float64)
-    new_side = np.where(blocked, np.where(sidestep > 0, -side, 1.0), side)
-    return np.where(blocked, updates, sidestep), new_side
+    return _sidestep.update(chosen, desired, sidestep, side, updates)
 
 
 def wmsr_keep(values: Any, own: float, trimmed: int) -> np.ndarray:

@@ -96,8 +96,8 @@ def _drive_apart(
             offsets, entries = np.concatenate(([0], np.cumsum(counts))), spans(offsets[:-1][steer], counts)
         ids, want = rows[steer], wished[steer]
         asked = want
-        if avoid.sidestep:
-            asked = _sidestep_preference(engine, ids, want)
+        if avoid.sidestep:  # the side-step rule (dream.rules) on the engine's tables, in place
+            asked = kernels.sidestep_ask(want, ids, engine.sidestep, engine.side)
         detections = tuple(np.ascontiguousarray(seen[name][entries]) for name in STEERED_BY)
         margin = robot.spec.radius if avoid.margin is None else avoid.margin
         steered = hrvo_rows_trusted(  # the engine's own perception, and a decision checked in `Engine._apply`
@@ -116,7 +116,7 @@ def _drive_apart(
         )
         chosen[steer] = steered
         if avoid.sidestep:
-            _sidestep_update(engine, ids, steered, want, avoid.sidestep)
+            kernels.sidestep_mark(steered, want, ids, engine.sidestep, engine.side, avoid.sidestep)
     engine.dxi[at_rows(rows, n)] = chosen
     out = kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain)
     if robot.halts:  # no wish, no command (the conversion alone turns some robots at full speed)
@@ -134,25 +134,3 @@ def _drive_apart(
         )
         out[0, stop] = 0.0
     return out
-
-
-def _sidestep_preference(engine: Driver, ids: np.ndarray, want: np.ndarray) -> np.ndarray:
-    """What the robots ``ids`` ask HRVO for (:func:`dream.rules.sidestep_preference`), their
-    counters counted down: ``want`` itself when none of them is stepping aside."""
-    at = at_rows(ids, len(engine.sidestep))
-    counters = engine.sidestep[at]
-    if not counters.any():
-        return want
-    asked, engine.sidestep[at] = rules.sidestep_preference(want, counters, engine.side[at])
-    return asked
-
-
-def _sidestep_update(engine: Driver, ids: np.ndarray, steered: np.ndarray, want: np.ndarray, updates: int) -> None:
-    """:func:`dream.rules.sidestep_update` of the robots ``ids`` after HRVO chose ``steered``:
-    nothing to do when it stopped none of them (only a stopped robot is blocked)."""
-    if not ((steered[:, 0] == 0.0) & (steered[:, 1] == 0.0)).any():
-        return
-    at = at_rows(ids, len(engine.sidestep))
-    engine.sidestep[at], engine.side[at] = rules.sidestep_update(
-        steered, want, engine.sidestep[at], engine.side[at], updates
-    )

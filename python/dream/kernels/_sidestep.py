@@ -1,0 +1,65 @@
+"""Stepping aside on the swarm engine's tables: the side-step counters and sides of the robots
+deciding, read and written in place (the rule: :func:`dream.rules.sidestep_preference` and
+:func:`~dream.rules.sidestep_update`)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from dream._checks import FloatArray, as_shaped
+from dream.kernels._dispatch import core_checks, implementation
+
+
+def sidestep_ask(want: Any, rows: Any, counters: np.ndarray, sides: np.ndarray) -> FloatArray:
+    """What the robots ``rows`` (increasing ids) ask HRVO for, ``(k, 2)``: their wished velocities
+    ``want`` ``(k, 2)``, turned a quarter turn to their side (``sides`` ``(n,)``: 1 right, -1 left)
+    while their counter in ``counters`` ``(n,)`` int64 is above zero; those counters count one
+    decision down, in place. At a million robots the rule gathered, turned and scattered back by
+    NumPy cost 12 ms a step on one core.
+
+    Raises
+    ------
+    ValueError
+        Arrays of the wrong type or shape, tables that are read-only or not C-contiguous, or rows
+        that are not increasing ids below ``len(counters)`` (then nothing is written).
+    """
+    index = _checked(rows, counters, sides)
+    return implementation("sidestep_ask")(as_shaped(want, "want", (len(index), 2)), index, counters, sides)
+
+
+def sidestep_mark(chosen: Any, want: Any, rows: Any, counters: np.ndarray, sides: np.ndarray, updates: int) -> None:
+    """Marks the robots ``rows`` that HRVO stopped (``chosen`` ``(k, 2)`` zero) though they wished
+    to move (``want`` ``(k, 2)``): each steps aside for ``updates`` decisions, to its right, or to
+    the other side if its counter was still running (``counters`` and ``sides`` written in place).
+
+    Raises
+    ------
+    ValueError
+        As :func:`sidestep_ask`.
+    """
+    index = _checked(rows, counters, sides)
+    shape = (len(index), 2)
+    implementation("sidestep_mark")(
+        as_shaped(chosen, "chosen", shape), as_shaped(want, "want", shape), index, counters, sides, int(updates)
+    )
+
+
+def _checked(rows: Any, counters: np.ndarray, sides: np.ndarray) -> np.ndarray:
+    """``rows`` as int64 ids, and the tables checked (the rows too for the reference: the Rust
+    binding checks its own)."""
+    n = len(counters)
+    for name, table, kind in (("counters", counters, np.int64), ("sides", sides, np.float64)):
+        if not isinstance(table, np.ndarray) or table.dtype != kind or table.shape != (n,):
+            got = f"{table.dtype} of shape {table.shape}" if isinstance(table, np.ndarray) else type(table).__name__
+            raise ValueError(f"`{name}` must be a ({n},) {np.dtype(kind)} array, got {got}")
+        if not (table.flags.writeable and table.flags.c_contiguous):
+            raise ValueError(f"`{name}` must be writable and C-contiguous (it is written in place)")
+    index = np.asarray(rows)
+    if index.ndim != 1 or not (index.dtype.kind in "iu" or len(index) == 0):
+        raise ValueError(f"`rows` must be 1-D integer robot ids, got {index.dtype} of shape {index.shape}")
+    index = index.astype(np.int64, copy=False)
+    if not core_checks() and len(index) and (index[0] < 0 or index[-1] >= n or (np.diff(index) <= 0).any()):
+        raise ValueError(f"`rows` must be increasing robot ids below {n}")
+    return index
