@@ -159,8 +159,8 @@ class Engine:
         due = (clock > self.start) & (clock - self.last >= self.robot.period)
         if faults is not None:
             due &= ~faults.crashed
-        self.last[due] = clock[due]
         rows = np.flatnonzero(due)
+        self.last[rows] = _clocks(clock, rows)
         known = self._odometry(t, rows, x, faults)
         if not known.all():
             rows = rows[known]
@@ -172,7 +172,7 @@ class Engine:
         if not len(rows):
             return []
         talking = self.sent_at >= 0
-        whole = self._view(t, rows, clock[rows], x, commands, talking, faults)
+        whole = self._view(t, rows, _clocks(clock, rows), x, commands, talking, faults)
         if not self.one_by_one:
             return [whole]
         return self._pieces(whole, range(len(whole) + 1))  # perceived at once, decided one by one
@@ -291,7 +291,7 @@ class Engine:
         at = at_rows(rows, self.n)
         wished, straight, safety, heeded, said = self._settle(view, wished)
         seen = view.seen if heeded is None else view.seen.where(heeded)
-        out[:, at] = drive(self, rows, wished, self.belief[at], seen, straight, safety)
+        out[:, at] = drive(self, rows, wished, take_rows(self.belief, at), seen, straight, safety)
         return said
 
     def _apply_pieces(
@@ -305,7 +305,7 @@ class Engine:
         at = at_rows(rows, self.n)
         put_all(self.memory, at, whole.memory)  # every robot's memory row, changed or not
         wished, straight, safety, seen = byrobot.merged(whole, settled, self.robot.avoid, bounds)
-        out[:, at] = drive(self, rows, wished, self.belief[at], seen, straight, safety)
+        out[:, at] = drive(self, rows, wished, take_rows(self.belief, at), seen, straight, safety)
         return [said for *_, said in settled]
 
     def _settle(
@@ -383,10 +383,11 @@ class Engine:
         self.focus_view = {"step": t, "seen": own(view.seen), "heard": own(view.heard)}
 
     # -- time --------------------------------------------------------------------------------
-    def _clock(self, t: int, faults: FaultState | None) -> np.ndarray:
-        """Each robot's clock at the world's step ``t``: drifting and jittery under those faults."""
+    def _clock(self, t: int, faults: FaultState | None) -> float | np.ndarray:
+        """Each robot's clock at the world's step ``t``: drifting and jittery under those faults, else
+        the world's step itself (one number: no array of a million copies of it to compare)."""
         if faults is None or not (faults.faults.drift or faults.faults.clock_jitter):
-            return np.full(self.n, float(t))
+            return float(t)
         clock = faults.rates * t
         jitter = faults.faults.clock_jitter
         if jitter:
@@ -398,15 +399,15 @@ class Engine:
         """Read the odometry of ``rows`` into :attr:`belief`; a dropped reading leaves the belief as
         it was. Returns which of ``rows`` know their pose (``(k,)`` bool)."""
         at = at_rows(rows, self.n)
-        reading = x[:, at].T if isinstance(at, slice) else np.take(x, at, axis=1).T
+        reading = x.T[at]  # (k, 3) C-ordered, as the belief's rows
         sigma = math.hypot(self.robot.odometry_noise, 0.0 if faults is None else faults.faults.sensor_noise)
         if sigma > 0:
             reading = reading + sigma * draws.normal(self.seed, draws.ODOMETRY_NOISE, t, rows[:, None], np.arange(3))
         kept = self._kept(t, rows, np.full(len(rows), -1), faults)
         if kept.all():
             put_rows(self.belief, at, reading)
-        else:
-            self.belief[rows[kept]] = reading[kept]
+            return np.isfinite(reading[:, 0])
+        self.belief[rows[kept]] = reading[kept]
         return np.isfinite(self.belief[at, 0])
 
     def _kept(self, t: int, me: np.ndarray, others: np.ndarray, faults: FaultState | None) -> np.ndarray:
@@ -667,6 +668,11 @@ def _linked(
     if len(graph[0]) - 1 != x.shape[1]:
         raise ValueError(f"the radio's graph links {len(graph[0]) - 1} robots, but the run has {x.shape[1]}")
     return kernels.linked(rows, graph, talking, positions=x[:2].T if measured else None)
+
+
+def _clocks(clock: float | np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """The clocks ``(k,)`` of robots ``rows`` from :meth:`Engine._clock`'s answer."""
+    return np.full(len(rows), clock) if isinstance(clock, float) else clock[rows]
 
 
 def _bearings(seen: Neighbourhood) -> np.ndarray:

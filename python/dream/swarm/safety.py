@@ -21,7 +21,7 @@ from dream.robot import GUARD_HORIZON, guard_distance
 from dream.specs import ArenaSpec, RobotSpec
 from dream.swarm.neighbourhood import Neighbourhood
 from dream.swarm.robot import SwarmRobot
-from dream.swarm.rows import at_rows
+from dream.swarm.rows import at_rows, put_rows, take_rows
 
 
 class Driver(Protocol):
@@ -101,7 +101,7 @@ def _drive_apart(
         detections = tuple(np.ascontiguousarray(seen[name][entries]) for name in STEERED_BY)
         margin = robot.spec.radius if avoid.margin is None else avoid.margin
         steered = hrvo_rows_trusted(  # the engine's own perception, and a decision checked in `Engine._apply`
-            engine.dxi[at_rows(ids, n)],
+            take_rows(engine.dxi, at_rows(ids, n)),
             np.ascontiguousarray(asked),
             np.ascontiguousarray(pose[steer, :2]),
             offsets,
@@ -117,7 +117,7 @@ def _drive_apart(
         chosen[steer] = steered
         if avoid.sidestep:
             kernels.sidestep_mark(steered, want, ids, engine.sidestep, engine.side, avoid.sidestep)
-    engine.dxi[at_rows(rows, n)] = chosen
+    put_rows(engine.dxi, at_rows(rows, n), chosen)
     out = kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain)
     if robot.halts:  # no wish, no command (the conversion alone turns some robots at full speed)
         out[:, ~rules.nonzero(chosen)] = 0.0
