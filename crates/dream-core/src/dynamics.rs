@@ -14,11 +14,11 @@ use std::ops::Range;
 
 use rayon::prelude::*;
 
-use crate::error::{check_finite, check_len, check_positive, Result};
+use crate::error::{check_finite, check_len, check_positive, GeomError, Result};
 use crate::geom::Arena;
 use crate::grid::Grid;
 use crate::neighbours::{in_range, radius_squared};
-use crate::parallel::{map_range, worth_spreading, TASK_ITEMS};
+use crate::parallel::{first_where, map_range, worth_spreading, TASK_ITEMS};
 
 /// Differential-drive geometry: what turns a unicycle command into wheel speeds (SI units).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -310,8 +310,9 @@ fn pairs_in(grid: &Grid, cell: &Range<usize>, diameter: f64, mut pair: impl FnMu
 /// to (-pi, pi], as rps's `step` does (to within a rounding of the heading).
 ///
 /// # Errors
-/// Length or finiteness problems of `poses` (`3 * n`) or `velocities` (`2 * n`), or a
-/// non-positive `dt`.
+/// Length or finiteness problems of `poses` (`3 * n`) or `velocities` (`2 * n`), a
+/// non-positive `dt`, or a `dt` so large that a pose overflows ([`GeomError::Overflow`], the
+/// poses then partly advanced).
 pub fn unicycle_step(poses: &mut [f64], velocities: &[f64], n: usize, dt: f64) -> Result<()> {
     check_positive("dt", dt)?;
     rows("poses", poses, 3, n)?;
@@ -345,7 +346,11 @@ pub fn unicycle_step(poses: &mut [f64], velocities: &[f64], n: usize, dt: f64) -
             .zip(u[0].iter().zip(u[1].iter()))
             .for_each(advance);
     }
-    Ok(())
+    // Looked for on every core (a million robots' poses on one took a millisecond a step).
+    match first_where(poses.len(), |k| !poses[k].is_finite()) {
+        Some(k) => Err(GeomError::Overflow { dt, robot: k % n }),
+        None => Ok(()),
+    }
 }
 
 /// Converts single-integrator velocities `(2, n)` to unicycle commands `(2, n)` for robots at

@@ -44,6 +44,9 @@ pub enum GeomError {
     /// An arena whose minimum is not below its maximum.
     #[error("arena bounds must satisfy xmin < xmax and ymin < ymax, got ({xmin}, {xmax}, {ymin}, {ymax})")]
     InvalidBounds { xmin: f64, xmax: f64, ymin: f64, ymax: f64 },
+    /// A time step so large that a robot's pose is no longer finite after it.
+    #[error("`dt` = {dt} overflows: robot {robot}'s pose is no longer finite after the step")]
+    Overflow { dt: f64, robot: usize },
     /// A buffer the input calls for could not be allocated.
     #[error("out of memory: {what} needed {bytes} more bytes")]
     OutOfMemory { what: &'static str, bytes: usize },
