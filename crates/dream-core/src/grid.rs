@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 use std::ops::Range;
 
-use crate::parallel::{map_range, worth_spreading, TASK_ITEMS};
+use crate::parallel::{map_range, split, worth_spreading, TASK_ITEMS};
 
 /// Points bucketed by cell; a cell's points are contiguous in `members`, in increasing index.
 #[derive(Debug, Clone)]
@@ -376,17 +376,6 @@ const CROWDED: usize = 4;
 
 /// Points whose columns one task sorts out when building the column table.
 const COLUMN_POINTS: usize = 16_384;
-
-/// `values` cut into consecutive pieces at `bounds` (piece k is `bounds[k]..bounds[k + 1]`).
-fn split<'a, T>(mut values: &'a mut [T], bounds: &[usize]) -> Vec<&'a mut [T]> {
-    let mut pieces = Vec::with_capacity(bounds.len().saturating_sub(1));
-    for bound in bounds.windows(2) {
-        let (head, tail) = std::mem::take(&mut values).split_at_mut(bound[1] - bound[0]);
-        pieces.push(head);
-        values = tail;
-    }
-    pieces
-}
 
 /// Counting sort of point indices by `slots[point]` into `cells` buckets: the buckets' starts
 /// (`cells + 1` of them) and the points in bucket order, each bucket in increasing index. On

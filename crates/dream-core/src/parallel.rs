@@ -21,6 +21,18 @@ pub(crate) fn worth_spreading(n: usize, ns: f64) -> bool {
 /// Items one task takes at least, where a loop is spread over the threads.
 pub(crate) const TASK_ITEMS: usize = 1024;
 
+/// `values` cut into consecutive pieces at `bounds` (piece k is `bounds[k]..bounds[k + 1]`): each
+/// task its own stretch to write.
+pub(crate) fn split<'a, T>(mut values: &'a mut [T], bounds: &[usize]) -> Vec<&'a mut [T]> {
+    let mut pieces = Vec::with_capacity(bounds.len().saturating_sub(1));
+    for bound in bounds.windows(2) {
+        let (head, tail) = std::mem::take(&mut values).split_at_mut(bound[1] - bound[0]);
+        pieces.push(head);
+        values = tail;
+    }
+    pieces
+}
+
 /// `value(i)` for every `i < n`, in order, each taking about `ns` nanoseconds (see
 /// [`worth_spreading`]): on every thread for much work.
 pub fn map_range<T: Send>(n: usize, ns: f64, value: impl Fn(usize) -> T + Sync + Send) -> Vec<T> {

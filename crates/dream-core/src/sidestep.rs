@@ -7,11 +7,18 @@
 //!   its right, or to the other side if it was stepping aside already.
 //!
 //! The rows are a scattered fifth of a swarm: gathered, turned and scattered back by NumPy, the
-//! rule cost 12 ms a step at a million robots, all of it on one core. Here it is one pass over
-//! the rows (a few nanoseconds each: not worth the threads).
+//! rule cost 12 ms a step at a million robots, all of it on one core. Here tasks of consecutive
+//! rows (increasing ids) each write the stretch of the tables between their first robot and the
+//! next task's, on every core for many.
+
+use rayon::prelude::*;
 
 use crate::csr::check_rows;
 use crate::error::{check_len, Result};
+use crate::parallel::{split, worth_spreading};
+
+/// Rows one task takes.
+const TASK_ROWS: usize = 4096;
 
 /// What the robots `rows` (increasing ids below `n`) ask HRVO for, `(k, 2)` row-major as `want`:
 /// `want` itself, or turned to the robot's side while its counter is above zero, which then
@@ -23,13 +30,26 @@ pub fn ask(want: &[f64], rows: &[i64], counters: &mut [i64], sides: &[f64]) -> R
     let n = counters.len();
     check(want, rows, n, sides)?;
     let mut asked = want.to_vec();
-    for (r, &i) in rows.iter().enumerate() {
-        let i = i as usize;
-        if counters[i] > 0 {
-            let (s, [x, y]) = (sides[i], [want[2 * r], want[2 * r + 1]]);
-            (asked[2 * r], asked[2 * r + 1]) = (s * y, s * -x);
-            counters[i] -= 1;
+    let bounds = bounds(rows, n);
+    let task = |((rows, asked), (counters, &first)): ((&[i64], &mut [f64]), (&mut [i64], &usize))| {
+        for (r, &i) in rows.iter().enumerate() {
+            let i = i as usize;
+            let counter = &mut counters[i - first];
+            if *counter > 0 {
+                let (s, [x, y]) = (sides[i], [asked[2 * r], asked[2 * r + 1]]);
+                (asked[2 * r], asked[2 * r + 1]) = (s * y, s * -x);
+                *counter -= 1;
+            }
         }
+    };
+    let tasks = rows
+        .chunks(TASK_ROWS)
+        .zip(asked.chunks_mut(2 * TASK_ROWS))
+        .zip(split(counters, &bounds).into_iter().zip(&bounds));
+    if worth_spreading(rows.len(), 4.0) {
+        tasks.collect::<Vec<_>>().into_par_iter().for_each(task);
+    } else {
+        tasks.for_each(task);
     }
     Ok(asked)
 }
@@ -51,14 +71,30 @@ pub fn mark(
     let n = counters.len();
     check(want, rows, n, sides)?;
     check_len("chosen", want.len(), chosen.len())?;
-    for (r, &i) in rows.iter().enumerate() {
-        let i = i as usize;
-        let stopped = chosen[2 * r] == 0.0 && chosen[2 * r + 1] == 0.0;
-        let wished = want[2 * r] != 0.0 || want[2 * r + 1] != 0.0;
-        if stopped && wished {
-            sides[i] = if counters[i] > 0 { -sides[i] } else { 1.0 };
-            counters[i] = updates;
+    let bounds = bounds(rows, n);
+    let task = |(((rows, first), (chosen, want)), (counters, sides)): (
+        ((&[i64], &usize), (&[f64], &[f64])),
+        (&mut [i64], &mut [f64]),
+    )| {
+        for (r, &i) in rows.iter().enumerate() {
+            let i = i as usize - first;
+            let stopped = chosen[2 * r] == 0.0 && chosen[2 * r + 1] == 0.0;
+            let wished = want[2 * r] != 0.0 || want[2 * r + 1] != 0.0;
+            if stopped && wished {
+                sides[i] = if counters[i] > 0 { -sides[i] } else { 1.0 };
+                counters[i] = updates;
+            }
         }
+    };
+    let tasks = rows
+        .chunks(TASK_ROWS)
+        .zip(&bounds)
+        .zip(chosen.chunks(2 * TASK_ROWS).zip(want.chunks(2 * TASK_ROWS)))
+        .zip(split(counters, &bounds).into_iter().zip(split(sides, &bounds)));
+    if worth_spreading(rows.len(), 4.0) {
+        tasks.collect::<Vec<_>>().into_par_iter().for_each(task);
+    } else {
+        tasks.for_each(task);
     }
     Ok(())
 }
@@ -67,6 +103,17 @@ fn check(want: &[f64], rows: &[i64], n: usize, sides: &[f64]) -> Result<()> {
     check_len("sides", n, sides.len())?;
     check_len("want", 2 * rows.len(), want.len())?;
     check_rows(rows, n)
+}
+
+/// Where each task's stretch of the tables starts (its first robot; 0 for the first task), and
+/// `n`: each task's rows lie in its stretch, since the rows increase.
+fn bounds(rows: &[i64], n: usize) -> Vec<usize> {
+    let mut bounds: Vec<usize> = rows.iter().step_by(TASK_ROWS).map(|&i| i as usize).collect();
+    if let Some(first) = bounds.first_mut() {
+        *first = 0;
+    }
+    bounds.push(n);
+    bounds
 }
 
 #[cfg(test)]

@@ -265,7 +265,7 @@ class Engine:
             inbox = Deferred(load, sums)
         else:
             inbox = self._hear(t, rows, heard, faults).frozen()
-        ids, command = rows.copy(), commands[:, rows].T.copy()
+        ids, command = rows.copy(), commands.T[rows]  # (k, 2) rows of their own
         ids.flags.writeable = command.flags.writeable = False
         at = at_rows(rows, self.n)
         view = View(
@@ -630,26 +630,29 @@ class Engine:
         """Move the messages heard from step ``t`` on to the board: each sender's newest (by when it
         was sent: with jitter, an older message can arrive after a newer one, and is dropped)."""
         air = self.air
-        arrived = np.flatnonzero(air["visible"] <= t)
-        if not len(arrived):
+        arriving = air["visible"] <= t
+        if not arriving.any():
             return
+        # Without latency every message in the air arrives, one from each sender, in order:
+        # read in place then, not gathered.
+        arrived: slice | np.ndarray = slice(None) if arriving.all() else np.flatnonzero(arriving)
         senders = air["sender"][arrived]
         if len(senders) > 1 and (senders[1:] <= senders[:-1]).any():
             # The newest per sender: sort by (sender, sent), keep each sender's last.
-            order = arrived[np.lexsort((air["sent"][arrived], senders))]
+            index = np.flatnonzero(arriving)
+            order = index[np.lexsort((air["sent"][index], air["sender"][index]))]
             last = np.r_[air["sender"][order][1:] != air["sender"][order][:-1], True]
-            newest = order[last]
-            senders = air["sender"][newest]
-        else:  # one message from each sender, in order (all sent at one step, say): no sort
-            newest = arrived
-        newer = air["sent"][newest] > self.sent_at[senders]
-        newest, senders = newest[newer], senders[newer]
-        self.sent_at[senders] = air["sent"][newest]
-        for key in self.kinds:
-            self.board[key][senders] = air[key][newest]
-        keep = np.ones(len(air["visible"]), dtype=bool)
-        keep[arrived] = False
-        self.air = {key: values[keep] for key, values in air.items()}
+            arrived = order[last]
+            senders = air["sender"][arrived]
+        sent = air["sent"][arrived]
+        newer = sent > self.sent_at[senders]
+        if not newer.all():
+            arrived = np.flatnonzero(newer) if isinstance(arrived, slice) else arrived[newer]
+            senders, sent = senders[newer], sent[newer]
+        # The senders increase: the board's rows written on every core.
+        put_rows(self.sent_at, senders, sent)
+        put_all(self.board, senders, {key: air[key][arrived] for key in self.kinds})
+        self.air = {key: values[~arriving] for key, values in air.items()}
 
     def _silence(self, crashed: np.ndarray) -> None:
         """The messages of robots that have just crashed leave the board and the air."""
