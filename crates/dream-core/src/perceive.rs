@@ -443,9 +443,8 @@ struct Asked {
 }
 
 /// What a robot near the one perceiving is to it: seen (with the bearing, where wanted) and
-/// heard, at `distance`.
+/// heard.
 struct Sorted {
-    distance: f64,
     seen: bool,
     bearing: f64,
     heard: bool,
@@ -566,7 +565,6 @@ impl Find<'_> {
         } = other;
         let distance = length(squared, dx, dy);
         let mut sorted = Sorted {
-            distance,
             seen: false,
             bearing: f64::NAN,
             heard: false,
@@ -649,6 +647,7 @@ impl Find<'_> {
         let bearings = self.sight.is_some_and(|s| s.bearings);
         let (seen_first, heard_first) = (task.seen_offsets[0], task.heard_offsets[0]);
         let summing = !self.summed_by_cell.is_empty();
+        let all_around = self.sight.is_none_or(|s| s.fov >= TAU);
         let mut sums = vec![0.0; self.summed_by_cell.len()];
         KEYS.with_borrow_mut(|keys| {
             for &(t, k) in task.order {
@@ -661,29 +660,40 @@ impl Find<'_> {
                 sums.fill(0.0);
                 for &key in keys.iter() {
                     let other = self.unkey(&asked, key);
-                    let sorted = self.sort(asked.i, &other);
-                    if sorted.seen {
+                    // A sensor that sees all around (or none) decides by the squares, as `count`
+                    // does: a root only for the robots written, a bearing only for those seen.
+                    let (seen, heard, bearing) = if all_around && other.squared.is_finite() {
+                        let heard = (other.squared <= self.radio_within) & other.talking;
+                        (other.squared <= self.sight_within, heard, f64::NAN)
+                    } else {
+                        let sorted = self.sort(asked.i, &other);
+                        (sorted.seen, sorted.heard, sorted.bearing)
+                    };
+                    if summing {
+                        // In increasing id, from +0.0: as `reduce` adds a listed row. A robot not
+                        // heard adds +0.0 (a sum from +0.0 is never -0.0: the same bits), without
+                        // a branch on whether it is heard.
+                        let (at, mask) = ((key & u64::from(u32::MAX)) as usize, u64::from(heard).wrapping_neg());
+                        for (sum, column) in sums.iter_mut().zip(&self.summed_by_cell) {
+                            *sum += f64::from_bits(column[at].to_bits() & mask);
+                        }
+                        heard_at += usize::from(heard);
+                    } else if heard {
+                        out.heard_ids[heard_at] = other.j as i64;
+                        out.heard_distances[heard_at] = length(other.squared, other.dx, other.dy);
+                        heard_at += 1;
+                    }
+                    if seen {
                         let e = seen_at;
                         out.seen_ids[e] = other.j as i64;
-                        out.seen_distances[e] = sorted.distance;
+                        out.seen_distances[e] = length(other.squared, other.dx, other.dy);
                         if bearings {
-                            out.bearings[e] = sorted.bearing;
+                            // All around, `sort` takes the same `atan2` where it takes one at all.
+                            out.bearings[e] = if all_around { other.dy.atan2(other.dx) } else { bearing };
                         }
                         out.dxs[e] = other.dx;
                         out.dys[e] = other.dy;
                         seen_at += 1;
-                    }
-                    if sorted.heard && summing {
-                        // In increasing id, from +0.0: as `reduce` adds a listed row.
-                        let at = (key & u64::from(u32::MAX)) as usize;
-                        for (sum, column) in sums.iter_mut().zip(&self.summed_by_cell) {
-                            *sum += column[at];
-                        }
-                        heard_at += 1;
-                    } else if sorted.heard {
-                        out.heard_ids[heard_at] = other.j as i64;
-                        out.heard_distances[heard_at] = sorted.distance;
-                        heard_at += 1;
                     }
                 }
                 for (column, &sum) in out.sums.iter_mut().zip(&sums) {
