@@ -145,9 +145,11 @@ def hrvo_rows(
     candidates: _Floats,
     include_preferred: bool,
     relative: bool = False,
+    steer: NDArray[np.bool_] | None = None,
 ) -> _Floats:
     """HRVO velocities (m, 2) of the deciding robots, each from its own detections (k, 4) or their four columns, cut by
-    offsets (m+1,); with `relative`, (k, 5) or five columns: distance, dx, dy, vx, vy."""
+    offsets (m+1,); with `relative`, (k, 5) or five columns: distance, dx, dy, vx, vy; with `steer` (m,), only the rows
+    it flags (the others: their preferred velocity)."""
 
 def linked(
     rows: _Ints, indptr: _Ints, indices: _Ints, talking: NDArray[np.bool_], positions: _Floats | None = None
@@ -255,11 +257,21 @@ def distance_rays(
 ) -> _Floats:
     """Readings (k, n) of the rays (3, k) of every robot (or of `robots`) against walls (m, 4) and the other robots; -1 for nothing."""
 
-def sidestep_ask(want: _Floats, rows: _Ints, counters: _Ints, sides: _Floats) -> _Floats:
-    """What robots `rows` (increasing) ask HRVO for (k, 2): `want` (k, 2), turned to their side while their counter is above zero; counters (n,) int64 counted down in place."""
+def sidestep_ask(
+    want: _Floats, rows: _Ints, counters: _Ints, sides: _Floats, steer: NDArray[np.bool_] | None = None
+) -> _Floats:
+    """What robots `rows` (increasing) ask HRVO for (k, 2): `want` (k, 2), turned to their side while their counter is above zero; counters (n,) int64 counted down in place; with `steer` (k,), only the rows it flags."""
 
-def sidestep_mark(chosen: _Floats, want: _Floats, rows: _Ints, counters: _Ints, sides: _Floats, updates: int) -> None:
-    """Robots `rows` stopped (`chosen` zero) though they wished to move: counters set to `updates`, sides (n,) set right or flipped, in place."""
+def sidestep_mark(
+    chosen: _Floats,
+    want: _Floats,
+    rows: _Ints,
+    counters: _Ints,
+    sides: _Floats,
+    updates: int,
+    steer: NDArray[np.bool_] | None = None,
+) -> None:
+    """Robots `rows` stopped (`chosen` zero) though they wished to move: counters set to `updates`, sides (n,) set right or flipped, in place; with `steer` (k,), only the rows it flags."""
 
 def take_rows(tables: Sequence[NDArray[np.uint8]], rows: _Ints) -> list[NDArray[np.uint8]]:
     """The rows `rows` (increasing) of each table (n, width) uint8: one (len(rows), width) array each."""

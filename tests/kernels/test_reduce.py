@@ -11,7 +11,8 @@ import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
 from dream import _core, _reference, kernels
-from dream.kernels._hrvo import _grid
+from dream.kernels import _dispatch
+from dream.kernels._hrvo import _bounded, _grid
 
 OPS = ("sum", "mean", "min", "max")
 
@@ -201,6 +202,33 @@ def test_hrvo_rows_is_the_planner_row_by_row(rng, rows):
     for r in range(0, rows, max(rows // 40, 1)):  # exactly the per-robot planner's answer
         row = seen[offsets[r] : offsets[r + 1]]
         assert_array_equal(got[r], planner.velocity(row, velocities[r], preferred[r], positions[r]))
+
+
+@pytest.mark.parametrize("rows", [1, 30, 5000])
+def test_hrvo_rows_steers_only_the_rows_flagged(rng, rows):
+    velocities, preferred, positions, offsets, seen = detections_scene(rng, rows)
+    preferred[rng.random(rows) < 0.1] *= 1e7  # huge wishes: those not steered are kept as given
+    steer = rng.random(rows) < 0.6
+    options = dict(safety=0.24, v_max=0.2, bounds=(-1.6, 1.6, -1.0, 1.0), include_preferred=True)
+    every = kernels.hrvo_rows(velocities, preferred, positions, offsets, seen, **options)
+    grid = _grid(0.2, 20, 10)
+    for path in (_core, _reference):
+        flagged = path.hrvo_rows(
+            velocities, _bounded(preferred), positions, offsets, seen, candidates=grid, steer=steer, **options
+        )
+        assert_array_equal(flagged[steer], every[steer])
+    for core in (_core, None):
+        _dispatch._core, saved = core, _dispatch._core
+        try:
+            got = kernels.hrvo_rows(velocities, preferred, positions, offsets, seen, steer=steer, **options)
+        finally:
+            _dispatch._core = saved
+        assert_array_equal(got[steer], every[steer])
+        assert_array_equal(got[~steer], preferred[~steer])
+    with pytest.raises(ValueError, match="`steer`"):
+        kernels.hrvo_rows(velocities, preferred, positions, offsets, seen, steer=steer[1:], **options)
+    with pytest.raises(ValueError, match="`steer`"):
+        _core.hrvo_rows(velocities, preferred, positions, offsets, seen, candidates=grid, steer=steer[1:], **options)
 
 
 def test_hrvo_rows_bad_input_is_named(rng):

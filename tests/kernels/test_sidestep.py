@@ -61,6 +61,25 @@ def test_sidestep_kernels_are_the_reference_and_the_rule(rng, n):
         assert (marked != counted).any() or n < 100
 
 
+@pytest.mark.parametrize("n", [7, 1000, 200_000])
+def test_sidestep_of_the_rows_steered_is_the_kernels_on_those_rows(rng, n):
+    counters, sides, rows, want, chosen = scene(rng, n)
+    steer = rng.random(len(rows)) < 0.7
+    subset = counters.copy(), sides.copy()
+    asked = _core.sidestep_ask(want[steer], rows[steer], *subset)
+    _core.sidestep_mark(chosen[steer], want[steer], rows[steer], *subset, 10)
+    for module in (_core, _reference):
+        c, s = counters.copy(), sides.copy()
+        flagged = module.sidestep_ask(want, rows, c, s, steer)
+        module.sidestep_mark(chosen, want, rows, c, s, 10, steer)
+        assert_array_equal(bits(flagged[steer]), bits(asked))
+        assert_array_equal(bits(flagged[~steer]), bits(want[~steer]))  # the others ask for their wish
+        assert_array_equal(c, subset[0])
+        assert_array_equal(s, subset[1])
+    with pytest.raises(ValueError, match="steer"):
+        kernels.sidestep_ask(want, rows, counters, sides, steer[1:])
+
+
 @pytest.mark.parametrize("core", [_core, None], ids=["rust", "numpy"])
 def test_sidestep_bad_input_is_named_and_writes_nothing(rng, core):
     counters, sides, rows, want, chosen = scene(rng, 50)

@@ -584,10 +584,13 @@ impl Detections<'_> {
 
 /// HRVO velocities of the robots deciding now, each from its own detections (what its movement
 /// sensor reported): row r's are `detections[offsets[r]..offsets[r + 1]]`. Row r gets exactly
-/// [`hrvo_one`]'s answer for those detections' neighbours, rows in parallel for a large swarm.
+/// [`hrvo_one`]'s answer for those detections' neighbours, rows in parallel for a large swarm;
+/// with `steer`, only the rows it flags: the others get their preferred velocity as it is (robots
+/// driving straight, whose rows a caller would otherwise gather out of every input).
 ///
 /// # Errors
 /// Length mismatches, non-finite inputs, negative distances, invalid parameters or offsets.
+#[allow(clippy::too_many_arguments)]
 pub fn hrvo_rows(
     velocities: &[Vec2],
     preferred: &[Vec2],
@@ -596,6 +599,7 @@ pub fn hrvo_rows(
     detections: Detections<'_>,
     grid: &[Vec2],
     params: &HrvoParams,
+    steer: Option<&[bool]>,
 ) -> Result<Vec<Vec2>> {
     let params = params.validated()?;
     let m = positions.len();
@@ -607,8 +611,14 @@ pub fn hrvo_rows(
     check_vec2s("preferred", preferred)?;
     check_vec2s("positions", positions)?;
     check_vec2s("candidates", grid)?;
+    if let Some(steer) = steer {
+        check_len("steer", m, steer.len())?;
+    }
     let around = detections.neighbours()?;
     let robot = |scratch: &mut Scratch, r: usize| {
+        if steer.is_some_and(|steer| !steer[r]) {
+            return preferred[r];
+        }
         scratch.cones.clear();
         let row = &around[offsets[r] as usize..offsets[r + 1] as usize];
         scratch
@@ -901,16 +911,31 @@ mod tests {
         ];
         let offsets = [0, 1, 3];
         let g = grid();
-        let by_angle = hrvo_rows(&v, &pref, &at, &offsets, Detections::Polar(&polar), &g, &PARAMS).unwrap();
-        let by_offset = hrvo_rows(&v, &pref, &at, &offsets, Detections::Offsets(&sensed), &g, &PARAMS).unwrap();
+        let by_angle = hrvo_rows(&v, &pref, &at, &offsets, Detections::Polar(&polar), &g, &PARAMS, None).unwrap();
+        let by_offset = hrvo_rows(
+            &v,
+            &pref,
+            &at,
+            &offsets,
+            Detections::Offsets(&sensed),
+            &g,
+            &PARAMS,
+            None,
+        )
+        .unwrap();
         assert_eq!(by_angle, by_offset);
         assert_ne!(by_offset[0], pref[0]); // the robot ahead is in the way
-                                           // Every value is checked, the offset at distance 0 too.
+                                           // Only the rows flagged steer: the other keeps its preferred velocity as it is.
+        let seen = Detections::Offsets(&sensed);
+        let steered = hrvo_rows(&v, &pref, &at, &offsets, seen, &g, &PARAMS, Some(&[false, true])).unwrap();
+        assert_eq!(steered, vec![pref[0], by_offset[1]]);
+        assert!(hrvo_rows(&v, &pref, &at, &offsets, seen, &g, &PARAMS, Some(&[true])).is_err());
+        // Every value is checked, the offset at distance 0 too.
         let mut bad = sensed;
         bad[1][1] = f64::NAN;
-        assert!(hrvo_rows(&v, &pref, &at, &offsets, Detections::Offsets(&bad), &g, &PARAMS).is_err());
+        assert!(hrvo_rows(&v, &pref, &at, &offsets, Detections::Offsets(&bad), &g, &PARAMS, None).is_err());
         bad[1] = [-0.1, 0.0, 0.0, 0.0, 0.0];
-        assert!(hrvo_rows(&v, &pref, &at, &offsets, Detections::Offsets(&bad), &g, &PARAMS).is_err());
+        assert!(hrvo_rows(&v, &pref, &at, &offsets, Detections::Offsets(&bad), &g, &PARAMS, None).is_err());
     }
 
     #[test]

@@ -8,7 +8,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
-use crate::arrays::{both, indices_in, indices_of, points_in, points_of, vector_in, vector_of};
+use crate::arrays::{both, flags_of, indices_in, indices_of, points_in, points_of, vector_in, vector_of};
 use crate::errors::{value_error, PyDreamResult};
 
 fn params(
@@ -72,7 +72,7 @@ pub fn hrvo<'py>(
 /// With `relative`, the detections are `(k, 5)`: distance, the offset `(dx, dy)` of the robot
 /// detected, its velocity.
 #[pyfunction]
-#[pyo3(signature = (velocities, preferred, positions, offsets, detections, *, safety, v_max, bounds, candidates, include_preferred, relative=false))]
+#[pyo3(signature = (velocities, preferred, positions, offsets, detections, *, safety, v_max, bounds, candidates, include_preferred, relative=false, steer=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn hrvo_rows<'py>(
     py: Python<'py>,
@@ -87,6 +87,7 @@ pub fn hrvo_rows<'py>(
     candidates: Bound<'py, PyAny>,
     include_preferred: bool,
     relative: bool,
+    steer: Option<Bound<'py, PyAny>>,
 ) -> PyDreamResult<Bound<'py, PyArray2<f64>>> {
     let v = points_in::<2>("velocities", &velocities)?;
     let pref = points_in::<2>("preferred", &preferred)?;
@@ -102,8 +103,10 @@ pub fn hrvo_rows<'py>(
     let seen = sensed.as_deref().map_or(Detections::Polar(&polar), Detections::Offsets);
     let grid = points_of::<2>("candidates", &candidates)?;
     let params = params(safety, v_max, bounds, include_preferred)?;
+    let steer = steer.map(|flags| flags_of("steer", &flags, p.len())).transpose()?;
     let (v, pref, p, offsets): (&[Vec2], &[Vec2], &[Vec2], &[i64]) = (&v, &pref, &p, &offsets);
-    let chosen = py.detach(|| core::hrvo_rows(v, pref, p, offsets, seen, &grid, &params))?;
+    let steer = steer.as_deref();
+    let chosen = py.detach(|| core::hrvo_rows(v, pref, p, offsets, seen, &grid, &params, steer))?;
     let m = chosen.len();
     Ok(chosen.into_flattened().into_pyarray(py).reshape([m, 2])?)
 }

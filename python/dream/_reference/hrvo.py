@@ -211,11 +211,13 @@ def hrvo_rows(
     candidates: FloatArray,
     include_preferred: bool,
     relative: bool = False,
+    steer: np.ndarray | None = None,
 ) -> FloatArray:
     """HRVO velocities ``(m, 2)`` of the deciding robots, row r from its own detections
     ``detections[offsets[r]:offsets[r + 1]]`` ``(k, 4)``, or its four columns (:meth:`HrvoPlanner.velocity`'s
     answer); with ``relative``, ``(k, 5)`` or five columns: distance, the offset ``(dx, dy)`` of the robot
-    detected (its direction: :func:`along` it) and its velocity."""
+    detected (its direction: :func:`along` it) and its velocity. With ``steer`` ``(m,)`` bool, only the
+    rows it flags; the others get their preferred velocity as it is."""
     if isinstance(detections, tuple):
         detections = np.column_stack(detections)
     if relative:
@@ -224,7 +226,7 @@ def hrvo_rows(
     else:
         distances, velocities_seen = detections[:, 0], detections[:, 2:4]
         directions = detection_directions(detections)
-    steer = partial(
+    choose = partial(
         hrvo_velocity,
         safety=safety,
         v_max=v_max,
@@ -232,10 +234,10 @@ def hrvo_rows(
         candidates=candidates,
         include_preferred=include_preferred,
     )
-    out = np.zeros((len(positions), 2))
-    for r in range(len(positions)):
+    out = np.array(preferred, dtype=np.float64)
+    for r in range(len(positions)) if steer is None else np.flatnonzero(steer):
         row = slice(offsets[r], offsets[r + 1])
-        out[r] = steer(
+        out[r] = choose(
             velocities[r], preferred[r], directions[row], distances[row], velocities_seen[row], position=positions[r]
         )
     return out

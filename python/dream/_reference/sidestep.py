@@ -35,15 +35,29 @@ def update(chosen: Any, desired: Any, sidestep: Any, side: Any, updates: int) ->
     return np.where(blocked, updates, sidestep), new_side
 
 
-def sidestep_ask(want: FloatArray, rows: np.ndarray, counters: np.ndarray, sides: FloatArray) -> FloatArray:
+def sidestep_ask(
+    want: FloatArray, rows: np.ndarray, counters: np.ndarray, sides: FloatArray, steer: np.ndarray | None = None
+) -> FloatArray:
     """What robots ``rows`` ask HRVO for, ``want`` ``(k, 2)`` by :func:`preference`; their
-    ``counters`` ``(n,)`` counted down in place."""
-    asked, counters[rows] = preference(want, counters[rows], sides[rows])
+    ``counters`` ``(n,)`` counted down in place. With ``steer`` ``(k,)``, only the rows it flags
+    (the others ask for ``want``)."""
+    asked = np.array(want, dtype=np.float64)
+    at = slice(None) if steer is None else np.flatnonzero(steer)
+    asked[at], counters[rows[at]] = preference(asked[at], counters[rows[at]], sides[rows[at]])
     return asked
 
 
 def sidestep_mark(
-    chosen: FloatArray, want: FloatArray, rows: np.ndarray, counters: np.ndarray, sides: FloatArray, updates: int
+    chosen: FloatArray,
+    want: FloatArray,
+    rows: np.ndarray,
+    counters: np.ndarray,
+    sides: FloatArray,
+    updates: int,
+    steer: np.ndarray | None = None,
 ) -> None:
-    """:func:`update` of robots ``rows``' ``counters`` and ``sides`` ``(n,)``, in place."""
-    counters[rows], sides[rows] = update(chosen, want, counters[rows], sides[rows], updates)
+    """:func:`update` of robots ``rows``' ``counters`` and ``sides`` ``(n,)``, in place; with ``steer``
+    ``(k,)``, of the rows it flags."""
+    at = slice(None) if steer is None else np.flatnonzero(steer)
+    ids = rows[at]
+    counters[ids], sides[ids] = update(chosen[at], want[at], counters[ids], sides[ids], updates)

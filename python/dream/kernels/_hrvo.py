@@ -9,7 +9,16 @@ from typing import Any
 import numpy as np
 
 import dream._reference as _reference
-from dream._checks import Bounds, FloatArray, all_finite, as_array, as_offsets, check_nonnegative, checked_bounds
+from dream._checks import (
+    Bounds,
+    FloatArray,
+    all_finite,
+    as_array,
+    as_flags,
+    as_offsets,
+    check_nonnegative,
+    checked_bounds,
+)
 from dream.kernels._dispatch import implementation
 
 #: Preferred speeds above this (m/s) are scaled down to it, keeping their direction: the choice
@@ -213,6 +222,7 @@ def hrvo_rows(
     n_speeds: int = 10,
     include_preferred: bool = True,
     relative: bool = False,
+    steer: Any = None,
 ) -> FloatArray:
     """HRVO velocities ``(m, 2)`` of the robots deciding now, each from its own detections.
 
@@ -224,6 +234,8 @@ def hrvo_rows(
     is :meth:`HrvoPlanner.velocity`'s for them, with ``velocities``, ``preferred`` and
     ``positions`` ``(m, 2)``: the robots' previous, wanted velocities and believed positions.
     A robot decides from what it perceives, never from the others' true poses (see :func:`hrvo`).
+    With ``steer`` ``(m,)`` bool, only the rows it flags go through HRVO; the others get their
+    preferred velocity as it is (robots driving straight: no rows to gather out of the inputs).
     """
     pos = as_array(positions, "positions", (None, 2))
     m = pos.shape[0]
@@ -255,6 +267,7 @@ def hrvo_rows(
         n_speeds=n_speeds,
         include_preferred=include_preferred,
         relative=relative,
+        steer=None if steer is None else as_flags(steer, "steer", m),
     )
 
 
@@ -272,14 +285,16 @@ def hrvo_rows_trusted(
     n_speeds: int,
     include_preferred: bool,
     relative: bool,
+    steer: np.ndarray | None = None,
 ) -> FloatArray:
     """:func:`hrvo_rows` of arrays its caller built and vouches for: float64 of the right shapes,
     finite, detections at distances >= 0 cut into rows by int64 ``offsets`` (the swarm engine's
     own perception and checked decisions), so that they are not checked again, entry by entry;
     the parameters are. Huge preferred velocities are bounded as :func:`hrvo_rows` bounds them."""
-    return implementation("hrvo_rows")(
+    bounded = _bounded(preferred)
+    out: FloatArray = implementation("hrvo_rows")(
         velocities,
-        _bounded(preferred),
+        bounded,
         positions,
         offsets,
         detections,
@@ -289,4 +304,8 @@ def hrvo_rows_trusted(
         candidates=_checked_grid(v_max, n_angles, n_speeds),
         include_preferred=include_preferred,
         relative=relative,
+        steer=steer,
     )
+    if steer is not None and bounded is not preferred:  # the rows not steered, as they were given
+        np.copyto(out, preferred, where=~steer[:, None])
+    return out

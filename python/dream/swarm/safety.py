@@ -86,26 +86,19 @@ def _drive_apart(
     n = len(engine.dxi)
     chosen = wished
     if avoid is not None and safety is not None:
-        chosen = wished.copy()
-        steer: slice | np.ndarray = slice(None)  # the rows that go through HRVO
-        entries: slice | np.ndarray = slice(None)  # and their detections
-        offsets = seen.offsets
-        if straight is not None:
-            steer = np.flatnonzero(~straight)
-            counts = np.diff(offsets)[steer]
-            offsets, entries = np.concatenate(([0], np.cumsum(counts))), spans(offsets[:-1][steer], counts)
-        ids, want = rows[steer], wished[steer]
-        asked = want
+        # The rows that go through HRVO (and step aside); the others drive their wish as it is,
+        # read in place by the kernels (no rows gathered out of the detections).
+        steer = None if straight is None else ~straight
+        asked = wished
         if avoid.sidestep:  # the side-step rule (dream.rules) on the engine's tables, in place
-            asked = kernels.sidestep_ask(want, ids, engine.sidestep, engine.side)
-        detections = tuple(np.ascontiguousarray(seen[name][entries]) for name in STEERED_BY)
+            asked = kernels.sidestep_ask(wished, rows, engine.sidestep, engine.side, steer)
         margin = robot.spec.radius if avoid.margin is None else avoid.margin
-        steered = hrvo_rows_trusted(  # the engine's own perception, and a decision checked in `Engine._apply`
-            take_rows(engine.dxi, at_rows(ids, n)),
+        chosen = hrvo_rows_trusted(  # the engine's own perception, and a decision checked in `Engine._apply`
+            take_rows(engine.dxi, at_rows(rows, n)),
             np.ascontiguousarray(asked),
-            np.ascontiguousarray(pose[steer, :2]),
-            offsets,
-            detections,
+            np.ascontiguousarray(pose[:, :2]),
+            seen.offsets,
+            tuple(np.ascontiguousarray(seen[name]) for name in STEERED_BY),
             safety=safety,
             v_max=robot.spec.v_max,
             bounds=engine.arena.shrunk(margin) if avoid.check_boundaries else None,
@@ -113,10 +106,10 @@ def _drive_apart(
             n_speeds=avoid.n_speeds,
             include_preferred=avoid.include_preferred,
             relative=True,  # the offsets of the robots seen: no angle to turn back into a direction
+            steer=steer,
         )
-        chosen[steer] = steered
         if avoid.sidestep:
-            kernels.sidestep_mark(steered, want, ids, engine.sidestep, engine.side, avoid.sidestep)
+            kernels.sidestep_mark(chosen, wished, rows, engine.sidestep, engine.side, avoid.sidestep, steer)
     put_rows(engine.dxi, at_rows(rows, n), chosen)
     out = kernels.dxi_to_dxu(chosen.T, pose.T, robot.vel_gain, robot.ang_gain)
     if robot.halts:  # no wish, no command (the conversion alone turns some robots at full speed)
