@@ -9,7 +9,8 @@ from typing import Any
 import numpy as np
 
 from dream._checks import FloatArray, as_flags, as_shaped
-from dream.kernels._dispatch import core_checks, implementation
+from dream.kernels._dispatch import implementation
+from dream.kernels._tables import _rows
 
 
 def sidestep_ask(want: Any, rows: Any, counters: np.ndarray, sides: np.ndarray, steer: Any = None) -> FloatArray:
@@ -53,8 +54,8 @@ def sidestep_mark(
 
 
 def _checked(rows: Any, counters: np.ndarray, sides: np.ndarray) -> np.ndarray:
-    """``rows`` as int64 ids, and the tables checked (the rows too for the reference: the Rust
-    binding checks its own)."""
+    """``rows`` as int64 ids (checked as :func:`~dream.kernels.take_rows` checks its rows), and
+    the tables checked."""
     n = len(counters)
     for name, table, kind in (("counters", counters, np.int64), ("sides", sides, np.float64)):
         if not isinstance(table, np.ndarray) or table.dtype != kind or table.shape != (n,):
@@ -62,10 +63,4 @@ def _checked(rows: Any, counters: np.ndarray, sides: np.ndarray) -> np.ndarray:
             raise ValueError(f"`{name}` must be a ({n},) {np.dtype(kind)} array, got {got}")
         if not (table.flags.writeable and table.flags.c_contiguous):
             raise ValueError(f"`{name}` must be writable and C-contiguous (it is written in place)")
-    index = np.asarray(rows)
-    if index.ndim != 1 or not (index.dtype.kind in "iu" or len(index) == 0):
-        raise ValueError(f"`rows` must be 1-D integer robot ids, got {index.dtype} of shape {index.shape}")
-    index = index.astype(np.int64, copy=False)
-    if not core_checks() and len(index) and (index[0] < 0 or index[-1] >= n or (np.diff(index) <= 0).any()):
-        raise ValueError(f"`rows` must be increasing robot ids below {n}")
-    return index
+    return _rows(rows, [counters])
