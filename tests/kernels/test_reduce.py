@@ -368,15 +368,21 @@ def test_perceive_counts_alike_at_the_ranges_edge(rng, scale, kinds, fov):
 
 @pytest.mark.parametrize("n", [1, 40, 3000])
 @pytest.mark.parametrize("scale", [1.0, 1e154], ids=["metres", "squares overflow"])
-def test_perceive_sums_what_is_heard_as_the_reduction_of_its_rows(rng, n, scale):
+@pytest.mark.parametrize("fov", [1.5, 2 * np.pi, None], ids=["ahead", "all around", "no sensor"])
+@pytest.mark.parametrize("columns", [1, 2, 5])
+def test_perceive_sums_what_is_heard_as_the_reduction_of_its_rows(rng, n, scale, fov, columns):
     """A radio that sums (a decision reading only its inbox's sums): each row's sums are the
     reduction of the rows it would list, to the bit (NaN and huge values carried), as the
-    reference's; the sensor's rows are untouched and the heard rows are left out."""
+    reference's; the sensor's rows are untouched and the heard rows are left out. The rows are
+    counted as they are summed, past the sensor's reach; up to four columns add up together."""
     positions, headings, talking = perceive_scene(rng, n)
     positions *= scale
     rows = np.sort(rng.choice(n, size=max(n // 2, 1), replace=False))
     values = [rng.normal(size=n), np.where(rng.random(n) < 0.05, np.nan, 1e300 * rng.normal(size=n))]
-    options = dict(sight=(0.4 * scale, 1.5, 0.3), radio_range=0.7 * scale, talking=talking)
+    values = (values + [rng.normal(size=n) for _ in range(columns)])[:columns]
+    options = dict(radio_range=0.7 * scale, talking=talking)
+    if fov is not None:
+        options["sight"] = (0.4 * scale, fov, 0.3)
     listed = _core.perceive(positions, headings, rows, **options)
     got = _core.perceive(positions, headings, rows, **options, summed=values)
     want = _reference.perceive(positions, headings, rows, **options, summed=values)
@@ -388,7 +394,7 @@ def test_perceive_sums_what_is_heard_as_the_reduction_of_its_rows(rng, n, scale)
     for column, (mine, theirs) in enumerate(zip(sums, want[1][3:], strict=True)):
         assert_array_equal(mine, reduced[:, column])  # NaN where a row heard one
         assert_array_equal(mine, theirs)
-    assert n < 3000 or (np.isnan(sums[1]).any() and offsets[-1] > len(rows))  # the cases arose
+    assert n < 3000 or (np.isnan(sums[1]).any() if columns > 1 else offsets[-1] > len(rows))  # the cases arose
 
 
 @pytest.mark.parametrize(
