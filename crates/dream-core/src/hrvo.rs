@@ -516,7 +516,7 @@ pub fn hrvo_one(
     check_finite("preferred", &preferred)?;
     check_finite("position", &position)?;
     check_vec2s("candidates", grid)?;
-    check_neighbours(neighbours)?;
+    check_neighbours(neighbours.len(), |k| neighbours[k])?;
     let mut scratch = Scratch::new(grid, &params);
     scratch
         .cones
@@ -524,17 +524,18 @@ pub fn hrvo_one(
     Ok(choose(&mut scratch, preferred, position, &params))
 }
 
-/// Fails at the first neighbour with a non-finite value or a negative distance.
-fn check_neighbours(neighbours: &[Neighbour]) -> Result<()> {
+/// Fails at the first of the `n` neighbours `neighbour(k)` with a non-finite value or a negative
+/// distance.
+fn check_neighbours(n: usize, neighbour: impl Fn(usize) -> Neighbour + Sync + Send) -> Result<()> {
     let bad = |b: &Neighbour| {
         let values = [b.direction[0], b.direction[1], b.distance, b.velocity[0], b.velocity[1]];
         !values.iter().all(|v| v.is_finite()) || b.distance < 0.0
     };
     // The first bad one, found on every core for many.
-    let Some(k) = first_where(neighbours.len(), |k| bad(&neighbours[k])) else {
+    let Some(k) = first_where(n, |k| bad(&neighbour(k))) else {
         return Ok(());
     };
-    let b = &neighbours[k];
+    let b = &neighbour(k);
     if b.distance.is_finite() && b.direction.iter().chain(&b.velocity).all(|v| v.is_finite()) {
         Err(GeomError::InvalidParameter {
             arg: "detection distance",
@@ -549,35 +550,59 @@ fn check_neighbours(neighbours: &[Neighbour]) -> Result<()> {
     }
 }
 
-/// What movement sensors report of the robots they detect, one entry a detection.
+/// What movement sensors report of the robots they detect, as columns, one entry a detection
+/// (a sensor's columns, read where they lie: a million robots' detections are tens of
+/// megabytes, which interleaved into rows, then turned into neighbours, were written twice).
 #[derive(Debug, Clone, Copy)]
 pub enum Detections<'a> {
-    /// `[distance, angle, vx, vy]`, as in [`Neighbour::from_detection`].
-    Polar(&'a [[f64; 4]]),
-    /// `[distance, dx, dy, vx, vy]`, as in [`Neighbour::from_sensed`].
-    Offsets(&'a [[f64; 5]]),
+    /// `distance, angle, vx, vy`, as in [`Neighbour::from_detection`].
+    Polar([&'a [f64]; 4]),
+    /// `distance, dx, dy, vx, vy`, as in [`Neighbour::from_sensed`].
+    Offsets([&'a [f64]; 5]),
 }
 
 impl Detections<'_> {
-    fn len(&self) -> usize {
+    fn columns(&self) -> &[&[f64]] {
         match self {
-            Detections::Polar(d) => d.len(),
-            Detections::Offsets(d) => d.len(),
+            Detections::Polar(columns) => columns,
+            Detections::Offsets(columns) => columns,
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.columns()[0].len()
+    }
+
+    /// Detection `e` as the neighbour it describes.
+    fn neighbour(&self, e: usize) -> Neighbour {
+        match self {
+            Detections::Polar(columns) => Neighbour::from_detection(columns.map(|column| column[e])),
+            Detections::Offsets(columns) => Neighbour::from_sensed(columns.map(|column| column[e])),
         }
     }
 
     /// The neighbours they describe, checked, on every core for many (a million robots see
-    /// millions of others).
+    /// millions of others): the columns as long as each other, and every neighbour valid. An
+    /// offset is read only at a distance above 0: every value of the offsets' columns is checked
+    /// (a non-finite one named by its place in the rows `(k, 5)` the columns stand for).
     fn neighbours(&self) -> Result<Vec<Neighbour>> {
-        let around = match self {
-            Detections::Polar(d) => map_range(d.len(), 20.0, |e| Neighbour::from_detection(d[e])),
-            Detections::Offsets(d) => {
-                // The offset is only read for a distance above 0: checked here, every value.
-                check_finite("detections", d.as_flattened())?;
-                map_range(d.len(), 3.0, |e| Neighbour::from_sensed(d[e]))
+        let columns = self.columns();
+        let n = self.len();
+        for column in columns {
+            check_len("detections", n, column.len())?;
+        }
+        if let Detections::Offsets(_) = self {
+            let bad = |e: usize| columns.iter().any(|column| !column[e].is_finite());
+            if let Some(e) = first_where(n, bad) {
+                let c = columns.iter().position(|column| !column[e].is_finite()).unwrap_or(0);
+                return Err(GeomError::NonFinite {
+                    arg: "detections",
+                    index: e * columns.len() + c,
+                });
             }
-        };
-        check_neighbours(&around)?;
+        }
+        let around = map_range(n, 3.0, |e| self.neighbour(e));
+        check_neighbours(n, |e| around[e])?;
         Ok(around)
     }
 }
@@ -911,31 +936,41 @@ mod tests {
         ];
         let offsets = [0, 1, 3];
         let g = grid();
-        let by_angle = hrvo_rows(&v, &pref, &at, &offsets, Detections::Polar(&polar), &g, &PARAMS, None).unwrap();
-        let by_offset = hrvo_rows(
-            &v,
-            &pref,
-            &at,
-            &offsets,
-            Detections::Offsets(&sensed),
-            &g,
-            &PARAMS,
-            None,
-        )
-        .unwrap();
+        let (polar, sensed) = (columns(&polar), columns(&sensed));
+        let by_polar = Detections::Polar(by_ref(&polar));
+        let by_angle = hrvo_rows(&v, &pref, &at, &offsets, by_polar, &g, &PARAMS, None).unwrap();
+        let seen = Detections::Offsets(by_ref(&sensed));
+        let by_offset = hrvo_rows(&v, &pref, &at, &offsets, seen, &g, &PARAMS, None).unwrap();
         assert_eq!(by_angle, by_offset);
         assert_ne!(by_offset[0], pref[0]); // the robot ahead is in the way
                                            // Only the rows flagged steer: the other keeps its preferred velocity as it is.
-        let seen = Detections::Offsets(&sensed);
         let steered = hrvo_rows(&v, &pref, &at, &offsets, seen, &g, &PARAMS, Some(&[false, true])).unwrap();
         assert_eq!(steered, vec![pref[0], by_offset[1]]);
         assert!(hrvo_rows(&v, &pref, &at, &offsets, seen, &g, &PARAMS, Some(&[true])).is_err());
         // Every value is checked, the offset at distance 0 too.
-        let mut bad = sensed;
-        bad[1][1] = f64::NAN;
-        assert!(hrvo_rows(&v, &pref, &at, &offsets, Detections::Offsets(&bad), &g, &PARAMS, None).is_err());
-        bad[1] = [-0.1, 0.0, 0.0, 0.0, 0.0];
-        assert!(hrvo_rows(&v, &pref, &at, &offsets, Detections::Offsets(&bad), &g, &PARAMS, None).is_err());
+        let mut bad = sensed.clone();
+        bad[1][1] = f64::NAN; // dx of the detection at distance 0
+        let seen = Detections::Offsets(by_ref(&bad));
+        let index = Err(GeomError::NonFinite {
+            arg: "detections",
+            index: 6,
+        });
+        assert_eq!(hrvo_rows(&v, &pref, &at, &offsets, seen, &g, &PARAMS, None), index);
+        let mut bad = sensed.clone();
+        bad[0][1] = -0.1;
+        let seen = Detections::Offsets(by_ref(&bad));
+        assert!(hrvo_rows(&v, &pref, &at, &offsets, seen, &g, &PARAMS, None).is_err());
+        let short = [&sensed[0][..], &sensed[1], &sensed[2], &sensed[3], &sensed[4][..2]];
+        assert!(hrvo_rows(&v, &pref, &at, &offsets, Detections::Offsets(short), &g, &PARAMS, None).is_err());
+    }
+
+    /// Rows of `W` values as `W` columns.
+    fn columns<const W: usize>(rows: &[[f64; W]]) -> [Vec<f64>; W] {
+        std::array::from_fn(|c| rows.iter().map(|row| row[c]).collect())
+    }
+
+    fn by_ref<const W: usize>(columns: &[Vec<f64>; W]) -> [&[f64]; W] {
+        columns.each_ref().map(Vec::as_slice)
     }
 
     #[test]

@@ -3,12 +3,13 @@
 use dream_core::geom::Arena;
 use dream_core::geom::Vec2;
 use dream_core::hrvo::{self as core, Detections, HrvoParams, Neighbour};
-use dream_core::parallel::map_range;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
-use crate::arrays::{both, flags_of, indices_in, indices_of, points_in, points_of, vector_in, vector_of};
+use crate::arrays::{
+    both, columns_in, flags_of, indices_in, indices_of, points_in, points_of, vector_in, vector_of, Columns, Values,
+};
 use crate::errors::{value_error, PyDreamResult};
 
 fn params(
@@ -93,14 +94,15 @@ pub fn hrvo_rows<'py>(
     let pref = points_in::<2>("preferred", &preferred)?;
     let p = points_in::<2>("positions", &positions)?;
     let offsets = indices_in("offsets", &offsets)?;
-    let sensed = relative
-        .then(|| detections_of::<5>(&detections, "(distance, dx, dy, vx, vy)"))
-        .transpose()?;
-    let polar = match sensed {
-        Some(_) => Vec::new(),
-        None => detections_of::<4>(&detections, "(distance, angle, vx, vy)")?,
+    let sensed = if relative {
+        Sensed::Offsets(detections_of(&detections, "(distance, dx, dy, vx, vy)")?)
+    } else {
+        Sensed::Polar(detections_of(&detections, "(distance, angle, vx, vy)")?)
     };
-    let seen = sensed.as_deref().map_or(Detections::Polar(&polar), Detections::Offsets);
+    let seen = match &sensed {
+        Sensed::Offsets(columns) => Detections::Offsets(columns.get()),
+        Sensed::Polar(columns) => Detections::Polar(columns.get()),
+    };
     let grid = points_of::<2>("candidates", &candidates)?;
     let params = params(safety, v_max, bounds, include_preferred)?;
     let steer = steer.map(|flags| flags_of("steer", &flags, p.len())).transpose()?;
@@ -111,11 +113,15 @@ pub fn hrvo_rows<'py>(
     Ok(chosen.into_flattened().into_pyarray(py).reshape([m, 2])?)
 }
 
-/// Detections `(k, W)`, or their `W` columns `(k,)` each (`names`): a movement sensor's columns
-/// go in without being stacked first.
-fn detections_of<const W: usize>(object: &Bound<'_, PyAny>, names: &str) -> PyDreamResult<Vec<[f64; W]>> {
+/// Detections `(k, W)`, or their `W` columns `(k,)` each (`names`), as columns: a movement
+/// sensor's columns read where they lie, an array's copied column by column where it is laid out
+/// in rows.
+fn detections_of<'py, const W: usize>(
+    object: &Bound<'py, PyAny>,
+    names: &str,
+) -> PyDreamResult<DetectionColumns<'py, W>> {
     let Ok(columns) = object.cast::<PyTuple>() else {
-        return points_of::<W>("detections", object);
+        return Ok(DetectionColumns::Stacked(columns_in::<W>("detections", object)?));
     };
     if columns.len() != W {
         return Err(value_error(format!(
@@ -123,16 +129,34 @@ fn detections_of<const W: usize>(object: &Bound<'_, PyAny>, names: &str) -> PyDr
             columns.len()
         )));
     }
-    // Each column read in place (a million robots' detections are tens of megabytes, copied on one
-    // core), then interleaved on every core.
     let first = vector_in("detections", &columns.get_item(0)?, None)?;
     let len = first.len();
     let mut all = vec![first];
     for c in 1..W {
         all.push(vector_in("detections", &columns.get_item(c)?, Some(len))?);
     }
-    let columns: Vec<&[f64]> = all.iter().map(|column| &**column).collect();
-    Ok(map_range(len, 1.0, |e| std::array::from_fn(|c| columns[c][e])))
+    Ok(DetectionColumns::Listed(all))
+}
+
+/// The detections' columns of either kind.
+enum Sensed<'py> {
+    Offsets(DetectionColumns<'py, 5>),
+    Polar(DetectionColumns<'py, 4>),
+}
+
+/// Detections' `W` columns (see [`detections_of`]).
+enum DetectionColumns<'py, const W: usize> {
+    Listed(Vec<Values<'py, f64>>),
+    Stacked(Columns<'py, W>),
+}
+
+impl<const W: usize> DetectionColumns<'_, W> {
+    fn get(&self) -> [&[f64]; W] {
+        match self {
+            DetectionColumns::Listed(columns) => std::array::from_fn(|c| &*columns[c]),
+            DetectionColumns::Stacked(columns) => columns.get(),
+        }
+    }
 }
 
 /// A robot's HRVO planner: parameters and candidate grid, fixed; one call per decision.
