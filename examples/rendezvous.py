@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from dream import Experiment, param
+from dream import Experiment, initial_poses, param
 from dream.specs import ROBOTARIUM, ArenaSpec
 from dream.swarm import Avoid, Movement, Radio, SwarmRobot, View
 
@@ -90,6 +90,11 @@ class Rendezvous(Experiment):
 
     def steps(self, n: int) -> int:
         return 3000 + 2 * n
+
+    def initial_poses(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """rps's random grid points, the robots numbered across the grid: no robot's role depends
+        on its id, and near ids for near robots keep a million robots' arrays in cache."""
+        return initial_poses(n, rng, self.arena, space_order=True)
 
     def swarm_robot(self, n: int) -> MeetingRobot:
         return MeetingRobot(self.gain, self.safety, self.radio_range)

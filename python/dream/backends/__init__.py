@@ -38,12 +38,21 @@ def initial_poses(
     arena: ArenaSpec = ROBOTARIUM,
     spacing: float = 0.2,
     where: Callable[[np.ndarray, np.ndarray], Any] | None = None,
+    space_order: bool = False,
 ) -> FloatArray:
     """Random poses ``(3, n)`` on a grid of ``spacing`` in the central part of the arena.
 
     As rps's ``generate_initial_conditions`` (distinct grid points in a 2.5 x 1.5 m area of the
     3.2 x 2 m arena, random headings), scaled to ``arena``, drawn from ``rng``. ``where(x, y)``,
     if given, keeps the grid points ``(k,)`` it is true of (relative to the arena's centre).
+
+    The robots are numbered in the order drawn, as rps numbers them; with ``space_order``,
+    column by column across the grid instead: robots near each other get near ids, so a swarm's
+    per-robot arrays, which the kernels read in the order of space, stay in cache (at a million
+    robots the rendezvous example's perception took half the time, its step 1.2-1.4x less:
+    ``docs/benchmarks.md``). The points drawn, and the headings, are the same either way; only
+    a rule that gives robots roles by id (a line ordered by id, places on a ring) sees the
+    difference.
 
     Without ``where`` only the chosen grid points are placed: time and memory grow with ``n``,
     not with the arena (a ring of 100,000 robots has 1.8e9 grid points). ``where`` tests every
@@ -66,6 +75,8 @@ def initial_poses(
     # An int population: numpy draws n distinct integers without a table of all of them
     # (Floyd's algorithm) unless n is over a fiftieth of it.
     chosen = rng.choice(count, size=n, replace=False)
+    if space_order:
+        chosen.sort()  # the grid's points are numbered column by column
     poses = np.empty((3, n))
     poses[0], poses[1] = _grid_point(chosen if cells is None else cells[chosen], rows, columns, spacing, cx, cy)
     poses[2] = rng.uniform(-np.pi, np.pi, size=n)
