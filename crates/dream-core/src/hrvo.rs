@@ -516,7 +516,7 @@ pub fn hrvo_one(
     check_finite("preferred", &preferred)?;
     check_finite("position", &position)?;
     check_vec2s("candidates", grid)?;
-    check_neighbours(neighbours.len(), |k| neighbours[k])?;
+    check_neighbours(neighbours)?;
     let mut scratch = Scratch::new(grid, &params);
     scratch
         .cones
@@ -524,18 +524,17 @@ pub fn hrvo_one(
     Ok(choose(&mut scratch, preferred, position, &params))
 }
 
-/// Fails at the first of the `n` neighbours `neighbour(k)` with a non-finite value or a negative
-/// distance.
-fn check_neighbours(n: usize, neighbour: impl Fn(usize) -> Neighbour + Sync + Send) -> Result<()> {
+/// Fails at the first neighbour with a non-finite value or a negative distance.
+fn check_neighbours(neighbours: &[Neighbour]) -> Result<()> {
     let bad = |b: &Neighbour| {
         let values = [b.direction[0], b.direction[1], b.distance, b.velocity[0], b.velocity[1]];
         !values.iter().all(|v| v.is_finite()) || b.distance < 0.0
     };
     // The first bad one, found on every core for many.
-    let Some(k) = first_where(n, |k| bad(&neighbour(k))) else {
+    let Some(k) = first_where(neighbours.len(), |k| bad(&neighbours[k])) else {
         return Ok(());
     };
-    let b = &neighbour(k);
+    let b = &neighbours[k];
     if b.distance.is_finite() && b.direction.iter().chain(&b.velocity).all(|v| v.is_finite()) {
         Err(GeomError::InvalidParameter {
             arg: "detection distance",
@@ -601,8 +600,10 @@ impl Detections<'_> {
                 });
             }
         }
-        let around = map_range(n, 3.0, |e| self.neighbour(e));
-        check_neighbours(n, |e| around[e])?;
+        // A sine and a cosine an angle; two divisions an offset.
+        let cost = if let Detections::Polar(_) = self { 20.0 } else { 3.0 };
+        let around = map_range(n, cost, |e| self.neighbour(e));
+        check_neighbours(&around)?;
         Ok(around)
     }
 }

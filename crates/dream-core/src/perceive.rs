@@ -119,7 +119,8 @@ fn check_range(arg: &'static str, value: f64) -> Result<()> {
 /// is talking), among the robots at `(xs[j], ys[j])` heading `headings[j]`. One grid over the
 /// longer range, whose cell-ordered coordinates each robot asked for streams through (five runs
 /// of memory). Two passes over the asked robots, on every core: the first counts what each sees
-/// and hears, which places every row in the output; the second writes the rows in place, tasks
+/// and hears, which places every row in the output (a radio that sums has no rows to place: its
+/// robots are counted in the second pass); the second writes the rows in place, tasks
 /// of consecutive rows each filling its own stretch of the columns. The output is allocated
 /// once, on the calling thread, and nothing is copied after: before, each task grew its own
 /// buffers on its worker thread and they were copied into row order on return, a fifth of the
@@ -183,8 +184,9 @@ pub fn perceive(
     );
     let summing = radio.is_some_and(|r| !r.summed.is_empty());
     // A radio that sums has no rows to place: its robots are counted as they are summed, in the
-    // second pass, and the first looks only as far as the sensor sees (a radio reaching twice
-    // as far as the sensor has four times the robots to look at).
+    // second pass, and the first looks only as far as an all-around sensor sees (a radio
+    // reaching twice as far has four times the robots to look at; a narrower sensor's count
+    // goes through `near`, as far as the radio reaches).
     let counted = if summing { sight.map_or(0.0, |s| s.range) } else { reach };
     let find = Find {
         grid: &grid,
@@ -484,8 +486,8 @@ struct Out<'a> {
 }
 
 impl<'a> Out<'a> {
-    /// The first `seen` seen entries, `heard` heard ones and `rows` rows' sums, and the rest (a
-    /// column left empty stays empty).
+    /// The first `seen` seen entries, `heard` heard ones and `rows` rows' sums and heard counts,
+    /// and the rest (a column left empty stays empty).
     fn split_at(self, seen: usize, heard: usize, rows: usize) -> (Self, Self) {
         fn cut<T>(column: &mut [T], at: usize) -> (&mut [T], &mut [T]) {
             column.split_at_mut(at.min(column.len()))
@@ -667,6 +669,7 @@ impl Find<'_> {
     /// Writes what the robots of `task` see and hear into `out`, its rows' stretch of the
     /// columns, each row by increasing id; the stretch holds exactly what [`Find::count`]
     /// counted for them (the same robots near, sorted out alike: the writes stay within it).
+    /// Where the radio sums, the robots heard are counted here, into `out.heard_counts`.
     fn fill(&self, task: &Task<'_>, out: Out<'_>) {
         match self.summed {
             1 => self.fill_summing::<1>(task, out),

@@ -49,10 +49,10 @@ def initial_poses(
     The robots are numbered in the order drawn, as rps numbers them; with ``space_order``,
     column by column across the grid instead: robots near each other get near ids, so a swarm's
     per-robot arrays, which the kernels read in the order of space, stay in cache (at a million
-    robots the rendezvous example's perception took half the time, its step 1.2-1.4x less:
-    ``docs/benchmarks.md``). The points drawn, and the headings, are the same either way; only
-    a rule that gives robots roles by id (a line ordered by id, places on a ring) sees the
-    difference.
+    robots the rendezvous example's perception took half the time, its step 1.2-1.3x less:
+    ``docs/benchmarks.md``). The poses drawn are the same either way, only numbered otherwise: a
+    rule that gives robots roles by id (a line ordered by id, places on a ring) sees the
+    difference, and a rule that draws at random robot by robot may draw otherwise.
 
     Without ``where`` only the chosen grid points are placed: time and memory grow with ``n``,
     not with the arena (a ring of 100,000 robots has 1.8e9 grid points). ``where`` tests every
@@ -75,12 +75,11 @@ def initial_poses(
     # An int population: numpy draws n distinct integers without a table of all of them
     # (Floyd's algorithm) unless n is over a fiftieth of it.
     chosen = rng.choice(count, size=n, replace=False)
-    if space_order:
-        chosen.sort()  # the grid's points are numbered column by column
     poses = np.empty((3, n))
     poses[0], poses[1] = _grid_point(chosen if cells is None else cells[chosen], rows, columns, spacing, cx, cy)
     poses[2] = rng.uniform(-np.pi, np.pi, size=n)
-    return poses
+    # The grid's points are numbered column by column: each pose keeps its heading.
+    return poses[:, np.argsort(chosen)] if space_order else poses
 
 
 def _grid_point(
