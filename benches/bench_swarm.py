@@ -17,6 +17,12 @@ Run::
     python benches/bench_swarm.py -n 1000 10000 100000 1000000 --threads 1 2 4 8 16
     python benches/bench_swarm.py -e hrvo-circle examples/rendezvous.py --steps 30
     python benches/bench_swarm.py -n 100000 --steps 112 --baseline OLDER/_core.abi3.so
+    python benches/bench_swarm.py -e examples/rendezvous.py -n 100000 --steps 70 --faults none loss=0.3 \
+        burst=0.05:0.3 sensor_noise=0.01,sensor_dropout=0.05
+
+``--faults`` runs each experiment once with each set of faults (the CLI's ``--fault KIND=VALUE``
+options, comma-separated; ``none`` for a run without), one row each: what the world's faults cost a
+step, side by side.
 
 ``--baseline`` times instead each run's steps with the installed kernels and with another build of
 them (an older commit's ``dream/_core.abi3.so``; a kernel it lacks is taken from this build), in
@@ -31,12 +37,15 @@ build, in an order drawn at random for each pair: experiments do some work every
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 import subprocess
 import sys
 from pathlib import Path
 from typing import Any
+
+import dream
 
 sys.path.insert(0, str(Path(__file__).parent))
 from harness import machine  # noqa: E402
@@ -54,6 +63,7 @@ import dream
 from dream.experiments import find
 
 name, n, steps, warm_up, top = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5])
+faults = None if sys.argv[7] == "none" else dream.Faults.parse(sys.argv[7].split(","))
 if sys.argv[6] == "one-call":  # a threaded robot's swarm decides in one call, on one thread
     import dream.swarm.engine
     dream.swarm.engine.threads = lambda: 1
@@ -66,7 +76,7 @@ def progress(step, cap):
         profile.enable()
 
 start = time.perf_counter()
-result = dream.run(find(name), n=n, steps=steps, backend="fast", swarm=True, progress=progress)
+result = dream.run(find(name), n=n, steps=steps, backend="fast", swarm=True, progress=progress, faults=faults)
 profile.disable()
 gaps = [b - a for a, b in zip(stamps, stamps[1:])]
 own = sorted(((row[2], f[2]) for f, row in pstats.Stats(profile).stats.items()), reverse=True) if top else []
@@ -142,10 +152,12 @@ def one_run(
     timeout: float,
     top: int = 0,
     one_call: bool = False,
+    faults: str = "none",
 ) -> dict[str, Any] | str:
-    """The figures of one run, or why there are none."""
+    """The figures of one run (with the world's ``faults``, as ``--faults`` gives a set), or why
+    there are none."""
     how = "one-call" if one_call else "blocks"
-    return _child([ONE_RUN, name, str(n), str(steps), str(warm_up), str(top), how], threads, timeout)
+    return _child([ONE_RUN, name, str(n), str(steps), str(warm_up), str(top), how, faults], threads, timeout)
 
 
 def _child(script: list[str], threads: int | None, timeout: float) -> dict[str, Any] | str:
@@ -219,7 +231,21 @@ def main() -> None:
         action="store_true",
         help="decide a threaded robot's swarm in one call (SwarmRobot.threaded's A/B: the default cuts it in blocks)",
     )
+    parser.add_argument(
+        "--faults",
+        nargs="+",
+        default=["none"],
+        metavar="SET",
+        help="sets of the world's faults to run each experiment with, one row each: KIND=VALUE options "
+        "(as the CLI's --fault) joined by commas, or none (default: none)",
+    )
     args = parser.parse_args()
+    for faults in args.faults:
+        if faults != "none":
+            try:
+                dream.Faults.parse(faults.split(","))
+            except ValueError as err:
+                parser.error(str(err))
     print(machine())
     threads: list[int | None] = list(args.threads) if args.threads else [None]
     if args.steps < args.warm_up + 2:
@@ -233,33 +259,32 @@ def main() -> None:
         f"{'in one call' if args.one_call else 'in blocks on the threads (threaded robots)'}"
     )
     print(
-        f"| experiment | robots | threads | step (ms) | robot-steps/s | µs per robot-step | set-up (s) "
-        f"| peak RSS | above 200 MiB, per robot | scaling |\n|{'---|' * 10}"
+        f"| experiment | robots | faults | threads | step (ms) | robot-steps/s | µs per robot-step | set-up (s) "
+        f"| peak RSS | above 200 MiB, per robot | scaling |\n|{'---|' * 11}"
     )
     breakdowns: list[str] = []
-    for name in args.experiments:
-        for asked in args.robots:
-            n = asked - asked % GROUPS.get(name, 1)
-            first: float | None = None
-            for count in threads:
-                got = one_run(name, n, args.steps, args.warm_up, count, args.timeout, args.breakdown, args.one_call)
-                shown = "all" if count is None else str(count)
-                if isinstance(got, str):
-                    print(f"| {name} | {n:,} | {shown} | {got} | | | | | | |", flush=True)
-                    continue
-                step = got["step_s"]
-                first = step if first is None else first
-                rss = got["rss"] / 2**20
-                print(
-                    f"| {name} | {n:,} | {shown} | {step * 1e3:,.1f} | {n / step:,.0f} | {step / n * 1e6:.2f} "
-                    f"| {got['setup_s']:.1f} | {rss:,.0f} MiB | {max(got['rss'] - FIXED, 0) / n / 1024:.2f} KiB "
-                    f"| {first / step:.1f}x |",
-                    flush=True,
-                )
-                if args.breakdown:
-                    parts = ", ".join(f"{short(what)} {seconds * 1e3:,.1f}" for what, seconds in got["own"])
-                    totals = f"Rust kernels {got['rust_s'] * 1e3:,.1f}, the rest {got['rest_s'] * 1e3:,.1f}"
-                    breakdowns.append(f"- {name}, {n:,} robots, {shown} threads ({totals}): {parts}")
+    for name, asked, faults in itertools.product(args.experiments, args.robots, args.faults):
+        n = asked - asked % GROUPS.get(name, 1)
+        first: float | None = None
+        for count in threads:
+            got = one_run(name, n, args.steps, args.warm_up, count, args.timeout, args.breakdown, args.one_call, faults)
+            shown = "all" if count is None else str(count)
+            if isinstance(got, str):
+                print(f"| {name} | {n:,} | {faults} | {shown} | {got} | | | | | | |", flush=True)
+                continue
+            step = got["step_s"]
+            first = step if first is None else first
+            rss = got["rss"] / 2**20
+            print(
+                f"| {name} | {n:,} | {faults} | {shown} | {step * 1e3:,.1f} | {n / step:,.0f} | {step / n * 1e6:.2f} "
+                f"| {got['setup_s']:.1f} | {rss:,.0f} MiB | {max(got['rss'] - FIXED, 0) / n / 1024:.2f} KiB "
+                f"| {first / step:.1f}x |",
+                flush=True,
+            )
+            if args.breakdown:
+                parts = ", ".join(f"{short(what)} {seconds * 1e3:,.1f}" for what, seconds in got["own"])
+                totals = f"Rust kernels {got['rust_s'] * 1e3:,.1f}, the rest {got['rest_s'] * 1e3:,.1f}"
+                breakdowns.append(f"- {name}, {n:,} robots, faults {faults}, {shown} threads ({totals}): {parts}")
     if breakdowns:
         print(
             "\nOwn time per step (ms, cProfile of the steps the mean covers, on the main thread: decisions in"

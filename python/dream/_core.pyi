@@ -9,6 +9,7 @@ from numpy.typing import NDArray
 __version__: str
 __all__ = [
     "__version__",
+    "draws",
     "unicycle_step",
     "threshold_velocities",
     "threshold_wheels",
@@ -80,6 +81,12 @@ def dxi_to_dxu(
 
 def dxu_to_dxi(dxu: NDArray[np.float64], headings: NDArray[np.float64], projection: float) -> NDArray[np.float64]:
     """Velocities (2, n) of the points projection ahead of robots of headings (n,) driven by commands (2, n)."""
+
+def draws(
+    seed: int, stream: int, step: int, keys: Sequence[NDArray[np.int64]], kinds: str, rows: int, columns: int
+) -> NDArray[np.float64]:
+    """The (rows, columns) uniform draws in [0, 1) of `stream` at `step`: each key a word for every
+    draw (kind a), one per row (r) or one per column (c), hashed in order (see dream.swarm.draws)."""
 
 def hypot(x: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray[np.float64]:
     """math.hypot(x[i], y[i]) for the arrays x, y (n,), to the bit."""

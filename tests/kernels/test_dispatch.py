@@ -11,6 +11,7 @@ import pytest
 from dream import _core, _reference, kernels
 from dream.kernels import _dispatch
 from dream.specs import RPS2
+from dream.swarm import draws
 
 CORE_KERNELS = sorted(set(_core.__all__) - {"__version__"})
 
@@ -82,6 +83,7 @@ def test_every_public_kernel_goes_through_the_dispatch(monkeypatch):
     counters, sides = np.zeros(2, dtype=np.int64), np.ones(2)
     kernels.sidestep_ask(points, [0, 1], counters, sides)
     kernels.sidestep_mark(points, points, [0, 1], counters, sides, 10)
+    draws.uniform(1, draws.LOSS, 0, [0, 1])  # the swarm engine's random draws, not a public kernel
     assert recorder.asked == set(CORE_KERNELS)
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import importlib.util
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -14,6 +15,7 @@ import dream
 from dream import Faults, timers
 from dream.experiments.files import load_file
 from dream.swarm import Avoid, Movement, Radio, SwarmRobot, View, draws
+from dream.swarm.engine import Engine
 
 ROOT = Path(__file__).resolve().parents[2]
 EVERY_FAULT = Faults.every_kind()
@@ -362,6 +364,24 @@ def test_draws_depend_on_keys_not_on_order():
     normal = draws.normal(5, draws.DETECTION_NOISE, 7, keys)
     assert abs(normal.mean()) < 0.1 and abs(normal.std() - 1) < 0.1
     assert not np.array_equal(together, draws.uniform(6, draws.LOSS, 7, keys, keys[::-1]))  # the seed counts
+
+
+def test_loss_bursts_follow_each_link_as_a_set_of_links_does(rng):
+    """The engine's links in a burst (a sorted array, looked up by bisection) against a Python set
+    of links, step by step: messages heard in any order, a link heard twice in a step."""
+    n, (enter, leave) = 50, (0.3, 0.4)
+    engine = SimpleNamespace(n=n, seed=3, lossy=np.zeros(0, dtype=np.int64))
+    bursts: set[int] = set()
+    for t in range(60):
+        me, others = rng.integers(0, n, 400), rng.integers(0, n, 400)
+        now = Engine._burst(engine, t, me, others, (enter, leave))  # type: ignore[arg-type]
+        links = me * n + others
+        was = np.array([link in bursts for link in links.tolist()], dtype=bool)
+        flip = draws.uniform(3, draws.BURST, t, me, others) < np.where(was, leave, enter)
+        assert np.array_equal(now, was ^ flip)
+        bursts = (bursts - set(links[was & ~now].tolist())) | set(links[now & ~was].tolist())
+        assert engine.lossy.tolist() == sorted(bursts)
+    assert 0 < len(bursts) < n * n
 
 
 @pytest.mark.parametrize(

@@ -12,6 +12,7 @@
 //! - [`error`]: the one error type, [`GeomError`], and the input checks every kernel shares.
 //!
 //! Kernels:
+//! - [`draws`]: counter-based random draws (noise, losses, lies), the same whoever asks and when.
 //! - [`dynamics`]: unicycle Euler step, rps velocity thresholding and validation counts,
 //!   single-integrator to unicycle conversion and actuator limiting, for the whole swarm.
 //! - [`grid`]: the uniform grid behind neighbour queries.
@@ -29,6 +30,7 @@
 //! - [`tables`]: rows of per-robot tables copied out and back (the swarm engine's memory).
 
 pub mod csr;
+pub mod draws;
 pub mod dynamics;
 pub mod error;
 pub mod geom;

