@@ -9,6 +9,7 @@ from numpy.typing import NDArray
 __version__: str
 __all__ = [
     "__version__",
+    "bursts",
     "draws",
     "unicycle_step",
     "threshold_velocities",
@@ -81,6 +82,12 @@ def dxi_to_dxu(
 
 def dxu_to_dxi(dxu: NDArray[np.float64], headings: NDArray[np.float64], projection: float) -> NDArray[np.float64]:
     """Velocities (2, n) of the points projection ahead of robots of headings (n,) driven by commands (2, n)."""
+
+def bursts(
+    lossy: NDArray[np.int64], links: NDArray[np.int64], draws: NDArray[np.float64], enter: float, leave: float
+) -> tuple[NDArray[np.bool_], NDArray[np.int64]]:
+    """Whether each message over `links` is sent in a loss burst, and the links in a burst after them
+    (strictly increasing, as `lossy`): a link flips where its draw is below `leave` (in one) or `enter`."""
 
 def draws(
     seed: int, stream: int, step: int, keys: Sequence[NDArray[np.int64]], kinds: str, rows: int, columns: int

@@ -4,6 +4,7 @@ which take the same arguments, and every public kernel goes through it."""
 from __future__ import annotations
 
 import inspect
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -11,7 +12,7 @@ import pytest
 from dream import _core, _reference, kernels
 from dream.kernels import _dispatch
 from dream.specs import RPS2
-from dream.swarm import draws
+from dream.swarm.engine import Engine
 
 CORE_KERNELS = sorted(set(_core.__all__) - {"__version__"})
 
@@ -83,7 +84,9 @@ def test_every_public_kernel_goes_through_the_dispatch(monkeypatch):
     counters, sides = np.zeros(2, dtype=np.int64), np.ones(2)
     kernels.sidestep_ask(points, [0, 1], counters, sides)
     kernels.sidestep_mark(points, points, [0, 1], counters, sides, 10)
-    draws.uniform(1, draws.LOSS, 0, [0, 1])  # the swarm engine's random draws, not a public kernel
+    # The swarm engine's random draws and loss bursts, not public kernels.
+    engine = SimpleNamespace(n=2, seed=1, lossy=np.zeros(0, dtype=np.int64))
+    Engine._burst(engine, 0, np.array([0, 1]), np.array([1, 0]), (0.5, 0.5))  # type: ignore[arg-type]
     assert recorder.asked == set(CORE_KERNELS)
 
 

@@ -12,6 +12,7 @@
 //! - [`error`]: the one error type, [`GeomError`], and the input checks every kernel shares.
 //!
 //! Kernels:
+//! - [`bursts`]: loss bursts on radio links (Gilbert-Elliott channels), the links in a burst kept sorted.
 //! - [`draws`]: counter-based random draws (noise, losses, lies), the same whoever asks and when.
 //! - [`dynamics`]: unicycle Euler step, rps velocity thresholding and validation counts,
 //!   single-integrator to unicycle conversion and actuator limiting, for the whole swarm.
@@ -29,6 +30,7 @@
 //! - [`sidestep`]: the side-step counters and sides of the robots deciding, read and written in place.
 //! - [`tables`]: rows of per-robot tables copied out and back (the swarm engine's memory).
 
+pub mod bursts;
 pub mod csr;
 pub mod draws;
 pub mod dynamics;

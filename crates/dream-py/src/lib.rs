@@ -2,6 +2,7 @@
 //! releases the GIL around the kernel, moves the result out and maps errors to `ValueError`.
 
 mod arrays;
+mod bursts;
 mod draws;
 mod dynamics;
 mod errors;
@@ -25,6 +26,7 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(bursts::bursts, m)?)?;
     m.add_function(wrap_pyfunction!(draws::draws, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::unicycle_step, m)?)?;
     m.add_function(wrap_pyfunction!(dynamics::threshold_velocities, m)?)?;

@@ -7,6 +7,7 @@ They depend on NumPy alone. Every kernel that :mod:`dream._core` has is here und
 name and takes the same arguments, so that :mod:`dream.kernels` calls either one alike.
 """
 
+from dream._reference.bursts import bursts
 from dream._reference.draws import draws
 from dream._reference.dynamics import (
     actuator_limit,
@@ -39,6 +40,7 @@ from dream._reference.tables import put_rows, take_rows
 from dream._reference.voronoi import heard_cells, voronoi_cell, voronoi_cells
 
 __all__ = [
+    "bursts",
     "draws",
     "sidestep_ask",
     "sidestep_mark",

@@ -36,6 +36,7 @@ from dream import kernels
 from dream._checks import all_finite, per_robot
 from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
 from dream.kernels import VoronoiCells
+from dream.kernels._dispatch import implementation
 from dream.kernels._neighbours import Heard, Perceived
 from dream.obstacles import sensed
 from dream.sensors import seen_velocity
@@ -566,20 +567,9 @@ class Engine:
         )
 
     def _burst(self, t: int, me: np.ndarray, others: np.ndarray, burst: tuple[float, float]) -> np.ndarray:
-        """Each link's Gilbert-Elliott state after this message (True: in a loss burst). The links in
-        a burst are kept sorted and looked up by bisection: sets rebuilt by NumPy's set routines
-        each step cost 14 times the rest of a step at 100,000 robots."""
-        links, lossy = me * self.n + others, self.lossy
-        at = np.searchsorted(lossy, links)
-        was = np.zeros(len(links), dtype=bool)
-        inside = at < len(lossy)
-        was[inside] = lossy[at[inside]] == links[inside]
-        flip = draws.uniform(self.seed, draws.BURST, t, me, others) < np.where(was, burst[1], burst[0])
-        now = was ^ flip
-        stays = np.ones(len(lossy), dtype=bool)
-        stays[at[was & ~now]] = False  # bursts that end
-        kept, entered = lossy[stays], np.unique(links[now & ~was])
-        self.lossy = np.insert(kept, np.searchsorted(kept, entered), entered)
+        """Each link's Gilbert-Elliott state after this message (True: in a loss burst)."""
+        flips = draws.uniform(self.seed, draws.BURST, t, me, others)
+        now, self.lossy = implementation("bursts")(self.lossy, me * self.n + others, flips, *burst)
         return now
 
     def _message(self, said: dict[str, np.ndarray], k: int) -> dict[str, np.ndarray]:
