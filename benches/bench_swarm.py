@@ -17,8 +17,8 @@ Run::
     python benches/bench_swarm.py -n 1000 10000 100000 1000000 --threads 1 2 4 8 16
     python benches/bench_swarm.py -e hrvo-circle examples/rendezvous.py --steps 30
     python benches/bench_swarm.py -n 100000 --steps 112 --baseline OLDER/_core.abi3.so
-    python benches/bench_swarm.py -e examples/rendezvous.py -n 100000 --steps 70 --faults none loss=0.3 \
-        burst=0.05:0.3 sensor_noise=0.01,sensor_dropout=0.05
+    python benches/bench_swarm.py -e examples/rendezvous.py -n 100000 --steps 70 --faults none loss=0.3
+    python benches/bench_swarm.py -n 100000 --faults burst=0.05:0.3 sensor_noise=0.01,sensor_dropout=0.05
 
 ``--faults`` runs each experiment once with each set of faults (the CLI's ``--fault KIND=VALUE``
 options, comma-separated; ``none`` for a run without), one row each: what the world's faults cost a
@@ -251,6 +251,8 @@ def main() -> None:
     if args.steps < args.warm_up + 2:
         parser.error(f"--steps must be at least --warm-up + 2 = {args.warm_up + 2}")
     if args.baseline:
+        if args.faults != ["none"]:
+            parser.error("--baseline runs without faults: give --faults or --baseline, not both")
         versus(args, args.baseline)
         return
     print(

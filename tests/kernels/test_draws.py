@@ -112,3 +112,21 @@ def test_broadcast_keys_draw_each_elements_own_numbers(core, rng):
     assert integers.min() >= -2 and integers.max() <= 2
     expected = [-2 + int(hashed_uniform(9, [draws.CLOCK_JITTER, 4, m]) * 5) for m in me]
     assert integers.tolist() == expected
+
+
+@pytest.mark.parametrize("core", [_core, None], ids=["rust", "numpy"])
+@pytest.mark.parametrize("seed", [0, 2**63 + 5, 2**64 - 1, -1, -(2**70)])
+def test_edge_shapes_and_seeds(core, seed):
+    """Empty tables, a lone column, 0-d keys and seeds beyond int64 (taken modulo 2^64)."""
+    _dispatch._core, saved = core, _dispatch._core
+    try:
+        empty = draws.uniform(seed, draws.LIE, 1, np.zeros((0, 1), dtype=np.int64), np.arange(3))
+        column = draws.uniform(seed, draws.LIE, 1, np.arange(5)[:, None], np.zeros((1, 1), dtype=np.int64))
+        scalar = draws.uniform(seed, draws.LIE, 1, np.int64(7), 3)
+        nothing = draws.normal(seed, draws.LIE, 1)
+    finally:
+        _dispatch._core = saved
+    assert empty.shape == (0, 3) and column.shape == (5, 1)
+    assert column[:, 0].tolist() == [hashed_uniform(seed, [draws.LIE, 1, k, 0]) for k in range(5)]
+    assert type(scalar) is np.float64 and scalar == hashed_uniform(seed, [draws.LIE, 1, 7, 3])
+    assert type(nothing) is np.float64 and np.isfinite(nothing)

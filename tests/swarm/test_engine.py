@@ -367,8 +367,8 @@ def test_draws_depend_on_keys_not_on_order():
 
 
 def test_loss_bursts_follow_each_link_as_a_set_of_links_does(rng):
-    """The engine's links in a burst (a sorted array, looked up by bisection) against a Python set
-    of links, step by step: messages heard in any order, a link heard twice in a step."""
+    """The engine's links in a burst (a sorted array, kept by the ``bursts`` kernel) against a Python
+    set of links, step by step: messages heard in any order, a link heard twice in a step."""
     n, (enter, leave) = 50, (0.3, 0.4)
     engine = SimpleNamespace(n=n, seed=3, lossy=np.zeros(0, dtype=np.int64))
     bursts: set[int] = set()

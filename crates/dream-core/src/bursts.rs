@@ -24,12 +24,13 @@ const TASK_LINKS: usize = 16_384;
 /// each message was sent in a burst, and `lossy` less the links whose burst ended and with those
 /// whose burst began. A link with several messages in the step: each flips from the state before
 /// the step; the link's burst ends if one of them ends it, begins if one begins it. `links` in any
-/// order; sorted (the engine's inboxes: rows by increasing id, each row by increasing id) they
-/// need no sort.
+/// order; sorted (a range radio's inboxes: rows by increasing id, each row by increasing id) they
+/// need no sort (a graph radio's come in the graph's order, and are sorted first).
 ///
 /// # Errors
 /// [`GeomError::LengthMismatch`] for `draws`; [`GeomError::InvalidParameter`] for a probability
-/// outside [0, 1] or a `lossy` that is not strictly increasing; [`GeomError::OutOfMemory`].
+/// outside [0, 1]; [`GeomError::NotIncreasing`] for a `lossy` that is not strictly increasing;
+/// [`GeomError::OutOfMemory`].
 pub fn bursts(lossy: &[i64], links: &[i64], draws: &[f64], enter: f64, leave: f64) -> Result<(Vec<bool>, Vec<i64>)> {
     check_len("draws", links.len(), draws.len())?;
     for (arg, p) in [("enter", enter), ("leave", leave)] {
@@ -42,10 +43,9 @@ pub fn bursts(lossy: &[i64], links: &[i64], draws: &[f64], enter: f64, leave: f6
         }
     }
     if let Some(k) = lossy.windows(2).position(|pair| pair[0] >= pair[1]) {
-        return Err(GeomError::InvalidParameter {
+        return Err(GeomError::NotIncreasing {
             arg: "lossy",
-            rule: "strictly increasing",
-            got: lossy[k + 1] as f64,
+            index: k + 1,
         });
     }
     // The messages in order of their links: as given when sorted, else through a sorted order.
@@ -181,9 +181,10 @@ mod tests {
     #[test]
     fn bad_input_is_named() {
         assert!(matches!(
-            bursts(&[3, 2], &[], &[], 0.1, 0.1),
-            Err(GeomError::InvalidParameter { arg: "lossy", .. })
+            bursts(&[1, 3, 2], &[], &[], 0.1, 0.1),
+            Err(GeomError::NotIncreasing { arg: "lossy", index: 2 })
         ));
+        assert!(bursts(&[i64::MIN, i64::MAX], &[i64::MAX], &[0.5], 0.1, 0.1).is_ok());
         assert!(matches!(
             bursts(&[], &[1], &[], 0.1, 0.1),
             Err(GeomError::LengthMismatch { arg: "draws", .. })

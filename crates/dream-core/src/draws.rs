@@ -14,7 +14,7 @@
 
 use rayon::prelude::*;
 
-use crate::error::{check_len, try_filled, Result};
+use crate::error::{check_len, try_filled, GeomError, Result};
 use crate::parallel::{worth_spreading, TASK_ITEMS};
 
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
@@ -54,8 +54,9 @@ fn unit(h: u64) -> f64 {
 /// word for row r and column j, in order.
 ///
 /// # Errors
-/// [`crate::GeomError::LengthMismatch`] for a row key of other than `rows` words or a column key
-/// of other than `columns`; [`crate::GeomError::OutOfMemory`] where the table cannot be allocated.
+/// [`GeomError::LengthMismatch`] for a row key of other than `rows` words or a column key of other
+/// than `columns`; [`GeomError::InvalidParameter`] for more draws than a `usize` counts;
+/// [`GeomError::OutOfMemory`] where the table cannot be allocated.
 pub fn draws(seed: u64, stream: i64, step: i64, keys: &[Key<'_>], rows: usize, columns: usize) -> Result<Vec<f64>> {
     for key in keys {
         match key {
@@ -64,7 +65,14 @@ pub fn draws(seed: u64, stream: i64, step: i64, keys: &[Key<'_>], rows: usize, c
             Key::Column(words) => check_len("column keys", columns, words.len())?,
         }
     }
-    let mut out = try_filled(rows.saturating_mul(columns), 0.0, "random draws")?;
+    let Some(count) = rows.checked_mul(columns) else {
+        return Err(GeomError::InvalidParameter {
+            arg: "rows",
+            rule: "such that rows x columns draws can be counted",
+            got: rows as f64,
+        });
+    };
+    let mut out = try_filled(count, 0.0, "random draws")?;
     if columns == 0 {
         return Ok(out);
     }
@@ -160,5 +168,9 @@ mod tests {
         assert!(draws(0, 0, 0, &[Key::Column(&three)], 1, 2).is_err());
         assert_eq!(draws(0, 0, 0, &[Key::Row(&[])], 0, 5).unwrap().len(), 0);
         assert_eq!(draws(0, 0, 0, &[], 4, 0).unwrap().len(), 0);
+        assert!(matches!(
+            draws(0, 0, 0, &[], usize::MAX, 2),
+            Err(GeomError::InvalidParameter { arg: "rows", .. })
+        ));
     }
 }

@@ -35,6 +35,9 @@ pub enum GeomError {
         rows: usize,
         reason: String,
     },
+    /// Values that must be strictly increasing (a sorted set) are not, first at `index`.
+    #[error("`{arg}` is not strictly increasing at index {index}")]
+    NotIncreasing { arg: &'static str, index: usize },
     /// An index into a per-robot array that names no row of it.
     #[error("`{arg}` holds {index}, which is not a row of the {len} it indexes")]
     IndexOutOfBounds { arg: &'static str, index: i64, len: usize },

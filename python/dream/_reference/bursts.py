@@ -15,13 +15,17 @@ def bursts(
     flips state where its draw (``draws``, uniform) is below ``leave`` (in a burst) or ``enter``
     (not), each from the state before the step; a link's burst ends if one of its messages ends
     it, begins if one begins it. The links are looked up by bisection."""
+    for name, values in (("lossy", lossy), ("links", links)):
+        if not isinstance(values, np.ndarray) or values.dtype != np.int64:
+            raise ValueError(f"`{name}` must be a NumPy array of int64")
     if len(draws) != len(links):
         raise ValueError(f"`draws` must have shape ({len(links)},), got {list(np.shape(draws))}")
     for name, p in (("enter", enter), ("leave", leave)):
         if not 0.0 <= p <= 1.0:
             raise ValueError(f"`{name}` must be finite and a probability in [0, 1], got {p}")
-    if len(lossy) > 1 and not (np.diff(lossy) > 0).all():
-        raise ValueError("`lossy` must be finite and strictly increasing")
+    falls = np.flatnonzero(lossy[1:] <= lossy[:-1])  # compared, not subtracted: no overflow
+    if len(falls):
+        raise ValueError(f"`lossy` is not strictly increasing at index {falls[0] + 1}")
     at = np.searchsorted(lossy, links)
     was = np.zeros(len(links), dtype=bool)
     inside = at < len(lossy)

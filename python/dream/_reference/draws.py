@@ -1,4 +1,4 @@
-"""Counter-based random draws: each number a hash of (seed, stream, step, keys) (see :mod:`dream.draws`).
+"""Counter-based random draws: each number a hash of (seed, stream, step, keys) (see :mod:`dream.swarm.draws`).
 
 The hash absorbs one 64-bit word at a time: the word times the golden ratio is XORed in and
 SplitMix64's finaliser applied; a draw is the hash's 53 high bits over 2^53. The draws come as a
@@ -49,7 +49,7 @@ def draws(
         if kind == "a":
             if words.size != 1:
                 raise ValueError(f"a key of kind `a` holds one word, got {words.size}")
-            h = _absorb(h, words[0])
+            h = _absorb(h, words.reshape(-1)[0])
         elif kind == "r":
             h = _absorb(h, np.repeat(_sized(words, rows, "row"), columns))
         elif kind == "c":

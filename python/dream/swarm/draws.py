@@ -32,7 +32,7 @@ def uniform(seed: int, stream: int, step: int, *keys: Any) -> FloatArray:
         rows, columns = math.prod(shape), 1
     flat = [np.ascontiguousarray(w.reshape(-1)) for w in words]
     table = implementation("draws")(seed % 2**64, stream, step, flat, kinds, rows, columns)
-    return np.asarray(table).reshape(shape)
+    return np.asarray(table).reshape(shape)[()]  # no keys, or 0-d ones: a float64, not a 0-d array
 
 
 def normal(seed: int, stream: int, step: int, *keys: Any) -> FloatArray:

@@ -231,8 +231,8 @@ class Neighbourhood:
         columns = {name: column[keep] for name, column in self.columns.items()}
         gathered = None
         if self.index is not None:  # often a column itself (an inbox's senders): taken once
-            same = [name for name, column in self.columns.items() if column is self.index]
-            gathered = (columns[same[0]] if same else self.index[keep], self.sources)
+            same = next((name for name, column in self.columns.items() if column is self.index), None)
+            gathered = (self.index[keep] if same is None else columns[same], self.sources)
         return Neighbourhood(kept, columns, gathered, self.derived)
 
     def frozen(self) -> Neighbourhood:
