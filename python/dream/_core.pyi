@@ -182,11 +182,13 @@ def perceive(
     carried: Sequence[_Floats] | None = None,
     bearings: bool = True,
     summed: Sequence[_Floats] | None = None,
+    loss: tuple[int, int, int, float, float] | None = None,
 ) -> tuple[tuple[NDArray[Any], ...], tuple[NDArray[Any], ...]]:
     """(seen (offsets, ids, distances, bearings, dx, dy, *carried), heard (offsets, ids, distances,
-    *summed)) of the robots `rows`; each of `carried` (n,) is read at the robots seen; bearings empty
-    unless `bearings`; each of `summed` (n,) is added up over each row heard, whose ids and distances
-    are then left empty."""
+    lost, *summed)) of the robots `rows`; each of `carried` (n,) is read at the robots seen; bearings
+    empty unless `bearings`; each of `summed` (n,) is added up over each row heard, whose ids and
+    distances are then left empty (none given: only counted); `lost` counts each row's messages lost
+    to `loss` (seed, stream, step, keep, per_metre), empty without."""
 
 def segment_reduce(values: _Floats, offsets: _Ints, op: str, index: _Ints | None = None) -> _Floats:
     """op (sum, mean, min, max) of each row's entries of values (k, w): (m, w)."""
@@ -245,9 +247,11 @@ def heard_cells(
     radius: float,
     bounds: _Bounds,
     resolution: int = 64,
+    loss: tuple[int, int, int, float, float] | None = None,
 ) -> tuple[_Floats, _Floats, _Floats, _Ints]:
     """(centroids (k, 2), areas (k,), vertices (m, 2), offsets (k+1,)) of the cells of robots that
-    know the others by range radio, by sight and by virtual agents."""
+    know the others by range radio (through its loss, as perceive draws it), by sight and by
+    virtual agents."""
 
 def virtual_agents(
     positions: _Floats, vertices: _Floats, offsets: _Ints, *, range: float, offset: float

@@ -25,13 +25,18 @@ class Traffic:
         self.heard = np.zeros(n, dtype=np.int64)
         self.lost = np.zeros(n, dtype=np.int64)
 
-    def received(self, rows: np.ndarray, offsets: np.ndarray, through: np.ndarray | None = None) -> None:
+    def received(
+        self, rows: np.ndarray, offsets: np.ndarray, through: np.ndarray | None = None, lost: np.ndarray | None = None
+    ) -> None:
         """Count the messages of inboxes given in CSR form: robot ``rows[i]`` was offered the
         messages ``offsets[i]:offsets[i + 1]``, of which ``through`` ``(m,)`` bool got through
-        (``None``: all did)."""
+        (``None``: all did, and ``lost`` ``(k,)``, where given, counts those lost before: the
+        losses drawn where the messages were found)."""
         offered = np.diff(offsets)
         if through is None:
             np.add.at(self.heard, rows, offered)
+            if lost is not None:
+                np.add.at(self.lost, rows, lost)
             return
         passed = np.concatenate(([0], np.cumsum(through)))
         got = passed[offsets[1:]] - passed[offsets[:-1]]

@@ -9,6 +9,7 @@ import pytest
 from numpy.testing import assert_array_equal
 
 from dream import _core, _reference, kernels
+from dream._reference.draws import delivered
 
 BOUNDS = (-2.0, 2.0, -1.5, 1.5)
 
@@ -53,8 +54,9 @@ def csr(parts, counts):
     return np.concatenate(([0], np.cumsum(counts))).astype(np.int64), np.vstack([np.zeros((0, 2)), *parts])
 
 
-def both(s, radius=1.0, range_=2.0, same=0.08, bounds=BOUNDS, resolution=32):
-    """The Rust pass's and the reference's ``(centroids, areas, vertices, offsets)``."""
+def both(s, radius=1.0, range_=2.0, same=0.08, bounds=BOUNDS, resolution=32, loss=None):
+    """The Rust pass's and the reference's ``(centroids, areas, vertices, offsets)`` (through the
+    radio's ``loss``, if any)."""
     args = (s["here"], s["hearers"], s["positions"], s["said"], s["said_now"])
     kw = dict(
         range=range_,
@@ -66,6 +68,7 @@ def both(s, radius=1.0, range_=2.0, same=0.08, bounds=BOUNDS, resolution=32):
         radius=radius,
         bounds=bounds,
         resolution=resolution,
+        loss=loss,
     )
     return _core.heard_cells(*args, **kw), _reference.heard_cells(*args, **kw)
 
@@ -173,6 +176,100 @@ def test_heard_cells_bad_parameters_are_value_errors(rng, bad):
             seen_points=s["seen"][1], virtual_indptr=s["virtual"][0], virtual_points=s["virtual"][1],
             bounds=BOUNDS, **kw,
         )  # fmt: skip
+
+
+LOSSES = [(0.5, 0.0), (0.9, 0.4)]
+
+
+@pytest.mark.parametrize(("keep", "per_metre"), LOSSES, ids=["flat", "fading"])
+@pytest.mark.parametrize(
+    ("n", "side", "range_", "radius"),
+    [(1, 1.0, 2.0, 1.0), (120, 3.0, 2.0, 1.0), (150, 12.0, 1.0, 0.5), (700, 4.0, 2.0, 1.0)],
+)
+def test_heard_cells_lose_messages_as_the_reference_draws_them(rng, n, side, range_, radius, keep, per_metre):
+    """Through a lossy radio the Rust pass is still the reference to the bit, and the loss is
+    felt: with a good share of the messages lost, many cells change (a robot's cell grows where
+    its message is lost, or is clipped by its sighting instead)."""
+    s = scene(rng, n, side)
+    bounds = (-side / 2, side / 2, -side / 2, side / 2)
+    loss = kernels.Loss(int(rng.integers(2**64, dtype=np.uint64)), 3, 11, keep, per_metre)
+    got, want = both(s, radius=radius, range_=range_, bounds=bounds, loss=loss)
+    for a, b in zip(got, want, strict=True):
+        assert_array_equal(a, b)
+    lossless, _ = both(s, radius=radius, range_=range_, bounds=bounds)
+    if n >= 120:
+        assert (got[1] != lossless[1]).mean() > 0.3
+
+
+@pytest.mark.parametrize(("keep", "per_metre"), LOSSES, ids=["flat", "fading"])
+def test_a_lossy_hearers_cell_is_its_cell_without_the_messages_lost(rng, keep, per_metre):
+    """Each hearer's cell through the loss is the cell it computes alone, without a loss, from
+    messages of which those :func:`delivered` drops for it (hearer, sender, distance) were never
+    said."""
+    s = scene(rng, 150, 3.0)
+    loss = kernels.Loss(2**64 - 5, -2, 40, keep, per_metre)
+    kw = dict(range=2.0, same=0.08, radius=1.0, bounds=BOUNDS, polygons=True)
+    args = (s["here"], s["hearers"], s["positions"], s["said"], s["said_now"])
+    cells = kernels.heard_cells(*args, seen=s["seen"], virtual=s["virtual"], loss=loss, **kw)
+    dropped = 0
+    for r, i in enumerate(s["hearers"][:25]):
+        near, distances = kernels.neighbours_of(s["positions"], int(i), 2.0)
+        lost = near[~delivered(loss, np.full(len(near), i), near, distances)]
+        dropped += len(lost)
+        said, said_now = s["said"].copy(), s["said_now"].copy()
+        said[lost] = said_now[lost] = np.nan
+        seen = (
+            np.array([0, s["seen"][0][r + 1] - s["seen"][0][r]]),
+            s["seen"][1][s["seen"][0][r] : s["seen"][0][r + 1]],
+        )
+        virtual = (
+            np.array([0, s["virtual"][0][r + 1] - s["virtual"][0][r]]),
+            s["virtual"][1][s["virtual"][0][r] : s["virtual"][0][r + 1]],
+        )
+        alone = kernels.heard_cells(
+            s["here"][r : r + 1], [i], s["positions"], said, said_now, seen=seen, virtual=virtual, **kw
+        )
+        assert_array_equal(cells.centroids[r], alone.centroids[0])
+        assert cells.areas[r] == alone.areas[0]
+        assert_array_equal(cells.vertices[cells.offsets[r] : cells.offsets[r + 1]], alone.vertices)
+    assert dropped > 25  # messages were lost
+
+
+def test_heard_cells_keep_all_or_lose_all_at_the_bounds(rng):
+    """``keep=1`` with no fading is the lossless radio; ``keep=0`` is a radio on which nothing was
+    said (on both paths)."""
+    s = scene(rng, 150, 3.0)
+    lossless, _ = both(s)
+    unsaid = dict(s, said=np.full_like(s["said"], np.nan), said_now=np.full_like(s["said"], np.nan))
+    deaf, _ = both(unsaid)
+    assert not np.array_equal(lossless[1], deaf[1])
+    for loss, expected in ((kernels.Loss(1, 2, 3, 1.0, 0.0), lossless), (kernels.Loss(1, 2, 3, 0.0, 0.0), deaf)):
+        for cells in both(s, loss=loss):
+            for a, b in zip(cells, expected, strict=True):
+                assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize(
+    ("loss", "message"),
+    [
+        ((1, 2, 3, 1.5, 0.0), r"`keep` must be within \[0, 1\], got 1.5"),
+        ((1, 2, 3, np.nan, 0.0), r"`keep` must be within \[0, 1\], got nan"),
+        ((1, 2, 3, 0.5, -1.0), "`per_metre` must be finite and >= 0, got -1"),
+        ((1, 2, 3, 0.5, np.inf), "`per_metre` must be finite and >= 0, got inf"),
+        ((1, 2, 3.0, 0.5, 0.0), "the loss's step must be an integer, got 3.0"),
+    ],
+)
+def test_heard_cells_bad_loss_is_named(rng, loss, message):
+    s = scene(rng, 10, 3.0)
+    with pytest.raises(ValueError, match=message):
+        kernels.heard_cells(s["here"], s["hearers"], s["positions"], s["said"], range=1.0, loss=kernels.Loss(*loss))
+    if isinstance(loss[2], int):  # the binding checks the values too (in its words): no panic reaches Python
+        with pytest.raises(ValueError, match=message.split()[0]):
+            _core.heard_cells(
+                s["here"], s["hearers"], s["positions"], s["said"], s["said"], range=1.0, seen_indptr=s["seen"][0],
+                seen_points=s["seen"][1], same=0.0, virtual_indptr=s["virtual"][0], virtual_points=s["virtual"][1],
+                radius=1.0, bounds=BOUNDS, loss=loss,
+            )  # fmt: skip
 
 
 def test_heard_cells_at_tiny_and_huge_scales_match_the_reference(rng):

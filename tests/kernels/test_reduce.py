@@ -11,6 +11,7 @@ import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
 from dream import _core, _reference, kernels
+from dream._reference.draws import delivered
 from dream.kernels import _dispatch
 from dream.kernels._hrvo import _bounded, _grid
 
@@ -286,7 +287,8 @@ def test_perceive_matches_the_reference(rng, n, fov, everyone):
                 assert_allclose(a, b, rtol=0, atol=1e-15)
             else:  # offsets, ids, distances, dx, dy, the carried values: the same arithmetic
                 assert_array_equal(a, b)
-    (offsets, seen, distances, bearings, dx, dy, vx, vy), (h_offsets, heard, h_distances) = got
+    (offsets, seen, distances, bearings, dx, dy, vx, vy), (h_offsets, heard, h_distances, lost) = got
+    assert lost.shape == (0,)  # no loss: nothing counted lost
     assert_array_equal(vx, carried[0][seen])  # each robot seen's own value
     assert_array_equal(vy, carried[1][seen])
     assert_allclose(np.hypot(dx, dy), distances, rtol=1e-15)
@@ -328,9 +330,9 @@ def test_a_perceived_row_does_not_depend_on_the_other_rows(rng):
     positions, headings, talking = perceive_scene(rng, 500)
     options = dict(sight=(0.5, 2.0, 0.0), radio_range=1.0, talking=talking)
     rows = np.arange(0, 500, 3)
-    (offsets, seen, *_), (h_offsets, heard, _) = kernels.perceive(positions, headings, rows, **options)
+    (offsets, seen, *_), (h_offsets, heard, *_) = kernels.perceive(positions, headings, rows, **options)
     for r in range(0, len(rows), 17):
-        (o1, s1, *_), (h1, r1, _) = kernels.perceive(positions, headings, rows[r : r + 1], **options)
+        (o1, s1, *_), (h1, r1, *_) = kernels.perceive(positions, headings, rows[r : r + 1], **options)
         assert_array_equal(s1, seen[offsets[r] : offsets[r + 1]])
         assert_array_equal(r1, heard[h_offsets[r] : h_offsets[r + 1]])
 
@@ -388,18 +390,19 @@ def test_perceive_sums_what_is_heard_as_the_reduction_of_its_rows(rng, n, scale,
     want = _reference.perceive(positions, headings, rows, **options, summed=values)
     for a, b in zip(got[0], listed[0], strict=True):
         assert_array_equal(a, b)
-    (offsets, ids, distances, *sums), (listed_offsets, senders, _) = got[1], listed[1]
+    (offsets, ids, distances, lost, *sums), (listed_offsets, senders, *_) = got[1], listed[1]
     assert_array_equal(offsets, listed_offsets)
-    assert ids.shape == distances.shape == (0,)
+    assert ids.shape == distances.shape == lost.shape == (0,)
     reduced = kernels.segment_reduce(np.column_stack(values), offsets, "sum", senders)
-    for column, (mine, theirs) in enumerate(zip(sums, want[1][3:], strict=True)):
+    for column, (mine, theirs) in enumerate(zip(sums, want[1][4:], strict=True)):
         assert_array_equal(mine, reduced[:, column])  # NaN where a row heard one
         assert_array_equal(mine, theirs)
     if n == 3000:  # the cases arose: rows hearing several robots, a NaN summed
         assert offsets[-1] > len(rows) and (columns == 1 or np.isnan(sums[1]).any())
     nobody = _core.perceive(positions, headings, rows[:0], **options, summed=values)[1]
     assert_array_equal(nobody[0], [0])
-    assert len(nobody[3:]) == columns and all(column.shape == (0,) for column in nobody[3:])
+    assert nobody[3].shape == (0,)  # no loss: nothing counted lost
+    assert len(nobody[4:]) == columns and all(column.shape == (0,) for column in nobody[4:])
 
 
 @pytest.mark.parametrize(
@@ -413,7 +416,8 @@ def test_perceive_sums_what_is_heard_as_the_reduction_of_its_rows(rng, n, scale,
         (dict(rows=[0], radio_range=1.0, talking=[True]), "`talking` must"),
         (dict(rows=[0], carried=[np.zeros(2)]), r"`carried` must hold arrays of shape \(3,\)"),
         (dict(rows=[0], carried=[["a", "b", "c"]]), "`carried` must hold float arrays"),
-        (dict(rows=[0], summed=[np.zeros(3)]), "`summed` needs a radio"),
+        (dict(rows=[0], summed=[np.zeros(3)]), "`summed` and `loss` need a radio"),
+        (dict(rows=[0], loss=kernels.Loss(1, 2, 3, 0.5, 0.0)), "`summed` and `loss` need a radio"),
         (
             dict(rows=[0], radio_range=1.0, talking=[True] * 3, summed=[np.zeros(4)]),
             r"`summed` must hold arrays of shape \(3,\)",
@@ -423,6 +427,144 @@ def test_perceive_sums_what_is_heard_as_the_reduction_of_its_rows(rng, n, scale,
 def test_perceive_bad_input_is_named(options, message):
     with pytest.raises(ValueError, match=message):
         kernels.perceive(np.zeros((3, 2)), np.zeros(3), **options)
+
+
+def offsets_kept(offsets, through):
+    """The offsets of the rows ``offsets`` once only the entries ``through`` (bool) are kept."""
+    return np.concatenate(([0], np.cumsum(through)))[offsets].astype(np.int64)
+
+
+@pytest.mark.parametrize("n", [1, 40, 2000])
+@pytest.mark.parametrize("fov", [2 * np.pi, 1.5])
+@pytest.mark.parametrize("per_metre", [0.0, 0.9], ids=["flat", "fading"])
+@pytest.mark.parametrize("scale", [1.0, 1e154], ids=["metres", "squares overflow"])
+def test_perceive_loses_messages_as_the_reference_draws_them(rng, n, fov, per_metre, scale):
+    """A lossy radio, listed, counted (``summed=[]``) and summed (1-3 columns): the Rust kernel's
+    every array as the reference's (``lost`` too), the sensor's rows untouched by the loss, and the
+    rows heard those of the lossless radio that :func:`delivered` lets through (drawn by either
+    draw table): ``lost`` the rest of what each row was offered (silent robots offer nothing)."""
+    positions, headings, talking = perceive_scene(rng, n)
+    positions *= scale
+    rows = np.sort(rng.choice(n, size=max(n // 2, 1), replace=False))
+    options = dict(
+        sight=(0.4 * scale, fov, 0.3), radio_range=0.7 * scale, talking=talking, carried=[rng.normal(size=n)]
+    )
+    seed = int(rng.integers(2**64, dtype=np.uint64))  # all 64 bits of it
+    loss = kernels.Loss(seed, 4, 17, 0.6, per_metre / scale)
+    values = [rng.normal(size=n), np.where(rng.random(n) < 0.05, np.nan, rng.normal(size=n)), rng.normal(size=n)]
+    lossless = _core.perceive(positions, headings, rows, **options)
+    offered_offsets, senders, distances, none_lost = lossless[1]
+    assert none_lost.shape == (0,) and talking[senders].all()
+    hearers = np.repeat(rows, np.diff(offered_offsets))
+    through = delivered(loss, hearers, senders, distances)
+    assert_array_equal(through, delivered(loss, hearers, senders, distances, table=_core.draws))
+    offsets = offsets_kept(offered_offsets, through)
+    lost = np.diff(offered_offsets) - np.diff(offsets)
+    for summed in (None, [], values[:1], values[:2], values):
+        got = _core.perceive(positions, headings, rows, **options, summed=summed, loss=loss)
+        want = _reference.perceive(positions, headings, rows, **options, summed=summed, loss=loss)
+        for mine, theirs in zip(got, want, strict=True):
+            assert len(mine) == len(theirs)
+            for k, (a, b) in enumerate(zip(mine, theirs)):
+                if k == 3 and mine is got[0]:  # bearings: Rust's atan2 and NumPy's, to an ulp
+                    assert_allclose(a, b, rtol=0, atol=1e-15)
+                else:
+                    assert a.dtype == b.dtype
+                    assert_array_equal(a, b)
+        for a, b in zip(got[0], lossless[0], strict=True):  # the loss is the radio's alone
+            assert_array_equal(a, b)
+        heard = got[1]
+        assert len(heard) == 4 + (0 if summed is None else len(summed))
+        assert_array_equal(heard[0], offsets)  # counted or summed rows are the listed rows' counts
+        assert heard[3].dtype == np.int64
+        assert_array_equal(heard[3], lost)
+        if summed is None:
+            assert_array_equal(heard[1], senders[through])
+            assert_array_equal(heard[2], distances[through])
+        else:
+            assert heard[1].shape == heard[2].shape == (0,)
+            for column, sums in zip(summed, heard[4:], strict=True):
+                assert_array_equal(
+                    sums, _reference.segment_reduce(column[:, None], offsets, "sum", senders[through])[:, 0]
+                )
+    if n == 2000:  # not vacuous: some but not all lost, the more the farther when the loss fades
+        assert 0 < lost.sum() < len(senders)
+        assert (lost > 0).any() and (np.diff(offsets) > 0).any()
+        near, far = distances < 0.25 * scale, distances > 0.5 * scale
+        if per_metre:
+            assert through[far].mean() < through[near].mean() - 0.2
+        else:
+            assert abs(through.mean() - 0.6) < 0.01 and abs(through[far].mean() - through[near].mean()) < 0.03
+
+
+@pytest.mark.parametrize("implementation", [_core, _reference], ids=["rust", "reference"])
+def test_perceive_keeps_all_or_loses_all_at_the_bounds(rng, implementation):
+    """``keep=1`` with no fading loses nothing (the lossless rows, ``lost`` all zeros); ``keep=0``
+    loses every message offered, and sums over nothing are +0.0."""
+    n = 400
+    positions, headings, talking = perceive_scene(rng, n)
+    rows = np.sort(rng.choice(n, size=200, replace=False))
+    options = dict(sight=(0.4, 1.5, 0.3), radio_range=0.7, talking=talking)
+    offsets, senders, distances, _ = implementation.perceive(positions, headings, rows, **options)[1]
+    assert len(senders) > 1000
+    values = [rng.normal(size=n)]
+    for summed in (None, [], values):
+        kept = implementation.perceive(
+            positions, headings, rows, **options, summed=summed, loss=kernels.Loss(9, 1, 2, 1.0, 0.0)
+        )
+        assert_array_equal(kept[1][0], offsets)
+        assert_array_equal(kept[1][3], np.zeros(len(rows), dtype=np.int64))
+        if summed is None:
+            assert_array_equal(kept[1][1], senders)
+            assert_array_equal(kept[1][2], distances)
+        gone = implementation.perceive(
+            positions, headings, rows, **options, summed=summed, loss=kernels.Loss(9, 1, 2, 0.0, 0.0)
+        )
+        assert_array_equal(gone[1][0], np.zeros(len(rows) + 1, dtype=np.int64))
+        assert_array_equal(gone[1][3], np.diff(offsets))
+        assert gone[1][1].shape == gone[1][2].shape == (0,)
+        for sums in gone[1][4:]:
+            assert_array_equal(sums, np.zeros(len(rows)))
+            assert not np.signbit(sums).any()
+
+
+def test_perceive_draws_the_loss_of_its_seed_stream_and_step(rng):
+    """The same loss loses the same messages; another step, stream or seed others; a seed is read
+    modulo 2^64 (-1 is 2^64 - 1)."""
+    positions, headings, talking = perceive_scene(rng, 300)
+    options = dict(radio_range=0.7, talking=talking)
+    rows = np.arange(0, 300, 2)
+
+    def heard(*loss):
+        return kernels.perceive(positions, headings, rows, **options, loss=kernels.Loss(*loss))[1]
+
+    first = heard(5, 1, 2, 0.5, 0.0)
+    for a, b in zip(first, heard(5, 1, 2, 0.5, 0.0), strict=True):
+        assert_array_equal(a, b)
+    for other in (heard(5, 1, 3, 0.5, 0.0), heard(5, 2, 2, 0.5, 0.0), heard(6, 1, 2, 0.5, 0.0)):
+        assert_array_equal(other[0][-1] + other[3].sum(), first[0][-1] + first[3].sum())  # as many offered
+        assert not np.array_equal(other[1], first[1])
+    for a, b in zip(heard(-1, 1, 2, 0.5, 0.0), heard(2**64 - 1, 1, 2, 0.5, 0.0), strict=True):
+        assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize(
+    ("loss", "message"),
+    [
+        ((1, 2, 3, 1.5, 0.0), r"`keep` must be within \[0, 1\], got 1.5"),
+        ((1, 2, 3, np.nan, 0.0), r"`keep` must be within \[0, 1\], got nan"),
+        ((1, 2, 3, 0.5, -1.0), "`per_metre` must be finite and >= 0, got -1"),
+        ((1, 2, 3, 0.5, np.inf), "`per_metre` must be finite and >= 0, got inf"),
+        ((1, 2, 3.0, 0.5, 0.0), "the loss's step must be an integer, got 3.0"),
+    ],
+)
+def test_perceive_bad_loss_is_named(loss, message):
+    options = dict(radio_range=1.0, talking=np.ones(3, dtype=bool))
+    with pytest.raises(ValueError, match=message):
+        kernels.perceive(np.zeros((3, 2)), np.zeros(3), [0], **options, loss=kernels.Loss(*loss))
+    if isinstance(loss[2], int):  # the binding checks the values too (in its words): no panic reaches Python
+        with pytest.raises(ValueError, match=message.split()[0]):
+            _core.perceive(np.zeros((3, 2)), np.zeros(3), np.array([0]), **options, loss=loss)
 
 
 def random_graph(rng, n, most):

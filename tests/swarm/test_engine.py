@@ -516,7 +516,7 @@ def test_an_inbox_only_summed_is_summed_in_the_perception_pass(monkeypatch):
     perceive = dream.kernels.perceive
 
     def spy(*args, **kwargs):
-        summed.append(len(kwargs.get("summed", ())))
+        summed.append(len(kwargs.get("summed") or ()))
         return perceive(*args, **kwargs)
 
     monkeypatch.setattr(dream.kernels, "perceive", spy)

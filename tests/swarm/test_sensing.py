@@ -12,7 +12,7 @@ from dream import Faults, Obstacle, kernels
 from dream._csr import merged
 from dream.obstacles import sensed
 from dream.specs import ROBOTARIUM
-from dream.swarm import Engine, Guard, Movement, Obstacles, SwarmRobot, known_cells
+from dream.swarm import Engine, Guard, Movement, Obstacles, SwarmRobot, View, known_cells
 
 
 class Reader(SwarmRobot):
@@ -145,16 +145,30 @@ def test_merged_rows_keep_each_kind_in_order():
     assert offsets.tolist() == [0, 2, 3, 6] and values.tolist() == [1.0, 2.0, 10.0, 3.0, 20.0, 30.0]
 
 
-def test_cells_from_the_board_are_the_cells_from_the_rows(monkeypatch):
-    # Without losses the engine finds each cell's messages near it on the board (heard_cells);
-    # with them, View.cells goes through every message delivered. Forced through the rows, a
-    # whole coverage run (packed start: many ties between equidistant neighbours) is the same.
+@pytest.mark.parametrize("faults", [None, Faults(loss=0.3, distance_loss=0.2)], ids=["lossless", "lossy"])
+def test_cells_from_the_board_are_the_cells_from_the_rows(monkeypatch, faults):
+    # A range radio's cells come from the messages near each cell on the board (heard_cells),
+    # losses drawn there as the perception draws them. Forced through every message delivered, a
+    # whole coverage run (packed start: many ties between equidistant neighbours) is the same, and
+    # so are the messages lost, counted in the perception's pass or as the inbox is listed.
 
-    board = dream.run("voronoi-coverage", n=40, seed=2, backend="fast", steps=200, swarm=True, trace=True)
-    monkeypatch.setattr(Engine, "_lossless", lambda self, faults: False)
-    rows = dream.run("voronoi-coverage", n=40, seed=2, backend="fast", steps=200, swarm=True, trace=True)
+    class RowsOnly(View):
+        """A view that never gets the engine's board (its cells go through its rows)."""
+
+        board_cells = property(lambda self: None, lambda self, value: None)
+
+    def run():
+        return dream.run(
+            "voronoi-coverage", n=40, seed=2, backend="fast", steps=200, swarm=True, trace=True, faults=faults
+        )
+
+    board = run()
+    monkeypatch.setattr(dream.swarm.engine, "View", RowsOnly)
+    rows = run()
     assert np.array_equal(board.trace, rows.trace)
     assert np.ptp(board.trace[:, :2], axis=0).max() > 0.3  # the team did spread
+    if faults is not None:
+        assert board.faults == rows.faults and board.faults["messages_lost"] > 0
 
 
 def test_a_deferred_neighbourhood_is_found_once_and_only_when_read():

@@ -111,6 +111,71 @@ pub fn draws(seed: u64, stream: i64, step: i64, keys: &[Key<'_>], rows: usize, c
     Ok(out)
 }
 
+/// A radio's losses at one step: the message robot i hears from robot j at distance `d` gets
+/// through when the draw of (`stream`, step, i, j) is below `keep * max(1 - per_metre * d, 0)`
+/// (the distance not read where `per_metre` is 0: a graph radio may not measure it). The
+/// perception and the Voronoi cells of what is heard draw it where they find the message, so no
+/// list of the messages is needed to lose some; `dream._reference.draws.delivered` is its NumPy
+/// twin, which the engine draws with where it lists the messages itself.
+#[derive(Debug, Clone, Copy)]
+pub struct Loss {
+    /// The hash with seed, stream and step absorbed.
+    start: u64,
+    keep: f64,
+    per_metre: f64,
+}
+
+impl Loss {
+    /// # Errors
+    /// [`GeomError::InvalidParameter`] unless `keep` is within [0, 1] and `per_metre` finite and
+    /// >= 0.
+    pub fn new(seed: u64, stream: i64, step: i64, keep: f64, per_metre: f64) -> Result<Self> {
+        if !(0.0..=1.0).contains(&keep) {
+            return Err(GeomError::InvalidParameter {
+                arg: "keep",
+                rule: "within [0, 1]",
+                got: keep,
+            });
+        }
+        if !(per_metre.is_finite() && per_metre >= 0.0) {
+            return Err(GeomError::InvalidParameter {
+                arg: "per_metre",
+                rule: ">= 0",
+                got: per_metre,
+            });
+        }
+        Ok(Loss {
+            start: absorb(absorb(seed, stream), step),
+            keep,
+            per_metre,
+        })
+    }
+
+    /// The hash of hearer `i`'s draws: absorbed once for all its messages.
+    #[inline]
+    pub fn hearer(&self, i: usize) -> u64 {
+        absorb(self.start, i as i64)
+    }
+
+    /// Whether the distance is read.
+    #[inline]
+    fn by_distance(&self) -> bool {
+        self.per_metre > 0.0
+    }
+
+    /// Whether the message from robot `j` to the hearer of `hearer` (its [`Loss::hearer`]) gets
+    /// through, `distance` (m) apart (worked out only where read).
+    #[inline]
+    pub fn delivered(&self, hearer: u64, j: usize, distance: impl FnOnce() -> f64) -> bool {
+        let keep = if self.by_distance() {
+            self.keep * (1.0 - self.per_metre * distance()).max(0.0)
+        } else {
+            self.keep
+        };
+        unit(absorb(hearer, j as i64)) < keep
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -172,5 +237,33 @@ mod tests {
             draws(0, 0, 0, &[], usize::MAX, 2),
             Err(GeomError::InvalidParameter { arg: "rows", .. })
         ));
+    }
+
+    #[test]
+    fn a_loss_draws_the_table_of_its_hearer_and_sender() {
+        let (hearers, senders) = ([3_i64, 3, 8, 0], [1_i64, 7, 2, 5]);
+        let table = draws(42, 0, 17, &[Key::Row(&hearers), Key::Row(&senders)], 4, 1).unwrap();
+        let distances = [0.5, 1.0, 0.1, 3.0];
+        for (keep, per_metre) in [(0.7, 0.0), (1.0, 0.4), (0.9, 0.25), (0.0, 0.0)] {
+            let loss = Loss::new(42, 0, 17, keep, per_metre).unwrap();
+            for e in 0..4 {
+                let (i, j) = (hearers[e] as usize, senders[e] as usize);
+                let expected = table[e]
+                    < keep
+                        * if per_metre > 0.0 {
+                            (1.0 - per_metre * distances[e]).max(0.0)
+                        } else {
+                            1.0
+                        };
+                assert_eq!(loss.delivered(loss.hearer(i), j, || distances[e]), expected);
+            }
+        }
+        // Without loss by distance, the distance is not read (a graph radio may not measure it).
+        let loss = Loss::new(42, 0, 17, 1.0, 0.0).unwrap();
+        assert!(loss.delivered(loss.hearer(3), 1, || unreachable!()));
+        assert!(Loss::new(1, 0, 0, 1.5, 0.0).is_err());
+        assert!(Loss::new(1, 0, 0, f64::NAN, 0.0).is_err());
+        assert!(Loss::new(1, 0, 0, 0.5, -1.0).is_err());
+        assert!(Loss::new(1, 0, 0, 0.5, f64::INFINITY).is_err());
     }
 }

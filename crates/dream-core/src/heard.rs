@@ -16,11 +16,12 @@
 use rayon::prelude::*;
 
 use crate::csr::check_offsets;
+use crate::draws::Loss;
 use crate::error::{check_len, GeomError, Result};
 use crate::geom::Arena;
 use crate::geom::Vec2;
 use crate::grid::Grid;
-use crate::neighbours::{in_range, radius_squared, Closeness};
+use crate::neighbours::{in_range, length, radius_squared, Closeness};
 use crate::parallel::{first_where, worth_spreading, TASK_ITEMS};
 use crate::voronoi::{
     area_centroid, check_cell_parameters, check_coordinates, nearest_first, squared_distance, unit_circle, widest,
@@ -39,6 +40,9 @@ pub struct Radio<'a> {
     /// ...and after its turn in it (n), which the robots of higher index hear: the robots of one
     /// step take their turns by index.
     pub said_now: &'a [Vec2],
+    /// Its losses, drawn for each message looked at (`None`: every message in range is heard):
+    /// the messages [`crate::perceive::perceive`] lists with the same loss, to the bit.
+    pub loss: Option<Loss>,
 }
 
 /// The robots whose cells are wanted, and what each knows besides its radio.
@@ -251,15 +255,24 @@ struct Search<'a> {
     arena: &'a Arena,
 }
 
+/// A hearer: its index and [`Search::hearer`]'s hash.
+type Hearer = (usize, u64);
+
 /// A clipping point of a cell: `(|q - p|^2 as bits, rank, index, q)`, clipped in that order
 /// (rank 0: messages, by the sender's index; 1: robots seen; 2: virtual agents).
 type Candidate = (u64, u8, usize, Vec2);
 
 impl Search<'_> {
+    /// Robot i as a hearer: its index and the hash of its loss draws (absorbed once a cell).
+    fn hearer(&self, i: usize) -> Hearer {
+        (i, self.radio.loss.map_or(0, |loss| loss.hearer(i)))
+    }
+
     /// What robot `i` hears from robot `j`, if anything.
-    fn heard(&self, i: usize, j: usize) -> Option<Vec2> {
+    fn heard(&self, (i, hash): Hearer, j: usize) -> Option<Vec2> {
         let (p, o) = (self.radio.positions[i], self.radio.positions[j]);
-        if j == i || !in_range(o[0] - p[0], o[1] - p[1], self.radio.range, self.range_squared) {
+        let (dx, dy) = (o[0] - p[0], o[1] - p[1]);
+        if j == i || !in_range(dx, dy, self.radio.range, self.range_squared) {
             return None;
         }
         let q = if j < i {
@@ -267,7 +280,11 @@ impl Search<'_> {
         } else {
             self.radio.said[j]
         };
-        (!q[0].is_nan()).then_some(q)
+        let through = || {
+            let distance = || length(dx * dx + dy * dy, dx, dy);
+            self.radio.loss.is_none_or(|loss| loss.delivered(hash, j, distance))
+        };
+        (!q[0].is_nan() && through()).then_some(q)
     }
 
     /// Calls `visit(j)` for the robots `j` in the square of half-width `half` about `at`, until
@@ -288,7 +305,7 @@ impl Search<'_> {
 
     /// Calls `visit(q)` for what robot `i` hears from robots near `at`: every message within
     /// `distance` of it (said by a robot within `distance + drift`), and maybe more.
-    fn heard_near(&self, i: usize, at: Vec2, distance: f64, mut visit: impl FnMut(usize, Vec2)) {
+    fn heard_near(&self, i: Hearer, at: Vec2, distance: f64, mut visit: impl FnMut(usize, Vec2)) {
         self.robots_near(at, distance + self.drift, |j| {
             if let Some(q) = self.heard(i, j) {
                 visit(j, q);
@@ -299,7 +316,7 @@ impl Search<'_> {
 
     /// Whether robot `i` hears a message within `same` of the robot it sees at `s`. The search
     /// stops at the first such message: most robots seen are heard, near where they are.
-    fn accounted(&self, i: usize, s: Vec2) -> bool {
+    fn accounted(&self, i: Hearer, s: Vec2) -> bool {
         self.robots_near(s, self.hearers.same + self.drift, |j| {
             self.heard(i, j).is_some_and(|q| self.close.within(s, q))
         })
@@ -309,6 +326,7 @@ impl Search<'_> {
     fn cell(&self, r: usize, candidates: &mut Vec<Candidate>) -> (Vec<Vec2>, f64, Vec2) {
         let h = self.hearers;
         let (i, p) = (h.ids[r] as usize, h.here[r]);
+        let hearer = self.hearer(i);
         let seen = &h.seen[h.seen_offsets[r] as usize..h.seen_offsets[r + 1] as usize];
         let agents = &h.agents[h.agents_offsets[r] as usize..h.agents_offsets[r + 1] as usize];
         // Every robot seen is a candidate; whether a message accounts for it (then it clips
@@ -335,7 +353,7 @@ impl Search<'_> {
             let high = if last { f64::INFINITY } else { reach * reach };
             let window = |d: f64| d > low && d <= high;
             candidates.clear();
-            self.heard_near(i, p, reach, |j, q| {
+            self.heard_near(hearer, p, reach, |j, q| {
                 let d = squared_distance(p, q);
                 if window(d) {
                     candidates.push((d.to_bits(), 0, j, q));
@@ -354,7 +372,7 @@ impl Search<'_> {
                     if clipper.settled(f64::from_bits(d), self.widest) {
                         return true;
                     }
-                    if !(rank == 1 && self.accounted(i, q)) {
+                    if !(rank == 1 && self.accounted(hearer, q)) {
                         clipper.cut(q);
                     }
                     false
@@ -405,15 +423,22 @@ mod tests {
         let mut heard: Vec<Vec<Vec2>> = Vec::new();
         for &i in hearers.ids {
             let i = i as usize;
-            let senders = &near.indices[near.indptr[i] as usize..near.indptr[i + 1] as usize];
+            let (a, b) = (near.indptr[i] as usize, near.indptr[i + 1] as usize);
+            let through = |e: usize| {
+                let (j, distance) = (near.indices[e] as usize, near.distances[e]);
+                radio
+                    .loss
+                    .is_none_or(|loss| loss.delivered(loss.hearer(i), j, || distance))
+            };
             heard.push(
-                senders
-                    .iter()
-                    .map(|&j| {
-                        if (j as usize) < i {
-                            radio.said_now[j as usize]
+                (a..b)
+                    .filter(|&e| through(e))
+                    .map(|e| {
+                        let j = near.indices[e] as usize;
+                        if j < i {
+                            radio.said_now[j]
                         } else {
-                            radio.said[j as usize]
+                            radio.said[j]
                         }
                     })
                     .filter(|q| !q[0].is_nan())
@@ -452,11 +477,14 @@ mod tests {
 
     #[test]
     fn equals_the_three_kernels_in_a_row() {
-        for (seed, n, side, range) in [
-            (1, 60, 2.0, 0.6),
-            (2, 300, 3.0, 2.0),
-            (3, 40, 10.0, 1.0),
-            (4, 5, 1.0, 0.0),
+        let lossy = |keep, per_metre| Some(Loss::new(5, 0, 2, keep, per_metre).unwrap());
+        for (seed, n, side, range, loss) in [
+            (1, 60, 2.0, 0.6, None),
+            (2, 300, 3.0, 2.0, None),
+            (3, 40, 10.0, 1.0, None),
+            (4, 5, 1.0, 0.0, None),
+            (5, 300, 3.0, 2.0, lossy(0.7, 0.0)),
+            (6, 200, 2.0, 1.0, lossy(0.9, 0.5)),
         ] {
             let mut u = stream(seed);
             let arena = Arena::new(-side / 2.0, side / 2.0, -side / 2.0, side / 2.0).unwrap();
@@ -498,6 +526,7 @@ mod tests {
                 range,
                 said: &said,
                 said_now: &said_now,
+                loss,
             };
             let hearers = Hearers {
                 ids: &ids,
@@ -510,6 +539,14 @@ mod tests {
             };
             let fused = heard_cells(&radio, &hearers, 0.5, &arena, 32).unwrap();
             assert_eq!(fused, composed(&radio, &hearers, 0.5, &arena), "seed {seed}");
+            if loss.is_some() {
+                let lossless = Radio { loss: None, ..radio };
+                assert_ne!(
+                    fused,
+                    heard_cells(&lossless, &hearers, 0.5, &arena, 32).unwrap(),
+                    "seed {seed}"
+                );
+            }
         }
     }
 
@@ -522,6 +559,7 @@ mod tests {
             range: 1.0,
             said: &said,
             said_now: &positions,
+            loss: None,
         };
         let hearers = Hearers {
             ids: &[0],
@@ -609,6 +647,7 @@ mod tests {
             range: 1.0,
             said: &said,
             said_now: &said,
+            loss: None,
         };
         assert!(said_once(&radio));
         let arena = Arena::new(0.0, 6.0, 0.0, 4.0).unwrap();

@@ -8,7 +8,8 @@
 //! robots can be perceived for one at a time or all at once. Distances are the neighbour
 //! query's, to the bit. Per-robot values `carried` (the velocities a movement sensor reports,
 //! say) are read at each robot seen, on every core; a radio that sums ([`Radio::summed`]) adds
-//! per-robot values up over each row heard instead of listing it (an inbox only summed).
+//! per-robot values up over each row heard instead of listing it (an inbox only summed). A radio
+//! that loses messages ([`Loss`]) draws each one's fate where it finds it, and counts those lost.
 //!
 //! A radio over a communication graph ([`linked`]) is heard by its links instead, whatever the
 //! distance.
@@ -18,6 +19,7 @@ use std::f64::consts::TAU;
 use rayon::prelude::*;
 
 use crate::csr::check_rows;
+use crate::draws::Loss;
 use crate::error::{check_finite, check_len, try_filled, try_room, GeomError, Result};
 use crate::grid::Grid;
 use crate::neighbours::{length, radius_squared, within_squared, wrap_angle};
@@ -41,7 +43,9 @@ pub struct Sight {
 /// direction of.
 /// `carried[c]` holds the `c`-th carried column's values at the robots seen (none for the heard).
 /// `summed[c]`, for the heard rows of a radio that sums ([`Radio::summed`]), holds each row's sum
-/// of the `c`-th summed column; the rows' ids and distances are then left empty.
+/// of the `c`-th summed column; the rows' ids and distances are then left empty. `lost`, for the
+/// heard rows of a radio that loses messages ([`Radio::loss`]), holds how many each row lost
+/// (else it is empty).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Perceived {
     pub offsets: Vec<i64>,
@@ -52,18 +56,21 @@ pub struct Perceived {
     pub dys: Vec<f64>,
     pub carried: Vec<Vec<f64>>,
     pub summed: Vec<Vec<f64>>,
+    pub lost: Vec<i64>,
 }
 
-/// A range radio: its `range` (m), who is `talking` (has a message out), and the per-robot
-/// values `summed` over each row of what is heard instead of listing the rows (where empty, the
-/// rows are listed). A sum adds the values of the robots heard in increasing id from +0.0, as
-/// `reduce::reduce` adds a listed row's: the same bits, without the rows written (a robot in a
-/// crowd hears tens of messages, and a consensus rule reads only their sum).
+/// A range radio: its `range` (m), who is `talking` (has a message out), the per-robot values
+/// `summed` over each row of what is heard instead of listing the rows (where `None`, the rows
+/// are listed; where no values, they are only counted), and its `loss` (where `None`, every
+/// message in range gets through). A sum adds the values of the robots heard in increasing id
+/// from +0.0, as `reduce::reduce` adds a listed row's: the same bits, without the rows written (a
+/// robot in a crowd hears tens of messages, and a consensus rule reads only their sum).
 #[derive(Debug, Clone, Copy)]
 pub struct Radio<'a> {
     pub range: f64,
     pub talking: &'a [bool],
-    pub summed: &'a [&'a [f64]],
+    pub summed: Option<&'a [&'a [f64]]>,
+    pub loss: Option<Loss>,
 }
 
 impl Perceived {
@@ -157,7 +164,7 @@ pub fn perceive(
     if let Some(radio) = radio {
         check_range("radio range", radio.range)?;
         check_len("talking", n, radio.talking.len())?;
-        for values in radio.summed {
+        for values in radio.summed.unwrap_or_default() {
             check_len("summed", n, values.len())?;
         }
     }
@@ -182,17 +189,24 @@ pub fn perceive(
             1.0
         },
     );
-    let summing = radio.is_some_and(|r| !r.summed.is_empty());
+    let summed = radio.and_then(|r| r.summed).unwrap_or_default();
+    let summing = !summed.is_empty();
     // A radio that sums has no rows to place: its robots are counted as they are summed, in the
     // second pass, and the first looks only as far as an all-around sensor sees (a radio
     // reaching twice as far has four times the robots to look at; a narrower sensor's count
-    // goes through `near`, as far as the radio reaches).
-    let counted = if summing { sight.map_or(0.0, |s| s.range) } else { reach };
+    // goes through `near`, as far as the radio reaches). One that only counts is counted in the
+    // first pass, and the second gathers only what the sensor sees.
+    let counting = radio.is_some_and(|r| r.summed.is_some()) && !summing;
+    let sight_range = sight.map_or(0.0, |s| s.range);
+    let counted = if summing { sight_range } else { reach };
+    let gathered = if counting { sight_range } else { reach };
     let find = Find {
         grid: &grid,
         headings,
         reach,
         reach_squared: radius_squared(reach),
+        gathered,
+        gathered_squared: radius_squared(gathered),
         counted,
         counted_squared: radius_squared(counted),
         sight,
@@ -201,11 +215,14 @@ pub fn perceive(
             Some(r) => map_range(n, 1.0, |k| r.talking[grid.members()[k]]),
             None => try_filled(n, false, WHAT)?,
         },
-        summed: radio.map_or(0, |r| r.summed.len()),
-        summed_by_cell: radio.map_or(Vec::new(), |r| {
-            let m = r.summed.len();
-            map_range(n * m, 1.0, |e| r.summed[e % m][grid.members()[e / m]])
+        summing,
+        heard_in_fill: radio.is_some() && !counting,
+        summed: summed.len(),
+        summed_by_cell: map_range(n * summed.len(), 1.0, |e| {
+            let m = summed.len();
+            summed[e % m][grid.members()[e / m]]
         }),
+        loss: radio.and_then(|r| r.loss),
         sight_within: sight.map_or(-1.0, |s| within_squared(s.range)),
         radio_within: radio.map_or(-1.0, |r| within_squared(r.range)),
     };
@@ -220,9 +237,9 @@ pub fn perceive(
     // `order[first + t] = (u, k)`: the t-th robot in cell order of the task from row `first` on
     // is its u-th row, at place k of the grid's cell order.
     let mut order = try_filled(rows.len(), (0_u32, 0_u32), WHAT)?;
-    let mut counts = try_filled(rows.len(), (0_u32, 0_u32), WHAT)?;
-    // The first pass: each row's counts, seen and heard, and from them the offsets.
-    let first_pass = |(first, (order, counts)): (usize, (&mut [(u32, u32)], &mut [(u32, u32)]))| {
+    let mut counts = try_filled(rows.len(), Counts::default(), WHAT)?;
+    // The first pass: each row's counts, seen, heard and lost, and from them the offsets.
+    let first_pass = |(first, (order, counts)): (usize, (&mut [(u32, u32)], &mut [Counts]))| {
         let rows_here = first as u32..(first + order.len()) as u32;
         let mut places = order.iter_mut();
         for &(r, k) in by_cell.iter().filter(|(r, _)| rows_here.contains(r)) {
@@ -248,6 +265,10 @@ pub fn perceive(
     }
     let (mut seen, mut heard) = (Perceived::default(), Perceived::default());
     (seen.offsets, heard.offsets) = offsets(&counts)?;
+    if find.loss.is_some() {
+        // Lost where counted: in the first pass unless the radio sums (then in the second).
+        heard.lost = map_range(rows.len(), 1.0, |r| i64::from(counts[r].lost));
+    }
     drop(counts);
     if sight.is_some() {
         seen.room_for_seen(bearings)?;
@@ -259,7 +280,7 @@ pub fn perceive(
         heard.summed = (0..find.summed)
             .map(|_| try_filled(rows.len(), 0.0, WHAT))
             .collect::<Result<_>>()?;
-    } else if radio.is_some() {
+    } else if radio.is_some() && !counting {
         heard.room_for_heard()?;
     }
     // The second pass: each task given its rows' stretch of every column.
@@ -274,6 +295,7 @@ pub fn perceive(
         heard_distances: &mut heard.distances,
         sums: heard.summed.iter_mut().map(|column| &mut column[..]).collect(),
         heard_counts: &mut heard_counts,
+        lost: &mut heard.lost,
     };
     for (first, task_order) in (0..rows.len()).step_by(task_rows).zip(order.chunks(task_rows)) {
         let last = (first + task_rows).min(rows.len());
@@ -324,13 +346,21 @@ fn rows_by_cell(grid: &Grid, rows: &[i64]) -> Result<Vec<(u32, u32)>> {
     })
 }
 
-/// The seen and the heard offsets of rows with `counts` (seen, heard) each.
-fn offsets(counts: &[(u32, u32)]) -> Result<(Vec<i64>, Vec<i64>)> {
+/// What the first pass counts of a row: the robots seen and heard, and the messages lost.
+#[derive(Debug, Clone, Copy, Default)]
+struct Counts {
+    seen: u32,
+    heard: u32,
+    lost: u32,
+}
+
+/// The seen and the heard offsets of rows with `counts` each.
+fn offsets(counts: &[Counts]) -> Result<(Vec<i64>, Vec<i64>)> {
     let mut seen = try_filled(counts.len() + 1, 0_i64, WHAT)?;
     let mut heard = try_filled(counts.len() + 1, 0_i64, WHAT)?;
-    for (r, &(seen_count, heard_count)) in counts.iter().enumerate() {
-        seen[r + 1] = seen[r] + i64::from(seen_count);
-        heard[r + 1] = heard[r] + i64::from(heard_count);
+    for (r, count) in counts.iter().enumerate() {
+        seen[r + 1] = seen[r] + i64::from(count.seen);
+        heard[r + 1] = heard[r] + i64::from(count.heard);
     }
     Ok((seen, heard))
 }
@@ -420,6 +450,10 @@ struct Find<'a> {
     reach: f64,
     /// A hair above reach^2: beyond it a robot is surely out; below it `sqrt` decides exactly.
     reach_squared: f64,
+    /// How far the second pass gathers the robots it sorts out (the reach, or the sensor's range
+    /// where the radio only counts), and a hair above its square.
+    gathered: f64,
+    gathered_squared: f64,
     /// How far the first pass looks for the robots it counts (see `perceive`), and a hair above
     /// its square.
     counted: f64,
@@ -429,7 +463,10 @@ struct Find<'a> {
     /// Who is talking, in the grid's cell order (all silent without a radio): read beside the
     /// cell-ordered coordinates, not at each robot's id.
     talking_by_cell: Vec<bool>,
-    /// How many columns the radio sums (none where the rows are listed).
+    /// Whether the radio sums its rows instead of listing them, whether the second pass hears
+    /// (not where the radio only counts its rows, in the first), and how many columns it sums.
+    summing: bool,
+    heard_in_fill: bool,
     summed: usize,
     /// The radio's summed columns in the grid's cell order, interleaved: robot k's values are
     /// `summed_by_cell[k * summed..][..summed]`, in one cache line where the columns' own lines
@@ -439,6 +476,7 @@ struct Find<'a> {
     /// within): a sensor that sees all around decides by these alone.
     sight_within: f64,
     radio_within: f64,
+    loss: Option<Loss>,
 }
 
 /// A robot within reach (by the squared distance's margin) of the one perceiving: its id, whether
@@ -462,12 +500,13 @@ struct Asked {
     y: f64,
 }
 
-/// What a robot near the one perceiving is to it: seen (with the bearing, where wanted) and
-/// heard.
+/// What a robot near the one perceiving is to it: seen (with the bearing, where wanted), heard,
+/// or its message lost.
 struct Sorted {
     seen: bool,
     bearing: f64,
     heard: bool,
+    lost: bool,
 }
 
 /// A task's stretch of the output columns (empty where nothing of that kind is perceived).
@@ -483,6 +522,8 @@ struct Out<'a> {
     sums: Vec<&'a mut [f64]>,
     /// Where the radio sums, how many robots each row heard (else empty).
     heard_counts: &'a mut [i64],
+    /// Where the radio loses messages, how many each row lost (else empty).
+    lost: &'a mut [i64],
 }
 
 impl<'a> Out<'a> {
@@ -501,6 +542,7 @@ impl<'a> Out<'a> {
         let (heard_distances, heard_distances_rest) = cut(self.heard_distances, heard);
         let (sums, sums_rest) = self.sums.into_iter().map(|column| cut(column, rows)).unzip();
         let (heard_counts, heard_counts_rest) = cut(self.heard_counts, rows);
+        let (lost, lost_rest) = cut(self.lost, rows);
         (
             Out {
                 seen_ids,
@@ -512,6 +554,7 @@ impl<'a> Out<'a> {
                 heard_distances,
                 sums,
                 heard_counts,
+                lost,
             },
             Out {
                 seen_ids: seen_ids_rest,
@@ -523,6 +566,7 @@ impl<'a> Out<'a> {
                 heard_distances: heard_distances_rest,
                 sums: sums_rest,
                 heard_counts: heard_counts_rest,
+                lost: lost_rest,
             },
         )
     }
@@ -540,16 +584,16 @@ impl Find<'_> {
         }
     }
 
-    /// The robots within reach of robot i (by the squared distance's margin) as keys `j << 32 |
-    /// k` (robot j at place k of the grid's cell order), in the grid's order: its 3x3 block of
-    /// cells streamed from the grid's cell-ordered coordinates. Sorted, the keys go by id; 8
+    /// The robots within `reach` of robot i (by the squared distance's margin, `reach_squared`)
+    /// as keys `j << 32 | k` (robot j at place k of the grid's cell order), in the grid's order:
+    /// its block of cells streamed from the grid's cell-ordered coordinates. Sorted, the keys go by id; 8
     /// bytes each sort faster than the robots' offsets with them (measured 1.12x on the
     /// rendezvous example's perception).
-    fn near(&self, &Asked { i, x, y, .. }: &Asked, keys: &mut Vec<u64>) {
+    fn near(&self, &Asked { i, x, y, .. }: &Asked, (reach, reach_squared): (f64, f64), keys: &mut Vec<u64>) {
         let (sorted_xs, sorted_ys) = self.grid.sorted();
         let members = self.grid.members();
         keys.clear();
-        self.grid.for_each_run_within(x, y, self.reach, |run| {
+        self.grid.for_each_run_within(x, y, reach, |run| {
             // No data-dependent branch in the hot loop (it measured 1.4 times slower with one):
             // every candidate is written, the count only advances for those that may be in reach.
             let mut count = keys.len();
@@ -558,7 +602,7 @@ impl Find<'_> {
                 let (j, dx, dy) = (members[k], sorted_xs[k] - x, sorted_ys[k] - y);
                 let squared = dx * dx + dy * dy;
                 keys[count] = (j as u64) << 32 | k as u64;
-                count += usize::from((squared <= self.reach_squared) & (j != i));
+                count += usize::from((squared <= reach_squared) & (j != i));
             }
             keys.truncate(count);
         });
@@ -593,6 +637,7 @@ impl Find<'_> {
             seen: false,
             bearing: f64::NAN,
             heard: false,
+            lost: false,
         };
         if distance > self.reach {
             return sorted;
@@ -608,9 +653,23 @@ impl Find<'_> {
             }
         }
         if let Some(range) = self.radio_range {
-            sorted.heard = distance <= range && talking;
+            let offered = distance <= range && talking;
+            sorted.heard = offered && self.through(self.hearer(i), other.j, || distance);
+            sorted.lost = offered && !sorted.heard;
         }
         sorted
+    }
+
+    /// The hash of robot i's loss draws ([`Loss::hearer`]; 0 without losses).
+    fn hearer(&self, i: usize) -> u64 {
+        self.loss.map_or(0, |loss| loss.hearer(i))
+    }
+
+    /// Whether the message of robot j, in range of the robot of `hearer` ([`Find::hearer`]) at
+    /// `distance`, gets through the radio's losses.
+    #[inline]
+    fn through(&self, hearer: u64, j: usize, distance: impl FnOnce() -> f64) -> bool {
+        self.loss.is_none_or(|loss| loss.delivered(hearer, j, distance))
     }
 
     /// How many robots robot i sees and how many it hears: as [`Find::sort`] decides, without a
@@ -618,20 +677,25 @@ impl Find<'_> {
     /// that count is not used). A sensor that sees all around (or none) needs no bearing, and
     /// then the count is one pass over the block without a data-dependent branch, nor a root:
     /// `squared <= within_squared(range)` decides as `sqrt(squared) <= range`.
-    fn count(&self, asked: &Asked) -> (u32, u32) {
+    fn count(&self, asked: &Asked) -> Counts {
         let &Asked { i, at, x, y } = asked;
+        let mut counts = Counts::default();
+        let mut add = |sorted: &Sorted| {
+            counts.seen += u32::from(sorted.seen);
+            counts.heard += u32::from(sorted.heard);
+            counts.lost += u32::from(sorted.lost);
+        };
         if self.sight.is_some_and(|s| s.fov < TAU) {
-            return KEYS.with_borrow_mut(|keys| {
-                self.near(asked, keys);
-                keys.iter().fold((0, 0), |(seen, heard), &key| {
-                    let sorted = self.sort(i, &self.unkey(asked, key));
-                    (seen + u32::from(sorted.seen), heard + u32::from(sorted.heard))
-                })
+            KEYS.with_borrow_mut(|keys| {
+                self.near(asked, (self.reach, self.reach_squared), keys);
+                keys.iter().for_each(|&key| add(&self.sort(i, &self.unkey(asked, key))));
             });
+            return counts;
         }
         let (sorted_xs, sorted_ys) = self.grid.sorted();
         let members = self.grid.members();
-        let (mut seen, mut heard) = (0, 0);
+        // A radio that sums counts what it hears in the second pass: its losses are drawn there.
+        let (lossy, hearer) = (self.loss.is_some() && !self.summing, self.hearer(i));
         self.grid.for_each_run_within(x, y, self.counted, |run| {
             let candidates = sorted_xs[run.clone()]
                 .iter()
@@ -653,23 +717,32 @@ impl Find<'_> {
                             dy,
                             squared,
                         };
-                        let sorted = self.sort(i, &other);
-                        seen += u32::from(sorted.seen);
-                        heard += u32::from(sorted.heard);
+                        add(&self.sort(i, &other));
                     }
                     continue;
                 }
-                seen += u32::from(near & (squared <= self.sight_within));
-                heard += u32::from(near & (squared <= self.radio_within) & talking);
+                let offered = near & (squared <= self.radio_within) & talking;
+                let heard = if lossy {
+                    offered && self.through(hearer, members[k], || length(squared, dx, dy))
+                } else {
+                    offered
+                };
+                add(&Sorted {
+                    seen: near & (squared <= self.sight_within),
+                    bearing: f64::NAN,
+                    heard,
+                    lost: offered & !heard,
+                });
             }
         });
-        (seen, heard)
+        counts
     }
 
     /// Writes what the robots of `task` see and hear into `out`, its rows' stretch of the
     /// columns, each row by increasing id; the stretch holds exactly what [`Find::count`]
     /// counted for them (the same robots near, sorted out alike: the writes stay within it).
-    /// Where the radio sums, the robots heard are counted here, into `out.heard_counts`.
+    /// Where the radio sums, the robots heard and the messages lost are counted here, into
+    /// `out.heard_counts` and `out.lost`; where it only counts, it is not heard here at all.
     fn fill(&self, task: &Task<'_>, out: Out<'_>) {
         match self.summed {
             1 => self.fill_summing::<1>(task, out),
@@ -686,29 +759,39 @@ impl Find<'_> {
     fn fill_summing<const M: usize>(&self, task: &Task<'_>, mut out: Out<'_>) {
         let bearings = self.sight.is_some_and(|s| s.bearings);
         let (seen_first, heard_first) = (task.seen_offsets[0], task.heard_offsets[0]);
-        let (summing, m) = (self.summed > 0, self.summed);
+        let (summing, m) = (self.summing, self.summed);
         let all_around = self.sight.is_none_or(|s| s.fov >= TAU);
         let mut sums = vec![0.0; if M == 0 { m } else { 0 }];
+        let (hears, lossy) = (self.heard_in_fill, self.loss.is_some());
         KEYS.with_borrow_mut(|keys| {
             for &(t, k) in task.order {
                 let t = t as usize;
                 let asked = self.asked(k as usize);
                 let mut seen_at = (task.seen_offsets[t] - seen_first) as usize;
                 let mut heard_at = (task.heard_offsets[t] - heard_first) as usize;
-                self.near(&asked, keys);
+                self.near(&asked, (self.gathered, self.gathered_squared), keys);
                 keys.sort_unstable();
                 sums.fill(0.0);
                 let mut lanes = [0.0; M];
+                let (hearer, mut lost) = (self.hearer(asked.i), 0);
                 for &key in keys.iter() {
                     let other = self.unkey(&asked, key);
                     // A sensor that sees all around (or none) decides by the squares, as `count`
                     // does: a root only for the robots written, a bearing only for those seen.
                     let (seen, heard, bearing) = if all_around && other.squared.is_finite() {
-                        let heard = (other.squared <= self.radio_within) & other.talking;
+                        let offered = (other.squared <= self.radio_within) & other.talking & hears;
+                        let heard = if lossy {
+                            let distance = || length(other.squared, other.dx, other.dy);
+                            offered && self.through(hearer, other.j, distance)
+                        } else {
+                            offered
+                        };
+                        lost += usize::from(offered & !heard);
                         (other.squared <= self.sight_within, heard, f64::NAN)
                     } else {
                         let sorted = self.sort(asked.i, &other);
-                        (sorted.seen, sorted.heard, sorted.bearing)
+                        lost += usize::from(sorted.lost & hears);
+                        (sorted.seen, sorted.heard & hears, sorted.bearing)
                     };
                     if summing {
                         // In increasing id, from +0.0: as `reduce` adds a listed row. A robot not
@@ -747,8 +830,11 @@ impl Find<'_> {
                 if summing {
                     out.heard_counts[t] = heard_at as i64;
                 }
+                if summing && lossy {
+                    out.lost[t] = lost as i64;
+                }
                 debug_assert_eq!(seen_at as i64, task.seen_offsets[t + 1] - seen_first);
-                debug_assert!(summing || heard_at as i64 == task.heard_offsets[t + 1] - heard_first);
+                debug_assert!(summing || !hears || heard_at as i64 == task.heard_offsets[t + 1] - heard_first);
             }
         });
     }
@@ -804,13 +890,17 @@ mod tests {
             let radio = Radio {
                 range: 0.7,
                 talking: &talking,
-                summed: &[],
+                summed: None,
+                loss: None,
             };
             let (seen, heard) = perceive(&xs, &ys, &headings, &rows, Some(sight), Some(radio), &[]).unwrap();
             // The same radio summing two columns: each row's sums in increasing id from +0.0.
             let (values, signs): (Vec<f64>, Vec<f64>) = (0..n).map(|j| (next() - 0.5, -(j as f64))).unzip();
             let summed: &[&[f64]] = &[&values, &signs];
-            let summing = Radio { summed, ..radio };
+            let summing = Radio {
+                summed: Some(summed),
+                ..radio
+            };
             let (_, sums) = perceive(&xs, &ys, &headings, &rows, Some(sight), Some(summing), &[]).unwrap();
             assert_eq!(sums.offsets, heard.offsets);
             assert!(sums.ids.is_empty() && sums.distances.is_empty());
@@ -821,6 +911,50 @@ mod tests {
                     assert_eq!(got[r].to_bits(), want.to_bits(), "row {r}'s sum");
                 }
             }
+            // The same radio losing messages, by distance too: each row the lossless one's
+            // through the loss's draws, listed, counted or summed; what is seen is unchanged.
+            let loss = Loss::new(9, 0, 4, 0.8, 0.6).unwrap();
+            let lossy = Radio {
+                loss: Some(loss),
+                ..radio
+            };
+            let with = |radio| perceive(&xs, &ys, &headings, &rows, Some(sight), Some(radio), &[]).unwrap();
+            let (seen_too, kept) = with(lossy);
+            let (_, counted) = with(Radio {
+                summed: Some(&[]),
+                ..lossy
+            });
+            let (_, kept_sums) = with(Radio {
+                summed: Some(summed),
+                ..lossy
+            });
+            assert_eq!(seen_too, seen);
+            assert_eq!(counted.offsets, kept.offsets);
+            assert!(heard.lost.is_empty() && counted.ids.is_empty() && counted.summed.is_empty());
+            let mut lost_any = 0;
+            for (r, &i) in rows.iter().enumerate() {
+                let (a, b) = (heard.offsets[r] as usize, heard.offsets[r + 1] as usize);
+                let through =
+                    |&e: &usize| loss.delivered(loss.hearer(i as usize), heard.ids[e] as usize, || heard.distances[e]);
+                let want: Vec<usize> = (a..b).filter(through).collect();
+                let (c, d) = (kept.offsets[r] as usize, kept.offsets[r + 1] as usize);
+                assert_eq!(
+                    kept.ids[c..d],
+                    want.iter().map(|&e| heard.ids[e]).collect::<Vec<_>>()[..]
+                );
+                assert_eq!(
+                    kept.distances[c..d],
+                    want.iter().map(|&e| heard.distances[e]).collect::<Vec<_>>()[..]
+                );
+                let lost = (b - a - want.len()) as i64;
+                assert_eq!((kept.lost[r], counted.lost[r], kept_sums.lost[r]), (lost, lost, lost));
+                lost_any += lost;
+                for (column, got) in summed.iter().zip(&kept_sums.summed) {
+                    let sum = want.iter().fold(0.0, |sum, &e| sum + column[heard.ids[e] as usize]);
+                    assert_eq!(got[r].to_bits(), sum.to_bits(), "row {r}'s sum of what got through");
+                }
+            }
+            assert!(lost_any > 0 && (lost_any as usize) < heard.ids.len() / 2);
             for (r, &i) in rows.iter().enumerate() {
                 let i = i as usize;
                 let row = |p: &Perceived| p.ids[p.offsets[r] as usize..p.offsets[r + 1] as usize].to_vec();
@@ -863,7 +997,8 @@ mod tests {
             Some(Radio {
                 range: 1.0,
                 talking: &talking,
-                summed: &[],
+                summed: None,
+                loss: None,
             }),
             &[speeds],
         )

@@ -177,7 +177,8 @@ proptest! {
         let radio = radio.map(|range: f64| perceive::Radio {
             range: (range * scale).min(f64::MAX),
             talking: &talking[..],
-            summed: &[],
+            summed: None,
+            loss: None,
         });
         let rows: Vec<i64> = (0..n as i64).collect();
         let headings = vec![0.0; n];
@@ -206,7 +207,10 @@ proptest! {
         // Summed instead of listed: each row's listed values added in increasing id from +0.0.
         if let Some(radio) = radio {
             let summed: &[&[f64]] = &[&xs];
-            let summing = perceive::Radio { summed, ..radio };
+            let summing = perceive::Radio {
+                summed: Some(summed),
+                ..radio
+            };
             let (_, sums) = perceive::perceive(&xs, &ys, &headings, &rows, sight, Some(summing), &[]).unwrap();
             prop_assert_eq!(&sums.offsets, &heard.offsets);
             for i in 0..n {

@@ -1,6 +1,6 @@
 //! Bindings of `dream_core::draws`: counter-based random draws.
 
-use dream_core::draws::{self as core, Key};
+use dream_core::draws::{self as core, Key, Loss};
 use numpy::{IntoPyArray, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
@@ -52,4 +52,14 @@ pub fn draws<'py>(
         .collect::<PyDreamResult<_>>()?;
     let table = py.detach(|| core::draws(seed, stream, step, &keys, rows, columns))?;
     Ok(table.into_pyarray(py).reshape([rows, columns])?)
+}
+
+/// A radio's loss as Python gives it, `(seed, stream, step, keep, per_metre)` (see `Loss`).
+pub type LossArgs = (u64, i64, i64, f64, f64);
+
+/// The loss of `args`, if any, checked.
+pub fn loss_of(args: Option<LossArgs>) -> PyDreamResult<Option<Loss>> {
+    Ok(args
+        .map(|(seed, stream, step, keep, per_metre)| Loss::new(seed, stream, step, keep, per_metre))
+        .transpose()?)
 }

@@ -4,6 +4,8 @@ use dream_core::geom::Arena;
 use dream_core::heard;
 use pyo3::prelude::*;
 
+use crate::draws::{loss_of, LossArgs};
+
 use crate::arrays::{count_of, indices_in, points_in};
 use crate::errors::PyDreamResult;
 use crate::voronoi::{cell_arrays, CellArrays};
@@ -11,9 +13,10 @@ use crate::voronoi::{cell_arrays, CellArrays};
 /// The cells `(centroids (k, 2), areas (k,), vertices (m, 2), offsets (k + 1,))` of robots
 /// `hearers` `(k,)` at `here` `(k, 2)`, each clipped by what its range radio hears (`said` and
 /// `said_now` `(n, 2)` of the robots at `positions` `(n, 2)`), by the robots it sees that no
-/// message accounts for and by its virtual agents (both CSR).
+/// message accounts for and by its virtual agents (both CSR); with the radio's `loss` `(seed,
+/// stream, step, keep, per_metre)`, as `perceive` draws it.
 #[pyfunction]
-#[pyo3(signature = (here, hearers, positions, said, said_now, *, range, seen_indptr, seen_points, same, virtual_indptr, virtual_points, radius, bounds, resolution=64))]
+#[pyo3(signature = (here, hearers, positions, said, said_now, *, range, seen_indptr, seen_points, same, virtual_indptr, virtual_points, radius, bounds, resolution=64, loss=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn heard_cells<'py>(
     py: Python<'py>,
@@ -31,6 +34,7 @@ pub fn heard_cells<'py>(
     radius: f64,
     bounds: (f64, f64, f64, f64),
     resolution: i64,
+    loss: Option<LossArgs>,
 ) -> PyDreamResult<CellArrays<'py>> {
     let resolution = count_of("resolution", resolution)?;
     let arena = Arena::new(bounds.0, bounds.1, bounds.2, bounds.3)?;
@@ -56,6 +60,7 @@ pub fn heard_cells<'py>(
         range,
         said: &said,
         said_now: said_now.as_deref().unwrap_or(&said),
+        loss: loss_of(loss)?,
     };
     let hearers = heard::Hearers {
         ids: &ids,

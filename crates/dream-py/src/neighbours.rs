@@ -4,6 +4,8 @@ use dream_core::neighbours::{self as core, FieldOfView, RowsOf};
 use dream_core::perceive::{linked as core_linked, perceive as core_perceive, Perceived, Radio, Sight};
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
+
+use crate::draws::{loss_of, LossArgs};
 use pyo3::types::PyTuple;
 
 use crate::arrays::{columns_in, count_of, flags_of, indices_of, points_of, vector_in, vector_of, with_indices};
@@ -86,10 +88,12 @@ pub fn far_from<'py>(
 
 /// Who the robots `rows` see and hear: `(seen, heard)`, `(offsets, ids, distances, bearings, dx,
 /// dy, *carried)` (each of `carried` `(n,)` read at the robots seen; bearings empty unless
-/// `bearings`) and `(offsets, ids, distances, *summed)` (each of `summed` `(n,)` added up over
-/// each row heard, whose ids and distances are then left empty).
+/// `bearings`) and `(offsets, ids, distances, lost, *summed)` (each of `summed` `(n,)` added up
+/// over each row heard, whose ids and distances are then left empty: none given, the rows are
+/// only counted; `lost`, each row's messages lost to the radio's `loss` `(seed, stream, step,
+/// keep, per_metre)`, empty without).
 #[pyfunction]
-#[pyo3(signature = (positions, headings, rows, *, sight=None, radio_range=None, talking=None, carried=None, bearings=true, summed=None))]
+#[pyo3(signature = (positions, headings, rows, *, sight=None, radio_range=None, talking=None, carried=None, bearings=true, summed=None, loss=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn perceive<'py>(
     py: Python<'py>,
@@ -102,6 +106,7 @@ pub fn perceive<'py>(
     carried: Option<Vec<Bound<'py, PyAny>>>,
     bearings: bool,
     summed: Option<Vec<Bound<'py, PyAny>>>,
+    loss: Option<LossArgs>,
 ) -> PyDreamResult<(Bound<'py, PyTuple>, Bound<'py, PyTuple>)> {
     let positions = columns_in::<2>("positions", &positions)?;
     let [xs, ys] = positions.get();
@@ -112,24 +117,27 @@ pub fn perceive<'py>(
         .iter()
         .map(|column| vector_in("carried", column, Some(n)))
         .collect::<PyDreamResult<Vec<_>>>()?;
-    let summed = summed.unwrap_or_default();
+    let sums = summed.is_some();
     let summed = summed
+        .unwrap_or_default()
         .iter()
         .map(|column| vector_in("summed", column, Some(n)))
         .collect::<PyDreamResult<Vec<_>>>()?;
     let summed: Vec<&[f64]> = summed.iter().map(|c| &c[..]).collect();
+    let loss = loss_of(loss)?;
     let rows = indices_of("rows", &rows)?;
     let talking = talking.map(|t| flags_of("talking", &t, n)).transpose()?;
     let radio = match (radio_range, talking.as_deref()) {
         (Some(range), Some(talking)) => Some(Radio {
             range,
             talking,
-            summed: &summed,
+            summed: sums.then_some(&summed[..]),
+            loss,
         }),
-        (None, None) if summed.is_empty() => None,
+        (None, None) if !sums && loss.is_none() => None,
         (None, None) => {
             return Err(value_error(
-                "`summed` needs a radio: give `radio_range` and `talking`".into(),
+                "`summed` and `loss` need a radio: give `radio_range` and `talking`".into(),
             ))
         }
         _ => return Err(value_error("give both `radio_range` and `talking`, or neither".into())),
@@ -160,6 +168,7 @@ pub fn perceive<'py>(
         heard.offsets.into_pyarray(py).into_any(),
         heard.ids.into_pyarray(py).into_any(),
         heard.distances.into_pyarray(py).into_any(),
+        heard.lost.into_pyarray(py).into_any(),
     ];
     heard_items.extend(
         heard

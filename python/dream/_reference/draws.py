@@ -8,7 +8,8 @@ SplitMix64's finaliser applied; a draw is the hash's 53 high bits over 2^53. The
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import NamedTuple
 
 import numpy as np
 
@@ -57,6 +58,35 @@ def draws(
         else:
             raise ValueError(f"`kinds` holds {kind!r}: each key is `a`, `r` or `c`")
     return (h >> np.uint64(11)).astype(np.float64).reshape(rows, columns) * 2.0**-53
+
+
+class Loss(NamedTuple):
+    """A radio's losses at one step: robot i hears the message of robot j, ``distance`` (m) away,
+    when the draw of (``stream``, ``step``, i, j) is below ``keep * max(1 - per_metre * distance,
+    0)`` (the distance not read where ``per_metre`` is 0: a graph radio may not measure it)."""
+
+    seed: int
+    stream: int
+    step: int
+    keep: float
+    per_metre: float
+
+
+def delivered(
+    loss: Loss,
+    hearers: np.ndarray,
+    senders: np.ndarray,
+    distances: FloatArray,
+    table: Callable[..., FloatArray] = draws,
+) -> np.ndarray:
+    """Which messages get through ``loss`` (``(m,)`` bool): message e from ``senders[e]`` to
+    ``hearers[e]``, ``distances[e]`` apart, drawn by ``table`` (:func:`draws`, or the Rust
+    kernel's twin of it)."""
+    keep: float | FloatArray = loss.keep
+    if loss.per_metre > 0:
+        keep = loss.keep * np.maximum(1.0 - loss.per_metre * np.asarray(distances), 0.0)
+    u = table(loss.seed % 2**64, loss.stream, loss.step, [hearers, senders], "rr", len(senders), 1)
+    return np.asarray(u).reshape(-1) < keep
 
 
 def _sized(words: np.ndarray, expected: int, kind: str) -> np.ndarray:

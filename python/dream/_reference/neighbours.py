@@ -8,6 +8,7 @@ import numpy as np
 
 from dream._checks import FloatArray
 from dream._csr import spans
+from dream._reference.draws import Loss, delivered
 from dream._reference.reduce import segment_reduce
 
 
@@ -113,13 +114,16 @@ def perceive(
     carried: Sequence[FloatArray] | None = None,
     bearings: bool = True,
     summed: Sequence[FloatArray] | None = None,
+    loss: Loss | None = None,
 ) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
     """Who the robots ``rows`` see (``sight``: range, fov, direction) and hear (within
-    ``radio_range``, among the ``talking``): ``(seen, heard)``, ``(offsets, ids, distances,
-    bearings, dx, dy, *carried)`` (each of ``carried`` ``(n,)`` read at the robots seen; the
-    bearings empty unless ``bearings``) and ``(offsets, ids, distances, *summed)`` over those
-    rows, ids increasing in each row; each of ``summed`` ``(n,)`` added up over each row heard
-    (in increasing id), whose ids and distances are then left empty."""
+    ``radio_range``, among the ``talking``, through the radio's ``loss``): ``(seen, heard)``,
+    ``(offsets, ids, distances, bearings, dx, dy, *carried)`` (each of ``carried`` ``(n,)`` read
+    at the robots seen; the bearings empty unless ``bearings``) and ``(offsets, ids, distances,
+    lost, *summed)`` over those rows, ids increasing in each row; ``lost`` each row's messages
+    lost (empty without ``loss``); each of ``summed`` ``(n,)`` added up over each row heard (in
+    increasing id), whose ids and distances are then left empty (as where ``summed`` is empty:
+    the rows only counted)."""
     n = len(positions)
     reach = max(0.0 if sight is None else sight[0], 0.0 if radio_range is None else radio_range)
     asked = np.zeros(n, dtype=bool)
@@ -127,6 +131,7 @@ def perceive(
     indptr, indices, distances = neighbours(positions, reach, rows=asked)
     seen: list[tuple[np.ndarray, ...]] = []
     heard: list[tuple[np.ndarray, ...]] = []
+    lost: list[int] = []
     for i in rows:
         js, d = indices[indptr[i] : indptr[i + 1]], distances[indptr[i] : indptr[i + 1]]
         dx, dy = positions[js, 0] - positions[i, 0], positions[js, 1] - positions[i, 1]
@@ -139,6 +144,10 @@ def perceive(
             seen.append((js[keep], d[keep], bearing[keep], dx[keep], dy[keep]))
         if radio_range is not None and talking is not None:
             keep = (d <= radio_range) & talking[js]
+            if loss is not None:
+                offered = int(keep.sum())
+                keep[keep] = delivered(loss, np.full(offered, i), js[keep], d[keep])
+                lost.append(offered - int(keep.sum()))
             heard.append((js[keep], d[keep]))
 
     def csr(parts: list[tuple[np.ndarray, ...]], columns: int) -> tuple[np.ndarray, ...]:
@@ -152,14 +161,14 @@ def perceive(
     if not bearings:
         seen_csr = (*seen_csr[:3], np.zeros(0), *seen_csr[4:])
     ids = seen_csr[1]
-    heard_csr = csr(heard, 2)
-    if summed:
-        offsets, senders = heard_csr[:2]
+    offsets, senders, gaps = csr(heard, 2)
+    heard_csr: tuple[np.ndarray, ...] = (offsets, senders, gaps, np.array(lost, dtype=np.int64))
+    if summed is not None:
         sums = [
             segment_reduce(np.asarray(values, dtype=np.float64)[:, None], offsets, "sum", senders)[:, 0]
             for values in summed
         ]
-        heard_csr = (offsets, np.zeros(0, dtype=np.int64), np.zeros(0), *sums)
+        heard_csr = (offsets, np.zeros(0, dtype=np.int64), np.zeros(0), heard_csr[3], *sums)
     return (*seen_csr, *(np.asarray(values, dtype=np.float64)[ids] for values in carried or ())), heard_csr
 
 

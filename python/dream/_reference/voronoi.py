@@ -17,6 +17,7 @@ import numpy as np
 
 from dream._checks import FloatArray
 from dream._csr import offsets_of, spans
+from dream._reference.draws import Loss, delivered
 from dream._reference.neighbours import far_from, neighbours, neighbours_of
 
 #: Largest coordinate magnitude (m) of robots, agents and bounds (the public API rejects more):
@@ -174,6 +175,7 @@ def heard_cells(
     radius: float,
     bounds: tuple[float, float, float, float],
     resolution: int = 64,
+    loss: Loss | None = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray]:
     """The cells of robots ``hearers`` ``(k,)`` (increasing) at ``here`` ``(k, 2)``, as
     :func:`voronoi_cells` without neighbours, each clipped by what it hears, then the robots it
@@ -181,17 +183,21 @@ def heard_cells(
 
     Robot i hears robot j within ``range`` (:func:`neighbours`, of the true ``positions``
     ``(n, 2)``): ``said_now[j]`` when j < i (robots of lower index took their turn first), else
-    ``said[j]``; a NaN message is nothing said.
+    ``said[j]``; a NaN message is nothing said, and one lost to the radio's ``loss``
+    (:func:`~dream._reference.draws.delivered`) is not heard.
     """
     k, n = len(hearers), len(positions)
     rows = np.zeros(n, dtype=bool)
     rows[hearers] = True
-    indptr, indices, _ = neighbours(positions, range, rows=rows)
+    indptr, indices, distances = neighbours(positions, range, rows=rows)
     counts = np.diff(indptr)[hearers]
     owners = np.repeat(np.arange(k), counts)
-    senders = indices[spans(indptr[hearers], counts)]
+    at = spans(indptr[hearers], counts)
+    senders = indices[at]
     heard = np.where((senders < hearers[owners])[:, None], said_now[senders], said[senders])
     spoken = ~np.isnan(heard[:, 0])
+    if loss is not None:
+        spoken &= delivered(loss, hearers[owners], senders, distances[at])
     heard, owners = heard[spoken], owners[spoken]
     silent = far_from(seen_points, heard, same, seen_indptr, offsets_of(owners, k))
     seen_owners = np.repeat(np.arange(k), np.diff(seen_indptr))

@@ -15,6 +15,7 @@ from __future__ import annotations
 # no module shadows the function of its name (which also hides the function from the API page);
 # each kernel calls its implementation through _dispatch. The public names are this package's.
 from dream import _checks
+from dream._reference.draws import Loss
 from dream.errors import GeometryError
 from dream.kernels._dispatch import IMPLEMENTATION
 from dream.kernels._dynamics import (
@@ -62,6 +63,7 @@ __all__ = [
     "neighbours_of",
     "far_from",
     "perceive",
+    "Loss",
     "linked",
     "HrvoPlanner",
     "hrvo",

@@ -9,6 +9,7 @@ import numpy as np
 
 import dream._reference as _reference
 from dream._checks import FloatArray, as_array, as_flags, as_offsets, check_nonnegative, check_robot_id
+from dream._reference.draws import Loss
 from dream.kernels._dispatch import implementation, kernel_input
 
 
@@ -112,7 +113,8 @@ def far_from(points: Any, others: Any, distance: float, *, offsets: tuple[Any, A
 #: What the asked robots see: ``(offsets, ids, distances, bearings, dx, dy, *carried)`` over
 #: their rows.
 Perceived = tuple[np.ndarray, ...]
-#: What they hear: ``(offsets, ids, distances, *summed)`` over their rows.
+#: What they hear: ``(offsets, ids, distances, lost, *summed)`` over their rows (a graph radio's:
+#: ``(offsets, ids, distances)``).
 Heard = tuple[np.ndarray, ...]
 
 
@@ -126,7 +128,8 @@ def perceive(
     talking: Any = None,
     carried: Sequence[Any] = (),
     bearings: bool = True,
-    summed: Sequence[Any] = (),
+    summed: Sequence[Any] | None = None,
+    loss: Loss | None = None,
 ) -> tuple[Perceived, Heard]:
     """Who the robots ``rows`` ``(m,)`` (increasing ids) see and hear, in one neighbour query.
 
@@ -134,7 +137,7 @@ def perceive(
     rad: the field of view about i's heading turned by ``direction``; a co-located robot is
     always seen), and heard when it is within ``radio_range`` (m) and ``talking[j]``. Returns
     ``(seen, heard)``: ``(offsets (m + 1,), ids, distances, bearings, dx, dy)`` and ``(offsets,
-    ids, distances)``; row r's entries are ``offsets[r]:offsets[r + 1]``, ids increasing;
+    ids, distances, lost)``; row r's entries are ``offsets[r]:offsets[r + 1]``, ids increasing;
     bearings are world-frame directions from the perceiving robot towards the other, ``(dx, dy)``
     the other's position less the perceiving robot's; then one column per array of ``carried``
     (each ``(n,)``, one value per robot, NaN passed on: the velocities a movement sensor reports,
@@ -145,7 +148,12 @@ def perceive(
     Each array of ``summed`` (``(n,)``, one value per robot) is added up over each row heard,
     ``(m,)`` after the heard columns, which are then left empty but for the offsets: a radio's
     inbox that a decision only sums (a consensus) needs no rows. The values add in increasing id
-    from +0.0, as :func:`segment_reduce` adds a listed row: the same bits.
+    from +0.0, as :func:`segment_reduce` adds a listed row: the same bits. ``summed=[]`` counts
+    each row heard (the offsets) and lists nothing.
+
+    A radio with a ``loss`` (:class:`Loss`) draws each message's fate where it finds it: a lost
+    message is not heard (nor summed), and ``lost`` ``(m,)`` counts each row's lost messages
+    (empty without a loss).
     """
     p = kernel_input(positions, "positions", (None, 2))
     n = p.shape[0]
@@ -156,14 +164,14 @@ def perceive(
         check_nonnegative(sight[1], "fov")
     if (radio_range is None) != (talking is None):
         raise ValueError("give both `radio_range` and `talking`, or neither")
-    if summed and radio_range is None:
-        raise ValueError("`summed` needs a radio: give `radio_range` and `talking`")
+    if (summed is not None or loss is not None) and radio_range is None:
+        raise ValueError("`summed` and `loss` need a radio: give `radio_range` and `talking`")
     flags = None
     if radio_range is not None:
         check_nonnegative(radio_range, "radio range")
         flags = as_flags(talking, "talking", n)
     columns = [_per_robot(values, n, "carried") for values in carried]
-    sums = [_per_robot(values, n, "summed") for values in summed]
+    sums = None if summed is None else [_per_robot(values, n, "summed") for values in summed]
     return implementation("perceive")(
         p,
         h,
@@ -173,8 +181,25 @@ def perceive(
         talking=flags,
         carried=columns or None,
         bearings=bearings,
-        summed=sums or None,
+        summed=sums,
+        loss=checked_loss(loss),
     )
+
+
+def checked_loss(loss: Loss | None) -> Loss | None:
+    """``loss`` checked (``keep`` within [0, 1], ``per_metre`` finite and >= 0, integer words),
+    its seed as the draws read it (modulo 2^64)."""
+    if loss is None:
+        return None
+    seed, stream, step, keep, per_metre = loss
+    for name, word in (("seed", seed), ("stream", stream), ("step", step)):
+        if not isinstance(word, (int, np.integer)):
+            raise ValueError(f"the loss's {name} must be an integer, got {word!r}")
+    if not 0.0 <= keep <= 1.0:
+        raise ValueError(f"the loss's `keep` must be within [0, 1], got {keep}")
+    if not (np.isfinite(per_metre) and per_metre >= 0):
+        raise ValueError(f"the loss's `per_metre` must be finite and >= 0, got {per_metre}")
+    return Loss(int(seed) % 2**64, int(stream), int(step), float(keep), float(per_metre))
 
 
 def linked(rows: Any, graph: tuple[Any, Any], talking: Any, *, positions: Any = None) -> Heard:

@@ -8,8 +8,10 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from dream._checks import Bounds, FloatArray, as_array, as_offsets, as_shaped, checked_bounds
+from dream._reference.draws import Loss
 from dream._reference.voronoi import MAX_COORDINATE
 from dream.kernels._dispatch import core_checks, implementation, kernel_input
+from dream.kernels._neighbours import checked_loss
 from dream.specs import ROBOTARIUM
 
 
@@ -142,6 +144,7 @@ def heard_cells(
     bounds: Bounds = ROBOTARIUM.bounds,
     resolution: int = 64,
     polygons: bool = False,
+    loss: Loss | None = None,
 ) -> VoronoiCells:
     """The cells of robots that know the others only by what a range radio tells them, each as
     :func:`voronoi_cell` computes it from what its robot knows.
@@ -170,6 +173,8 @@ def heard_cells(
         hears clip its cell too.
     virtual : (indptr (k + 1,), points (j, 2)), optional
         Each hearer's virtual agents (see :func:`obstacle_agents`).
+    loss : Loss, optional
+        The radio's losses: a message lost is not heard, drawn as :func:`perceive` draws it.
     """
     p = _points(here, "here")
     k = p.shape[0]
@@ -209,6 +214,7 @@ def heard_cells(
         radius=radius,
         bounds=_checked_box(bounds),
         resolution=resolution,
+        loss=checked_loss(loss),
     )
     return VoronoiCells(centroids, areas, vertices if polygons else None, offsets if polygons else None)
 

@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 
 from dream._checks import FloatArray
+from dream._reference.draws import delivered as _delivered
+from dream.kernels import Loss
 from dream.kernels._dispatch import implementation
 
 #: Streams: one per kind of draw, so that two kinds never share a number.
@@ -53,6 +55,14 @@ def normal(seed: int, stream: int, step: int, *keys: Any) -> FloatArray:
 def integers(low: int, high: int, seed: int, stream: int, step: int, *keys: Any) -> np.ndarray:
     """Integers uniform in ``[low, high]``."""
     return low + np.floor(uniform(seed, stream, step, *keys) * (high - low + 1)).astype(np.int64)
+
+
+def delivered(loss: Loss, hearers: np.ndarray, senders: np.ndarray, distances: FloatArray) -> np.ndarray:
+    """Which messages get through ``loss`` (:class:`dream.kernels.Loss`), ``(m,)`` bool: message e
+    from ``senders[e]`` to ``hearers[e]``, ``distances[e]`` (m) apart. The rule
+    :func:`dream.kernels.perceive` draws where it finds the messages, for those listed here (a
+    graph radio's, or a bursty link's)."""
+    return _delivered(loss, hearers, senders, distances, implementation("draws"))
 
 
 def _kind(words: np.ndarray, shape: tuple[int, ...]) -> str:

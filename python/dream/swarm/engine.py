@@ -35,7 +35,7 @@ import numpy as np
 from dream import kernels
 from dream._checks import all_finite, per_robot
 from dream.faults import CONSTANT_LIE, DRIFT_PER_STEP, RANDOM_LIE, FaultState
-from dream.kernels import VoronoiCells
+from dream.kernels import Loss, VoronoiCells
 from dream.kernels._dispatch import implementation
 from dream.kernels._neighbours import Heard, Perceived
 from dream.obstacles import sensed
@@ -112,7 +112,7 @@ class Engine:
         self.lossy = np.zeros(0, dtype=np.int64)  #: links (receiver * n + sender) in a loss burst
         self.traffic = Traffic(n)  #: each robot's messages sent, heard and lost so far
         #: whether to count them (the runner counts only for an output that reads them: the
-        #: trajectory log, a recording; without, a lossless inbox is found only when read)
+        #: trajectory log, a recording; without, a range radio's inbox is found only when read)
         self.count_traffic = True
         #: whether a decision has read a deferred inbox: from then on it is found with the robots
         #: seen, in the same neighbour query (one pass where two would be made)
@@ -225,15 +225,19 @@ class Engine:
         reported = partial(seen_velocity, commands, x[2])
         carried = movement is not None and self._velocities_carried(faults)
         velocities = reported() if carried else ()
+        # A range radio's losses are drawn where the kernels find the messages, but for bursty
+        # links': a link's chain steps on every message offered, listed for _hear.
         by_range = radio is not None and radio.graph is None
-        lossless = by_range and self._lossless(faults)
-        # Without losses and counts to keep, the inbox is found only if the decision reads it
-        # (View.cells need not: a robot in a crowd hears hundreds of messages), until one does;
-        # a decision that has only counted or summed it gets those from the perception's pass.
-        deferred = lossless and not self.count_traffic and not self.inbox_read
+        found = by_range and (faults is None or faults.faults.burst is None)
+        loss = self._loss(t, faults) if found else None
+        # Without counts to keep, the inbox is found only if the decision reads it (View.cells
+        # need not: a robot in a crowd hears hundreds of messages), until one does; a decision
+        # that has only counted or summed it gets those from the perception's pass, as do the
+        # fault counts the messages lost (then counted there, for every inbox).
+        deferred = found and not self.count_traffic and not self.inbox_read
         floats = [name for name, kind in self.kinds.items() if kind.kind == "f"]
-        in_pass = deferred and self.inbox_summed and bool(floats)
-        summed = floats if in_pass else []
+        in_pass = deferred and ((self.inbox_summed and bool(floats)) or loss is not None)
+        summed = (floats if self.inbox_summed else []) if in_pass else None
         listened = by_range and (not deferred or in_pass)
         seen, heard = kernels.perceive(
             x[:2].T,
@@ -244,8 +248,11 @@ class Engine:
             talking=talking if listened else None,
             carried=velocities,  # read at the robots seen, in the same pass
             bearings=self._bearings_read(faults),
-            summed=[self.board[name] for name in summed],
+            summed=None if summed is None else [self.board[name] for name in summed],
+            loss=loss,  # a loss is drawn in the pass: the radio is then listened to
         )
+        if loss is not None and faults is not None:
+            faults.messages_lost += int(heard[3].sum())
         if radio is not None and radio.graph is not None:
             heard = _linked(
                 radio.graph, rows, x, talking, measured=faults is not None and faults.faults.distance_loss > 0
@@ -253,19 +260,19 @@ class Engine:
         inbox: Neighbourhood
         if deferred:
             assert radio is not None
-            sums = Summed(np.diff(heard[0]), dict(zip(summed, heard[3:], strict=True))) if in_pass else None
+            sums = Summed(np.diff(heard[0]), dict(zip(summed or [], heard[4:], strict=True))) if in_pass else None
 
             def load() -> Neighbourhood:
-                if sums is None and summing():  # counted or summed only, so far
+                if summing() and not (sums is not None and sums.sums):  # counted or summed only, so far
                     self.inbox_summed = True
                 else:
                     self.inbox_read = True
-                heard = kernels.perceive(x[:2].T, x[2], rows, radio_range=radio.range, talking=talking)[1]
-                return self._hear(t, rows, heard, faults).frozen()
+                heard = kernels.perceive(x[:2].T, x[2], rows, radio_range=radio.range, talking=talking, loss=loss)[1]
+                return self._hear(t, rows, heard, faults, drawn=loss is not None).frozen()
 
             inbox = Deferred(load, sums)
         else:
-            inbox = self._hear(t, rows, heard, faults).frozen()
+            inbox = self._hear(t, rows, heard, faults, drawn=loss is not None).frozen()
         ids, command = rows.copy(), commands.T[rows]  # (k, 2) rows of their own
         ids.flags.writeable = command.flags.writeable = False
         at = at_rows(rows, self.n)
@@ -279,8 +286,8 @@ class Engine:
             self._obstacles(t, rows, x, faults).frozen(),
             command,
         )
-        if lossless:
-            view.board_cells = partial(self._board_cells, x[:2].T, talking)
+        if found:
+            view.board_cells = partial(self._board_cells, x[:2].T, talking, loss)
         if self.focus is not None:
             self._keep_focus(t, rows, view, self.focus)
         return view
@@ -501,47 +508,52 @@ class Engine:
         return Neighbourhood(offsets, {"dx": dx, "dy": dy, "distance": np.hypot(dx, dy)})
 
     # -- radio -------------------------------------------------------------------------------
-    def _hear(self, t: int, rows: np.ndarray, heard: Heard, faults: FaultState | None) -> Neighbourhood:
-        """The messages delivered to ``rows`` by the talking robots in range (what
-        :func:`dream.kernels.perceive` found), with the radio's and the world's losses."""
-        offsets, senders, gaps = heard
+    def _hear(
+        self, t: int, rows: np.ndarray, heard: Heard, faults: FaultState | None, drawn: bool = False
+    ) -> Neighbourhood:
+        """The messages delivered to ``rows`` by the talking robots in range or linked (what
+        :func:`dream.kernels.perceive` or :func:`~dream.kernels.linked` found), with the radio's
+        and the world's losses: ``drawn`` where the perception drew them (``heard[3]``: each row's
+        messages lost, counted in the faults already), else drawn here."""
+        offsets, senders, gaps = heard[:3]
         radio = self.robot.radio
         if radio is None:
             return Neighbourhood(offsets, {"sender": senders})
         inbox = Neighbourhood(offsets, {"sender": senders}, (senders, self.board))
-        f = None if faults is None else faults.faults
-        keep: float | np.ndarray = 1.0 - radio.loss
-        if f is not None:
-            keep = keep * (1.0 - f.loss)
-            if f.distance_loss > 0:  # a graph radio measures the distances for this loss only
-                keep = keep * np.maximum(1.0 - f.distance_loss * gaps, 0.0)
-        lossy = np.broadcast_to(keep < 1.0, senders.shape)
-        if not lossy.any() and (f is None or f.burst is None):
+        loss = None if drawn else self._loss(t, faults)
+        burst = None if faults is None else faults.faults.burst
+        if loss is None and burst is None:
             if self.count_traffic:
-                self.traffic.received(rows, offsets)
+                self.traffic.received(rows, offsets, lost=heard[3] if drawn else None)
             return inbox
         me = np.repeat(rows, np.diff(offsets))
         through = np.ones(len(senders), dtype=bool)
-        if lossy.any():  # a draw for every message: one kept for sure passes too (a draw is below 1)
-            through = draws.uniform(self.seed, draws.LOSS, t, me, senders) < keep
-        if f is not None and f.burst is not None:
-            through &= ~self._burst(t, me, senders, f.burst)
+        if loss is not None:  # a draw for every message: one kept for sure passes too (a draw is below 1)
+            through = draws.delivered(loss, me, senders, gaps)
+        if burst is not None:
+            through &= ~self._burst(t, me, senders, burst)
         if faults is not None:
             faults.messages_lost += int((~through).sum())
         if self.count_traffic:
             self.traffic.received(rows, offsets, through)
         return inbox.where(through)
 
-    def _lossless(self, faults: FaultState | None) -> bool:
-        """Whether every message in the radio's range gets through (no loss of any kind)."""
-        f = None if faults is None else faults.faults
-        radio_loss = 0.0 if self.robot.radio is None else self.robot.radio.loss
-        return radio_loss == 0 and (f is None or (f.loss == 0 and f.distance_loss == 0 and f.burst is None))
+    def _loss(self, t: int, faults: FaultState | None) -> Loss | None:
+        """The radio's and the world's message losses at step ``t`` (``None``: every message in
+        range or linked gets through, unless a burst takes it)."""
+        keep = 1.0 - (0.0 if self.robot.radio is None else self.robot.radio.loss)
+        per_metre = 0.0
+        if faults is not None:  # a graph radio measures the distances for this loss only
+            keep, per_metre = keep * (1.0 - faults.faults.loss), faults.faults.distance_loss
+        if keep == 1.0 and per_metre == 0:
+            return None
+        return Loss(self.seed, draws.LOSS, t, keep, per_metre)
 
     def _board_cells(
         self,
         positions: np.ndarray,
         talking: np.ndarray,
+        loss: Loss | None,
         rows: np.ndarray,
         here: np.ndarray,
         fields: tuple[str, str],
@@ -550,9 +562,10 @@ class Engine:
         virtual: tuple[Any, Any],
         **shape: Any,
     ) -> VoronoiCells:
-        """:meth:`View.cells` of ``rows`` when every message in range gets through: what each hears
-        is what the talking robots within range of it (``positions`` ``(n, 2)``) have on the board,
-        and :func:`dream.kernels.heard_cells` looks only at the messages near each cell."""
+        """:meth:`View.cells` of ``rows`` for a range radio without bursts: what each hears is what
+        the talking robots within range of it (``positions`` ``(n, 2)``) have on the board, less
+        the messages ``loss`` takes, and :func:`dream.kernels.heard_cells` looks only at the
+        messages near each cell (drawing the loss of those alone, as the perception draws it)."""
         missing = [name for name in fields if name not in self.board]
         if missing:
             raise KeyError(f"no field {missing[0]!r} in the radio's messages (its fields: {', '.join(self.board)})")
@@ -563,7 +576,7 @@ class Engine:
         assert self.robot.radio is not None  # a range radio
         radio_range = self.robot.radio.range
         return kernels.heard_cells(
-            here, rows, positions, said, range=radio_range, seen=seen, same=same, virtual=virtual, **shape
+            here, rows, positions, said, range=radio_range, seen=seen, same=same, virtual=virtual, loss=loss, **shape
         )
 
     def _burst(self, t: int, me: np.ndarray, others: np.ndarray, burst: tuple[float, float]) -> np.ndarray:

@@ -211,8 +211,8 @@ class View:
     heeded: Any = field(default=None, repr=False)  #: which detections the safety layer heeds (:meth:`heed`)
     safety: Any = field(default=None, repr=False)  #: each row's safety radius (:meth:`keep_apart`)
     turn: Any = field(default=None, repr=False)  #: each row's side and stop (:meth:`aside`)
-    #: The engine's way to :meth:`cells` of robots ``ids`` when every message in range got through
-    #: (None: the rows').
+    #: The engine's way to :meth:`cells` of robots ``ids`` from the board, for a range radio
+    #: without bursts (None: the rows').
     board_cells: Any = field(default=None, repr=False)
 
     def __len__(self) -> int:
@@ -271,9 +271,10 @@ class View:
         (m) from every one of those (a robot seen that no message accounts for, a crashed one
         say), then by its ``virtual`` agents (CSR rows; :func:`dream.kernels.obstacle_agents`).
 
-        When every message in the radio's range got through (no loss of any kind), the engine
-        looks only at the messages near each cell (:func:`dream.kernels.heard_cells`): a robot in a
-        crowd hears hundreds, of which a dozen shape its cell. The cells are the same, to the bit.
+        For a range radio (but under bursts of loss), the engine looks only at the messages near
+        each cell (:func:`dream.kernels.heard_cells`, drawing their losses as the perception
+        does): a robot in a crowd hears hundreds, of which a dozen shape its cell. The cells are
+        the same, to the bit.
         """
         empty: Rows = (np.zeros(len(self) + 1, dtype=np.int64), np.zeros((0, 2)))
         seen, virtual = seen or empty, virtual or empty
@@ -317,7 +318,7 @@ class SwarmRobot:
         :data:`~dream.swarm.engine.LEAST_BLOCK` rows on several threads at once (one per core of
         the Rust kernels' pool), with the same bits: NumPy gives the thread back while it works
         on a block's arrays. Work a decision does once a call for the whole swarm (``cells`` of
-        a lossless radio looks up the whole board) is then done once a block. Default False: one
+        a range radio looks up the whole board) is then done once a block. Default False: one
         call for all the rows.
     memory : dict
         Each memory field's initial value (a float or an int, or an array of them: each robot then
