@@ -306,8 +306,9 @@ def test_the_velocities_seen_are_worked_out_only_once_read(monkeypatch, one_by_o
 @pytest.mark.parametrize("faults", [None, Faults(loss=0.2, latency=2)], ids=["lossless", "lossy"])
 def test_runs_are_the_same_whether_or_not_the_messages_are_counted(tmp_path, faults):
     # Without an output that shows the message counts (a trajectory log, a recording) the runner
-    # does not count them, and a lossless inbox is found only when the decision reads it (a
-    # coverage robot's never is): the run is the same.
+    # does not count them, and a range radio's inbox is found only when the decision reads it (a
+    # coverage robot's never is; its losses are drawn where the messages are found): the run is
+    # the same.
 
     runs = [
         dream.run(

@@ -16,7 +16,7 @@ import pytest
 import dream
 from dream.experiments.voronoi_coverage import CoverageRobot
 from dream.faults import Faults
-from dream.swarm import engine
+from dream.swarm import draws, engine, threads
 
 EXAMPLE = str(Path(__file__).resolve().parents[2] / "examples" / "rendezvous.py")
 FAULTS = Faults(loss=0.1, crash=0.05, crash_at=40, sensor_noise=0.002, latency=1, byzantine=2)
@@ -82,3 +82,36 @@ def test_the_decision_threads_follow_the_kernels_pool(monkeypatch, asked, expect
     monkeypatch.setenv("RAYON_NUM_THREADS", asked)
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     assert engine.threads() == (cores if expected is None else expected)  # rayon's default for 0 or none
+
+
+def test_normal_draws_worked_out_on_threads_are_the_same_bits(monkeypatch):
+    # A noisy sensor's normal draws are worked out in pieces, one a thread: the same numbers as
+    # on one thread, at every shape (a row a message, the full broadcast, one number).
+    cases = [
+        (np.arange(10_001)[:, None] // 3, np.arange(10_001)[:, None], np.arange(4)),
+        (np.arange(2_000), np.arange(3)[:, None]),
+        (7,),
+    ]
+    monkeypatch.setattr(threads, "threads", lambda: 1)
+    one = [draws.normal(5, draws.DETECTION_NOISE, 3, *keys) for keys in cases]
+    pieces = []
+    spread = threads.spread
+    monkeypatch.setattr(draws, "spread", lambda work, size, least: pieces.append(size) or spread(work, size, least))
+    monkeypatch.setattr(threads, "threads", lambda: 3)
+    monkeypatch.setattr(draws, "LEAST_SPREAD", 100)
+    many = [draws.normal(5, draws.DETECTION_NOISE, 3, *keys) for keys in cases]
+    for a, b in zip(one, many, strict=True):
+        assert type(a) is type(b) and np.shape(a) == np.shape(b) and np.array_equal(a, b)
+    assert pieces == [40_004, 6_000, 1]
+
+
+@pytest.mark.parametrize(("size", "least", "expected"), [(1000, 100, 3), (250, 100, 2), (99, 100, 1), (0, 100, 1)])
+def test_spread_cuts_the_items_into_one_piece_a_thread(monkeypatch, size, least, expected):
+    monkeypatch.setattr(threads, "threads", lambda: 3)
+    worked = []
+    threads.spread(lambda piece: worked.append((piece.start, piece.stop)), size, least)
+    assert len(worked) == expected
+    covered = sorted(worked)
+    assert covered[0][0] == 0 and covered[-1][1] == size
+    assert all(a[1] == b[0] for a, b in zip(covered, covered[1:]))  # every item once
+    assert all(stop - start >= min(least, size) for start, stop in worked)

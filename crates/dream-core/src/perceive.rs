@@ -476,6 +476,7 @@ struct Find<'a> {
     /// within): a sensor that sees all around decides by these alone.
     sight_within: f64,
     radio_within: f64,
+    /// The radio's losses, drawn for each robot heard (`None`: every one gets through).
     loss: Option<Loss>,
 }
 
@@ -527,8 +528,8 @@ struct Out<'a> {
 }
 
 impl<'a> Out<'a> {
-    /// The first `seen` seen entries, `heard` heard ones and `rows` rows' sums and heard counts,
-    /// and the rest (a column left empty stays empty).
+    /// The first `seen` seen entries, `heard` heard ones and `rows` rows' sums, heard counts and
+    /// lost counts, and the rest (a column left empty stays empty).
     fn split_at(self, seen: usize, heard: usize, rows: usize) -> (Self, Self) {
         fn cut<T>(column: &mut [T], at: usize) -> (&mut [T], &mut [T]) {
             column.split_at_mut(at.min(column.len()))
@@ -586,8 +587,8 @@ impl Find<'_> {
 
     /// The robots within `reach` of robot i (by the squared distance's margin, `reach_squared`)
     /// as keys `j << 32 | k` (robot j at place k of the grid's cell order), in the grid's order:
-    /// its block of cells streamed from the grid's cell-ordered coordinates. Sorted, the keys go by id; 8
-    /// bytes each sort faster than the robots' offsets with them (measured 1.12x on the
+    /// its block of cells streamed from the grid's cell-ordered coordinates. Sorted, the keys go
+    /// by id; 8 bytes each sort faster than the robots' offsets with them (measured 1.12x on the
     /// rendezvous example's perception).
     fn near(&self, &Asked { i, x, y, .. }: &Asked, (reach, reach_squared): (f64, f64), keys: &mut Vec<u64>) {
         let (sorted_xs, sorted_ys) = self.grid.sorted();
@@ -672,11 +673,12 @@ impl Find<'_> {
         self.loss.is_none_or(|loss| loss.delivered(hearer, j, distance))
     }
 
-    /// How many robots robot i sees and how many it hears: as [`Find::sort`] decides, without a
-    /// list of the robots near (where the radio sums, the robots heard are not all looked at:
-    /// that count is not used). A sensor that sees all around (or none) needs no bearing, and
-    /// then the count is one pass over the block without a data-dependent branch, nor a root:
-    /// `squared <= within_squared(range)` decides as `sqrt(squared) <= range`.
+    /// How many robots robot i sees and how many it hears, and how many messages it loses: as
+    /// [`Find::sort`] decides, without a list of the robots near (where the radio sums, the
+    /// robots heard are not all looked at: those counts are not used). A sensor that sees all
+    /// around (or none) needs no bearing, and then the count is one pass over the block without
+    /// a data-dependent branch (but for a lossy radio's draws), nor a root: `squared <=
+    /// within_squared(range)` decides as `sqrt(squared) <= range`.
     fn count(&self, asked: &Asked) -> Counts {
         let &Asked { i, at, x, y } = asked;
         let mut counts = Counts::default();

@@ -4,9 +4,8 @@ use dream_core::geom::Arena;
 use dream_core::heard;
 use pyo3::prelude::*;
 
-use crate::draws::{loss_of, LossArgs};
-
 use crate::arrays::{count_of, indices_in, points_in};
+use crate::draws::{loss_of, LossArgs};
 use crate::errors::PyDreamResult;
 use crate::voronoi::{cell_arrays, CellArrays};
 

@@ -4,11 +4,10 @@ use dream_core::neighbours::{self as core, FieldOfView, RowsOf};
 use dream_core::perceive::{linked as core_linked, perceive as core_perceive, Perceived, Radio, Sight};
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
-
-use crate::draws::{loss_of, LossArgs};
 use pyo3::types::PyTuple;
 
 use crate::arrays::{columns_in, count_of, flags_of, indices_of, points_of, vector_in, vector_of, with_indices};
+use crate::draws::{loss_of, LossArgs};
 use crate::errors::{value_error, PyDreamResult};
 
 type CsrArrays<'py> = (

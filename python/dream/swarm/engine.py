@@ -46,6 +46,7 @@ from dream.swarm.neighbourhood import Deferred, Loaded, Neighbourhood, Summed, s
 from dream.swarm.robot import SwarmRobot, View
 from dream.swarm.rows import at_rows, put_all, put_rows, take_all, take_rows
 from dream.swarm.safety import drive
+from dream.swarm.threads import threads
 from dream.traffic import Traffic
 
 #: What robots said: their ids ``(k,)`` and their message's fields (name to ``(k,)``).
@@ -233,10 +234,11 @@ class Engine:
         # Without counts to keep, the inbox is found only if the decision reads it (View.cells
         # need not: a robot in a crowd hears hundreds of messages), until one does; a decision
         # that has only counted or summed it gets those from the perception's pass, as do the
-        # fault counts the messages lost (then counted there, for every inbox).
+        # world's fault counts the messages lost (then counted there, for every inbox).
         deferred = found and not self.count_traffic and not self.inbox_read
         floats = [name for name, kind in self.kinds.items() if kind.kind == "f"]
-        in_pass = deferred and ((self.inbox_summed and bool(floats)) or loss is not None)
+        counted = loss is not None and faults is not None
+        in_pass = deferred and ((self.inbox_summed and bool(floats)) or counted)
         summed = (floats if self.inbox_summed else []) if in_pass else None
         listened = by_range and (not deferred or in_pass)
         seen, heard = kernels.perceive(
@@ -249,9 +251,10 @@ class Engine:
             carried=velocities,  # read at the robots seen, in the same pass
             bearings=self._bearings_read(faults),
             summed=None if summed is None else [self.board[name] for name in summed],
-            loss=loss,  # a loss is drawn in the pass: the radio is then listened to
+            loss=loss if listened else None,
         )
-        if loss is not None and faults is not None:
+        if counted:  # listened to, deferred or not
+            assert faults is not None
             faults.messages_lost += int(heard[3].sum())
         if radio is not None and radio.graph is not None:
             heard = _linked(
@@ -691,15 +694,6 @@ def _clocks(clock: float | np.ndarray, rows: np.ndarray) -> np.ndarray:
 def _bearings(seen: Neighbourhood) -> np.ndarray:
     """The bearings of the robots seen, from their offsets (world frame, towards them)."""
     return np.arctan2(seen["dy"], seen["dx"])
-
-
-def threads() -> int:
-    """The threads to decide on: as many as the Rust kernels' pool has (``RAYON_NUM_THREADS``,
-    where it is a whole number above 0, else the cores this process may run on)."""
-    asked = os.environ.get("RAYON_NUM_THREADS", "")
-    if asked.isdigit() and int(asked) > 0:
-        return int(asked)
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
 @cache
