@@ -96,9 +96,9 @@ def test_normal_draws_worked_out_on_threads_are_the_same_bits(monkeypatch):
     one = [draws.normal(5, draws.DETECTION_NOISE, 3, *keys) for keys in cases]
     pieces = []
     spread = threads.spread
-    monkeypatch.setattr(draws, "spread", lambda work, size, least: pieces.append(size) or spread(work, size, least))
+    monkeypatch.setattr(draws, "spread", lambda work, size: pieces.append(size) or spread(work, size))
     monkeypatch.setattr(threads, "threads", lambda: 3)
-    monkeypatch.setattr(draws, "LEAST_SPREAD", 100)
+    monkeypatch.setattr(threads, "LEAST_PIECE", 100)
     many = [draws.normal(5, draws.DETECTION_NOISE, 3, *keys) for keys in cases]
     for a, b in zip(one, many, strict=True):
         assert type(a) is type(b) and np.shape(a) == np.shape(b) and np.array_equal(a, b)
@@ -115,3 +115,12 @@ def test_spread_cuts_the_items_into_one_piece_a_thread(monkeypatch, size, least,
     assert covered[0][0] == 0 and covered[-1][1] == size
     assert all(a[1] == b[0] for a, b in zip(covered, covered[1:]))  # every item once
     assert all(stop - start >= min(least, size) for start, stop in worked)
+
+
+def test_a_noisy_sensors_offsets_worked_out_on_threads_are_the_same_bits(monkeypatch):
+    monkeypatch.setattr(threads, "threads", lambda: 3)
+    monkeypatch.setattr(threads, "LEAST_PIECE", 100)
+    rng = np.random.default_rng(0)
+    distance, bearing = np.abs(rng.normal(size=1_001)), rng.uniform(-4.0, 4.0, 1_001)
+    dx, dy = engine._offsets(distance, bearing)
+    assert np.array_equal(dx, distance * np.cos(bearing)) and np.array_equal(dy, distance * np.sin(bearing))

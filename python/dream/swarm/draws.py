@@ -19,10 +19,6 @@ from dream.kernels import Loss
 from dream.kernels._dispatch import implementation
 from dream.swarm.threads import spread
 
-#: Normal draws a thread works out at least: fewer are not worth waking a thread for (a piece of
-#: 65,536 takes about a millisecond).
-LEAST_SPREAD = 65_536
-
 #: Streams: one per kind of draw, so that two kinds never share a number.
 LOSS, BURST, DETECTION_NOISE, ODOMETRY_NOISE, DROPOUT, CLOCK_JITTER, LATENCY_JITTER, LIE, OBSTACLE_NOISE = range(9)
 
@@ -61,7 +57,7 @@ def normal(seed: int, stream: int, step: int, *keys: Any) -> FloatArray:
         np.cos(b, out=b)
         a *= b
 
-    spread(box_muller, flat_u.size, LEAST_SPREAD)
+    spread(box_muller, flat_u.size)
     return flat_u.reshape(u.shape)[()]
 
 

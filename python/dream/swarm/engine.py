@@ -46,7 +46,7 @@ from dream.swarm.neighbourhood import Deferred, Loaded, Neighbourhood, Summed, s
 from dream.swarm.robot import SwarmRobot, View
 from dream.swarm.rows import at_rows, put_all, put_rows, take_all, take_rows
 from dream.swarm.safety import drive
-from dream.swarm.threads import threads
+from dream.swarm.threads import spread, threads
 from dream.traffic import Traffic
 
 #: What robots said: their ids ``(k,)`` and their message's fields (name to ``(k,)``).
@@ -462,8 +462,7 @@ class Engine:
             noise = draws.normal(self.seed, draws.DETECTION_NOISE, t, me[:, None], others[:, None], np.arange(4))
             columns = {name: columns[name] + sigma * noise[:, k] for k, name in enumerate(SENSED)}
             columns["distance"] = np.maximum(columns["distance"], 0.0)  # never negative, noisy or not
-            dx = columns["distance"] * np.cos(columns["bearing"])
-            dy = columns["distance"] * np.sin(columns["bearing"])
+            dx, dy = _offsets(columns["distance"], columns["bearing"])
         columns["dx"], columns["dy"] = dx, dy
         return Neighbourhood(offsets, columns)
 
@@ -689,6 +688,23 @@ def _linked(
 def _clocks(clock: float | np.ndarray, rows: np.ndarray) -> np.ndarray:
     """The clocks ``(k,)`` of robots ``rows`` from :meth:`Engine._clock`'s answer."""
     return np.full(len(rows), clock) if isinstance(clock, float) else clock[rows]
+
+
+def _offsets(distance: np.ndarray, bearing: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``distance * cos(bearing)`` and ``distance * sin(bearing)``, worked out in pieces on every
+    thread (:func:`~dream.swarm.threads.spread`, the same bits): a cosine and a sine a noisy
+    detection."""
+    dx, dy = np.empty_like(distance), np.empty_like(distance)
+
+    def polar(piece: slice) -> None:
+        x, y = dx[piece], dy[piece]
+        np.cos(bearing[piece], out=x)
+        x *= distance[piece]
+        np.sin(bearing[piece], out=y)
+        y *= distance[piece]
+
+    spread(polar, len(distance))
+    return dx, dy
 
 
 def _bearings(seen: Neighbourhood) -> np.ndarray:

@@ -23,10 +23,17 @@ def threads() -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
-def spread(work: Callable[[slice], None], size: int, least: int) -> None:
+#: Items a thread works through at least: fewer are not worth waking a thread for (65,536 values'
+#: logarithm and cosine take about a millisecond).
+LEAST_PIECE = 65_536
+
+
+def spread(work: Callable[[slice], None], size: int, least: int | None = None) -> None:
     """``work(piece)`` for the slices that cut ``range(size)`` into one piece a thread, each of at
-    least ``least`` items (one piece, on the calling thread, where there are fewer): the calling
-    thread works through the first piece while the pool's threads work through the others."""
+    least ``least`` items (default :data:`LEAST_PIECE`; one piece, on the calling thread, where
+    there are fewer): the calling thread works through the first piece while the pool's threads
+    work through the others."""
+    least = LEAST_PIECE if least is None else least
     pieces = max(1, min(threads(), size // max(least, 1)))
     bounds = [size * k // pieces for k in range(pieces + 1)]
     others = [_pool().submit(work, slice(a, b)) for a, b in zip(bounds[1:-1], bounds[2:])]
