@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dream import _core, _reference
+from dream import _core, _reference, kernels
 from dream.kernels import _dispatch
 from dream.swarm import draws
 
@@ -130,3 +130,34 @@ def test_edge_shapes_and_seeds(core, seed):
     assert column[:, 0].tolist() == [hashed_uniform(seed, [draws.LIE, 1, k, 0]) for k in range(5)]
     assert type(scalar) is np.float64 and scalar == hashed_uniform(seed, [draws.LIE, 1, 7, 3])
     assert type(nothing) is np.float64 and np.isfinite(nothing)
+
+
+@pytest.mark.parametrize(
+    ("loss", "message"),
+    [
+        ((1, 2, 3, 1.5, 0.0), r"`keep` must be within \[0, 1\], got 1.5"),
+        ((1, 2, 3, np.nan, 0.0), r"`keep` must be within \[0, 1\], got nan"),
+        ((1, 2, 3, 0.5, -1.0), "`per_metre` must be finite and >= 0, got -1"),
+        ((1, 2, 3, 0.5, np.inf), "`per_metre` must be finite and >= 0, got inf"),
+        ((1, 2, 3.0, 0.5, 0.0), "the loss's step must be an integer, got 3.0"),
+    ],
+)
+def test_a_bad_radio_loss_is_named(loss, message):
+    # Through both kernels that draw a radio's loss, and their bindings (in their own words: no
+    # panic reaches Python).
+    positions, here, hearers = np.zeros((3, 2)), np.zeros((1, 2)), np.array([0])
+    radio = dict(radio_range=1.0, talking=np.ones(3, dtype=bool))
+    empty = (np.zeros(2, dtype=np.int64), np.zeros((0, 2)))
+    with pytest.raises(ValueError, match=message):
+        kernels.perceive(positions, np.zeros(3), hearers, **radio, loss=kernels.Loss(*loss))
+    with pytest.raises(ValueError, match=message):
+        kernels.heard_cells(here, hearers, positions, positions, range=1.0, loss=kernels.Loss(*loss))
+    if isinstance(loss[2], int):
+        with pytest.raises(ValueError, match=message.split()[0]):
+            _core.perceive(positions, np.zeros(3), hearers, **radio, loss=loss)
+        with pytest.raises(ValueError, match=message.split()[0]):
+            _core.heard_cells(
+                here, hearers, positions, positions, positions, range=1.0, seen_indptr=empty[0],
+                seen_points=empty[1], same=0.0, virtual_indptr=empty[0], virtual_points=empty[1], radius=1.0,
+                bounds=(-1.0, 1.0, -1.0, 1.0), loss=loss,
+            )  # fmt: skip

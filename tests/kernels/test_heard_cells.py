@@ -249,29 +249,6 @@ def test_heard_cells_keep_all_or_lose_all_at_the_bounds(rng):
                 assert_array_equal(a, b)
 
 
-@pytest.mark.parametrize(
-    ("loss", "message"),
-    [
-        ((1, 2, 3, 1.5, 0.0), r"`keep` must be within \[0, 1\], got 1.5"),
-        ((1, 2, 3, np.nan, 0.0), r"`keep` must be within \[0, 1\], got nan"),
-        ((1, 2, 3, 0.5, -1.0), "`per_metre` must be finite and >= 0, got -1"),
-        ((1, 2, 3, 0.5, np.inf), "`per_metre` must be finite and >= 0, got inf"),
-        ((1, 2, 3.0, 0.5, 0.0), "the loss's step must be an integer, got 3.0"),
-    ],
-)
-def test_heard_cells_bad_loss_is_named(rng, loss, message):
-    s = scene(rng, 10, 3.0)
-    with pytest.raises(ValueError, match=message):
-        kernels.heard_cells(s["here"], s["hearers"], s["positions"], s["said"], range=1.0, loss=kernels.Loss(*loss))
-    if isinstance(loss[2], int):  # the binding checks the values too (in its words): no panic reaches Python
-        with pytest.raises(ValueError, match=message.split()[0]):
-            _core.heard_cells(
-                s["here"], s["hearers"], s["positions"], s["said"], s["said"], range=1.0, seen_indptr=s["seen"][0],
-                seen_points=s["seen"][1], same=0.0, virtual_indptr=s["virtual"][0], virtual_points=s["virtual"][1],
-                radius=1.0, bounds=BOUNDS, loss=loss,
-            )  # fmt: skip
-
-
 def test_heard_cells_at_tiny_and_huge_scales_match_the_reference(rng):
     # Squared distances that underflow (a message must not be lost between two rounds' boxes) and
     # a robot 3e18 m away (the search box's cell count overflows: no endless walk of empty cells).

@@ -548,25 +548,6 @@ def test_perceive_draws_the_loss_of_its_seed_stream_and_step(rng):
         assert_array_equal(a, b)
 
 
-@pytest.mark.parametrize(
-    ("loss", "message"),
-    [
-        ((1, 2, 3, 1.5, 0.0), r"`keep` must be within \[0, 1\], got 1.5"),
-        ((1, 2, 3, np.nan, 0.0), r"`keep` must be within \[0, 1\], got nan"),
-        ((1, 2, 3, 0.5, -1.0), "`per_metre` must be finite and >= 0, got -1"),
-        ((1, 2, 3, 0.5, np.inf), "`per_metre` must be finite and >= 0, got inf"),
-        ((1, 2, 3.0, 0.5, 0.0), "the loss's step must be an integer, got 3.0"),
-    ],
-)
-def test_perceive_bad_loss_is_named(loss, message):
-    options = dict(radio_range=1.0, talking=np.ones(3, dtype=bool))
-    with pytest.raises(ValueError, match=message):
-        kernels.perceive(np.zeros((3, 2)), np.zeros(3), [0], **options, loss=kernels.Loss(*loss))
-    if isinstance(loss[2], int):  # the binding checks the values too (in its words): no panic reaches Python
-        with pytest.raises(ValueError, match=message.split()[0]):
-            _core.perceive(np.zeros((3, 2)), np.zeros(3), np.array([0]), **options, loss=loss)
-
-
 def random_graph(rng, n, most):
     """A communication graph over n robots: up to `most` links each, some to itself, some twice."""
     counts = rng.integers(0, most + 1, n)
