@@ -248,10 +248,11 @@ def heard_cells(
     bounds: _Bounds,
     resolution: int = 64,
     loss: tuple[int, int, int, float, float] | None = None,
+    lost: _Ints | None = None,
 ) -> tuple[_Floats, _Floats, _Floats, _Ints]:
     """(centroids (k, 2), areas (k,), vertices (m, 2), offsets (k+1,)) of the cells of robots that
-    know the others by range radio (through its loss, as perceive draws it), by sight and by
-    virtual agents."""
+    know the others by range radio (through its loss, as perceive draws it, and without the
+    links lost, i * n + j, strictly increasing), by sight and by virtual agents."""
 
 def virtual_agents(
     positions: _Floats, vertices: _Floats, offsets: _Ints, *, range: float, offset: float

@@ -54,9 +54,9 @@ def csr(parts, counts):
     return np.concatenate(([0], np.cumsum(counts))).astype(np.int64), np.vstack([np.zeros((0, 2)), *parts])
 
 
-def both(s, radius=1.0, range_=2.0, same=0.08, bounds=BOUNDS, resolution=32, loss=None):
+def both(s, radius=1.0, range_=2.0, same=0.08, bounds=BOUNDS, resolution=32, loss=None, lost=None):
     """The Rust pass's and the reference's ``(centroids, areas, vertices, offsets)`` (through the
-    radio's ``loss``, if any)."""
+    radio's ``loss`` and without the links ``lost``, if any)."""
     args = (s["here"], s["hearers"], s["positions"], s["said"], s["said_now"])
     kw = dict(
         range=range_,
@@ -69,6 +69,7 @@ def both(s, radius=1.0, range_=2.0, same=0.08, bounds=BOUNDS, resolution=32, los
         bounds=bounds,
         resolution=resolution,
         loss=loss,
+        lost=lost,
     )
     return _core.heard_cells(*args, **kw), _reference.heard_cells(*args, **kw)
 
@@ -274,3 +275,31 @@ def test_heard_cells_at_tiny_and_huge_scales_match_the_reference(rng):
 def test_heard_cells_refuse_positions_beyond_reach():
     with pytest.raises(ValueError, match="`positions`"):
         kernels.heard_cells([[0.0, 0.0]], [0], [[0.0, 0.0], [1e308, 0.0]], [[0.0, 0.0], [0.0, 0.0]], range=1.0)
+
+
+@pytest.mark.parametrize("loss", [None, kernels.Loss(3, 0, 9, 0.8, 0.0)], ids=["links alone", "with a loss"])
+def test_heard_cells_without_the_links_lost_match_the_reference(rng, loss):
+    # A burst's lost messages, found as the engine lists an inbox, come as links i * n + j: the
+    # cells are those of the hearers without them (some links out of range, some not hearers').
+    s = scene(rng, 200, 3.0)
+    n = len(s["positions"])
+    lost = np.flatnonzero(rng.random(n * n) < 0.3)
+    got, want = both(s, loss=loss, lost=lost)
+    for a, b in zip(got, want, strict=True):
+        assert_array_equal(a, b)
+    kept, _ = both(s, loss=loss)
+    assert (got[1] != kept[1]).mean() > 0.3  # the links lost matter
+    silent = both(s, loss=loss, lost=np.arange(n * n))[0]  # every link lost: nobody heard
+    unsaid = dict(s, said=np.full_like(s["said"], np.nan), said_now=np.full_like(s["said"], np.nan))
+    for a, b in zip(silent, both(unsaid)[0], strict=True):
+        assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize(
+    ("lost", "message"),
+    [(np.array([4, 4]), "`lost` must be strictly increasing"), (np.array([1.5]), "`lost` must be a 1-D array")],
+)
+def test_heard_cells_bad_lost_links_are_named(rng, lost, message):
+    s = scene(rng, 10, 3.0)
+    with pytest.raises(ValueError, match=message):
+        kernels.heard_cells(s["here"], s["hearers"], s["positions"], s["said"], range=1.0, lost=lost)

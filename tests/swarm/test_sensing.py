@@ -145,12 +145,17 @@ def test_merged_rows_keep_each_kind_in_order():
     assert offsets.tolist() == [0, 2, 3, 6] and values.tolist() == [1.0, 2.0, 10.0, 3.0, 20.0, 30.0]
 
 
-@pytest.mark.parametrize("faults", [None, Faults(loss=0.3, distance_loss=0.2)], ids=["lossless", "lossy"])
+@pytest.mark.parametrize(
+    "faults",
+    [None, Faults(loss=0.3, distance_loss=0.2), Faults(burst=(0.1, 0.3), loss=0.1)],
+    ids=["lossless", "lossy", "bursty"],
+)
 def test_cells_from_the_board_are_the_cells_from_the_rows(monkeypatch, faults):
     # A range radio's cells come from the messages near each cell on the board (heard_cells),
-    # losses drawn there as the perception draws them. Forced through every message delivered, a
-    # whole coverage run (packed start: many ties between equidistant neighbours) is the same, and
-    # so are the messages lost, counted in the perception's pass or as the inbox is listed.
+    # losses drawn there as the perception draws them (a burst's: the links lost as the inbox was
+    # listed). Forced through every message delivered, a whole coverage run (packed start: many
+    # ties between equidistant neighbours) is the same, and so are the messages lost, counted in
+    # the perception's pass or as the inbox is listed.
 
     class RowsOnly(View):
         """A view that never gets the engine's board (its cells go through its rows)."""

@@ -43,6 +43,9 @@ pub struct Radio<'a> {
     /// Its losses, drawn for each message looked at (`None`: every message in range is heard):
     /// the messages [`crate::perceive::perceive`] lists with the same loss, to the bit.
     pub loss: Option<Loss>,
+    /// The messages lost otherwise, as links `i * n + j` (robot i does not hear robot j),
+    /// strictly increasing: what the engine found listing an inbox (a loss burst's).
+    pub lost: &'a [i64],
 }
 
 /// The robots whose cells are wanted, and what each knows besides its radio.
@@ -130,6 +133,12 @@ fn check(radio: &Radio<'_>, hearers: &Hearers<'_>) -> Result<()> {
     }
     for (arg, said) in messages(radio) {
         check_said(arg, said, n)?;
+    }
+    if let Some(k) = radio.lost.windows(2).position(|pair| pair[0] >= pair[1]) {
+        return Err(GeomError::NotIncreasing {
+            arg: "lost",
+            index: k + 1,
+        });
     }
     // Coordinates within reach of the clipping's arithmetic also keep every search distance finite.
     check_coordinates("positions", radio.positions.as_flattened())?;
@@ -255,21 +264,26 @@ struct Search<'a> {
     arena: &'a Arena,
 }
 
-/// A hearer: its index and [`Search::hearer`]'s hash.
-type Hearer = (usize, u64);
+/// A hearer: its index, [`Search::hearer`]'s hash, its lost links and the first link of its row.
+type Hearer<'a> = (usize, u64, &'a [i64], i64);
 
 /// A clipping point of a cell: `(|q - p|^2 as bits, rank, index, q)`, clipped in that order
 /// (rank 0: messages, by the sender's index; 1: robots seen; 2: virtual agents).
 type Candidate = (u64, u8, usize, Vec2);
 
 impl Search<'_> {
-    /// Robot i as a hearer: its index and the hash of its loss draws (absorbed once a cell).
-    fn hearer(&self, i: usize) -> Hearer {
-        (i, self.radio.loss.map_or(0, |loss| loss.hearer(i)))
+    /// Robot i as a hearer: its index, the hash of its loss draws and the senders of its lost
+    /// messages (both found once a cell).
+    fn hearer(&self, i: usize) -> Hearer<'_> {
+        let n = self.radio.positions.len() as i64;
+        let lost = self.radio.lost;
+        let (first, last) = ((i as i64).saturating_mul(n), (i as i64 + 1).saturating_mul(n));
+        let row = &lost[lost.partition_point(|&link| link < first)..lost.partition_point(|&link| link < last)];
+        (i, self.radio.loss.map_or(0, |loss| loss.hearer(i)), row, first)
     }
 
     /// What robot `i` hears from robot `j`, if anything.
-    fn heard(&self, (i, hash): Hearer, j: usize) -> Option<Vec2> {
+    fn heard(&self, (i, hash, lost, first): Hearer<'_>, j: usize) -> Option<Vec2> {
         let (p, o) = (self.radio.positions[i], self.radio.positions[j]);
         let (dx, dy) = (o[0] - p[0], o[1] - p[1]);
         if j == i || !in_range(dx, dy, self.radio.range, self.range_squared) {
@@ -284,7 +298,8 @@ impl Search<'_> {
             let distance = || length(dx * dx + dy * dy, dx, dy);
             self.radio.loss.is_none_or(|loss| loss.delivered(hash, j, distance))
         };
-        (!q[0].is_nan() && through()).then_some(q)
+        let kept = || lost.binary_search(&(first + j as i64)).is_err();
+        (!q[0].is_nan() && through() && kept()).then_some(q)
     }
 
     /// Calls `visit(j)` for the robots `j` in the square of half-width `half` about `at`, until
@@ -305,7 +320,7 @@ impl Search<'_> {
 
     /// Calls `visit(q)` for what robot `i` hears from robots near `at`: every message within
     /// `distance` of it (said by a robot within `distance + drift`), and maybe more.
-    fn heard_near(&self, i: Hearer, at: Vec2, distance: f64, mut visit: impl FnMut(usize, Vec2)) {
+    fn heard_near(&self, i: Hearer<'_>, at: Vec2, distance: f64, mut visit: impl FnMut(usize, Vec2)) {
         self.robots_near(at, distance + self.drift, |j| {
             if let Some(q) = self.heard(i, j) {
                 visit(j, q);
@@ -316,7 +331,7 @@ impl Search<'_> {
 
     /// Whether robot `i` hears a message within `same` of the robot it sees at `s`. The search
     /// stops at the first such message: most robots seen are heard, near where they are.
-    fn accounted(&self, i: Hearer, s: Vec2) -> bool {
+    fn accounted(&self, i: Hearer<'_>, s: Vec2) -> bool {
         self.robots_near(s, self.hearers.same + self.drift, |j| {
             self.heard(i, j).is_some_and(|q| self.close.within(s, q))
         })
@@ -426,7 +441,8 @@ mod tests {
             let (a, b) = (near.indptr[i] as usize, near.indptr[i + 1] as usize);
             let through = |e: usize| {
                 let (j, distance) = (near.indices[e] as usize, near.distances[e]);
-                radio
+                let kept = radio.lost.binary_search(&((i * n + j) as i64)).is_err();
+                kept && radio
                     .loss
                     .is_none_or(|loss| loss.delivered(loss.hearer(i), j, || distance))
             };
@@ -478,13 +494,15 @@ mod tests {
     #[test]
     fn equals_the_three_kernels_in_a_row() {
         let lossy = |keep, per_metre| Some(Loss::new(5, 0, 2, keep, per_metre).unwrap());
-        for (seed, n, side, range, loss) in [
-            (1, 60, 2.0, 0.6, None),
-            (2, 300, 3.0, 2.0, None),
-            (3, 40, 10.0, 1.0, None),
-            (4, 5, 1.0, 0.0, None),
-            (5, 300, 3.0, 2.0, lossy(0.7, 0.0)),
-            (6, 200, 2.0, 1.0, lossy(0.9, 0.5)),
+        for (seed, n, side, range, loss, dropped) in [
+            (1, 60, 2.0, 0.6, None, 0.0),
+            (2, 300, 3.0, 2.0, None, 0.0),
+            (3, 40, 10.0, 1.0, None, 0.0),
+            (4, 5, 1.0, 0.0, None, 0.0),
+            (5, 300, 3.0, 2.0, lossy(0.7, 0.0), 0.0),
+            (6, 200, 2.0, 1.0, lossy(0.9, 0.5), 0.0),
+            (7, 300, 3.0, 2.0, None, 0.3),
+            (8, 200, 2.0, 1.0, lossy(0.9, 0.0), 0.2),
         ] {
             let mut u = stream(seed);
             let arena = Arena::new(-side / 2.0, side / 2.0, -side / 2.0, side / 2.0).unwrap();
@@ -503,6 +521,8 @@ mod tests {
                 .map(|(q, p)| if u() < 0.3 { moved(p, &mut u) } else { *q })
                 .collect();
             let ids: Vec<i64> = (0..n as i64).filter(|_| u() < 0.5).collect();
+            // Links lost otherwise (a burst's), in increasing order: some in range, some not.
+            let lost: Vec<i64> = (0..(n * n) as i64).filter(|_| u() < dropped).collect();
             let here: Vec<Vec2> = ids
                 .iter()
                 .map(|&i| [positions[i as usize][0] + 0.02 * (u() - 0.5), positions[i as usize][1]])
@@ -527,6 +547,7 @@ mod tests {
                 said: &said,
                 said_now: &said_now,
                 loss,
+                lost: &lost,
             };
             let hearers = Hearers {
                 ids: &ids,
@@ -539,8 +560,12 @@ mod tests {
             };
             let fused = heard_cells(&radio, &hearers, 0.5, &arena, 32).unwrap();
             assert_eq!(fused, composed(&radio, &hearers, 0.5, &arena), "seed {seed}");
-            if loss.is_some() {
-                let lossless = Radio { loss: None, ..radio };
+            if loss.is_some() || !lost.is_empty() {
+                let lossless = Radio {
+                    loss: None,
+                    lost: &[],
+                    ..radio
+                };
                 assert_ne!(
                     fused,
                     heard_cells(&lossless, &hearers, 0.5, &arena, 32).unwrap(),
@@ -560,6 +585,7 @@ mod tests {
             said: &said,
             said_now: &positions,
             loss: None,
+            lost: &[],
         };
         let hearers = Hearers {
             ids: &[0],
@@ -588,6 +614,10 @@ mod tests {
         };
         assert!(heard_cells(&radio, &twice, 1.0, &arena, 16).is_err());
         assert!(heard_cells(&Radio { range: -1.0, ..radio }, &hearers, 1.0, &arena, 16).is_err());
+        assert!(matches!(
+            heard_cells(&Radio { lost: &[3, 3], ..radio }, &hearers, 1.0, &arena, 16),
+            Err(GeomError::NotIncreasing { arg: "lost", index: 1 })
+        ));
         assert!(heard_cells(&radio, &hearers, 1.0, &arena, 16).is_ok());
     }
 
@@ -648,6 +678,7 @@ mod tests {
             said: &said,
             said_now: &said,
             loss: None,
+            lost: &[],
         };
         assert!(said_once(&radio));
         let arena = Arena::new(0.0, 6.0, 0.0, 4.0).unwrap();

@@ -13,9 +13,10 @@ use crate::voronoi::{cell_arrays, CellArrays};
 /// `hearers` `(k,)` at `here` `(k, 2)`, each clipped by what its range radio hears (`said` and
 /// `said_now` `(n, 2)` of the robots at `positions` `(n, 2)`), by the robots it sees that no
 /// message accounts for and by its virtual agents (both CSR); with the radio's `loss` `(seed,
-/// stream, step, keep, per_metre)`, as `perceive` draws it.
+/// stream, step, keep, per_metre)`, as `perceive` draws it, and without the messages of the
+/// links `lost` (`i * n + j`, strictly increasing).
 #[pyfunction]
-#[pyo3(signature = (here, hearers, positions, said, said_now, *, range, seen_indptr, seen_points, same, virtual_indptr, virtual_points, radius, bounds, resolution=64, loss=None))]
+#[pyo3(signature = (here, hearers, positions, said, said_now, *, range, seen_indptr, seen_points, same, virtual_indptr, virtual_points, radius, bounds, resolution=64, loss=None, lost=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn heard_cells<'py>(
     py: Python<'py>,
@@ -34,6 +35,7 @@ pub fn heard_cells<'py>(
     bounds: (f64, f64, f64, f64),
     resolution: i64,
     loss: Option<LossArgs>,
+    lost: Option<Bound<'py, PyAny>>,
 ) -> PyDreamResult<CellArrays<'py>> {
     let resolution = count_of("resolution", resolution)?;
     let arena = Arena::new(bounds.0, bounds.1, bounds.2, bounds.3)?;
@@ -54,12 +56,14 @@ pub fn heard_cells<'py>(
     let seen = points_in::<2>("seen_points", &seen_points)?;
     let agents_offsets = indices_in("virtual_indptr", &virtual_indptr)?;
     let agents = points_in::<2>("virtual_points", &virtual_points)?;
+    let lost = lost.map(|links| indices_in("lost", &links)).transpose()?;
     let radio = heard::Radio {
         positions: &positions,
         range,
         said: &said,
         said_now: said_now.as_deref().unwrap_or(&said),
         loss: loss_of(loss)?,
+        lost: lost.as_deref().unwrap_or_default(),
     };
     let hearers = heard::Hearers {
         ids: &ids,

@@ -176,6 +176,7 @@ def heard_cells(
     bounds: tuple[float, float, float, float],
     resolution: int = 64,
     loss: Loss | None = None,
+    lost: np.ndarray | None = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray]:
     """The cells of robots ``hearers`` ``(k,)`` (increasing) at ``here`` ``(k, 2)``, as
     :func:`voronoi_cells` without neighbours, each clipped by what it hears, then the robots it
@@ -184,7 +185,8 @@ def heard_cells(
     Robot i hears robot j within ``range`` (:func:`neighbours`, of the true ``positions``
     ``(n, 2)``): ``said_now[j]`` when j < i (robots of lower index took their turn first), else
     ``said[j]``; a NaN message is nothing said, and one lost to the radio's ``loss``
-    (:func:`~dream._reference.draws.delivered`) is not heard.
+    (:func:`~dream._reference.draws.delivered`) or on a link of ``lost`` (``i * n + j``) is not
+    heard.
     """
     k, n = len(hearers), len(positions)
     rows = np.zeros(n, dtype=bool)
@@ -198,6 +200,8 @@ def heard_cells(
     spoken = ~np.isnan(heard[:, 0])
     if loss is not None:
         spoken &= delivered(loss, hearers[owners], senders, distances[at])
+    if lost is not None:
+        spoken &= ~np.isin(hearers[owners] * n + senders, lost)
     heard, owners = heard[spoken], owners[spoken]
     silent = far_from(seen_points, heard, same, seen_indptr, offsets_of(owners, k))
     seen_owners = np.repeat(np.arange(k), np.diff(seen_indptr))

@@ -145,6 +145,7 @@ def heard_cells(
     resolution: int = 64,
     polygons: bool = False,
     loss: Loss | None = None,
+    lost: Any = None,
 ) -> VoronoiCells:
     """The cells of robots that know the others only by what a range radio tells them, each as
     :func:`voronoi_cell` computes it from what its robot knows.
@@ -175,6 +176,9 @@ def heard_cells(
         Each hearer's virtual agents (see :func:`obstacle_agents`).
     loss : Loss, optional
         The radio's losses: a message lost is not heard, drawn as :func:`perceive` draws it.
+    lost : (m,) int, optional
+        Links ``i * n + j`` whose message robot i does not hear (lost otherwise: a loss burst's),
+        strictly increasing.
     """
     p = _points(here, "here")
     k = p.shape[0]
@@ -215,8 +219,21 @@ def heard_cells(
         bounds=_checked_box(bounds),
         resolution=resolution,
         loss=checked_loss(loss),
+        lost=None if lost is None else _links(lost),
     )
     return VoronoiCells(centroids, areas, vertices if polygons else None, offsets if polygons else None)
+
+
+def _links(lost: Any) -> np.ndarray:
+    """``lost`` as a strictly increasing int64 array of links."""
+    links = np.asarray(lost)
+    if links.ndim != 1 or (links.size and links.dtype.kind not in "iu"):
+        raise ValueError(f"`lost` must be a 1-D array of links (integers), got {links.dtype} of shape {links.shape}")
+    links = np.ascontiguousarray(links, dtype=np.int64)
+    wrong = np.flatnonzero(links[1:] <= links[:-1])
+    if wrong.size:
+        raise ValueError(f"`lost` must be strictly increasing, but link {wrong[0] + 1} is not above the one before")
+    return links
 
 
 def voronoi_cell(

@@ -261,6 +261,7 @@ class Engine:
                 radio.graph, rows, x, talking, measured=faults is not None and faults.faults.distance_loss > 0
             )
         inbox: Neighbourhood
+        lost = None  # the links whose messages were lost as the inbox was listed (a burst's)
         if deferred:
             assert radio is not None
             sums = Summed(np.diff(heard[0]), dict(zip(summed or [], heard[4:], strict=True))) if in_pass else None
@@ -271,11 +272,12 @@ class Engine:
                 else:
                     self.inbox_read = True
                 heard = kernels.perceive(x[:2].T, x[2], rows, radio_range=radio.range, talking=talking, loss=loss)[1]
-                return self._hear(t, rows, heard, faults, drawn=loss is not None).frozen()
+                return self._hear(t, rows, heard, faults, drawn=loss is not None)[0].frozen()
 
             inbox = Deferred(load, sums)
         else:
-            inbox = self._hear(t, rows, heard, faults, drawn=loss is not None).frozen()
+            inbox, lost = self._hear(t, rows, heard, faults, drawn=loss is not None)
+            inbox = inbox.frozen()
         ids, command = rows.copy(), commands.T[rows]  # (k, 2) rows of their own
         ids.flags.writeable = command.flags.writeable = False
         at = at_rows(rows, self.n)
@@ -289,8 +291,8 @@ class Engine:
             self._obstacles(t, rows, x, faults).frozen(),
             command,
         )
-        if found:
-            view.board_cells = partial(self._board_cells, x[:2].T, talking, loss)
+        if by_range:
+            view.board_cells = partial(self._board_cells, x[:2].T, talking, loss, lost)
         if self.focus is not None:
             self._keep_focus(t, rows, view, self.focus)
         return view
@@ -512,22 +514,24 @@ class Engine:
     # -- radio -------------------------------------------------------------------------------
     def _hear(
         self, t: int, rows: np.ndarray, heard: Heard, faults: FaultState | None, drawn: bool = False
-    ) -> Neighbourhood:
+    ) -> tuple[Neighbourhood, np.ndarray | None]:
         """The messages delivered to ``rows`` by the talking robots in range or linked (what
         :func:`dream.kernels.perceive` or :func:`~dream.kernels.linked` found), with the radio's
         and the world's losses: ``drawn`` where the perception drew them (``heard[3]``: each row's
-        messages lost, counted in the faults already), else drawn here."""
+        messages lost, counted in the faults already), else drawn here. Returns the inbox and the
+        links of the messages lost here (``i * n + j``, increasing; ``None`` where none was
+        drawn here)."""
         offsets, senders, gaps = heard[:3]
         radio = self.robot.radio
         if radio is None:
-            return Neighbourhood(offsets, {"sender": senders})
+            return Neighbourhood(offsets, {"sender": senders}), None
         inbox = Neighbourhood(offsets, {"sender": senders}, (senders, self.board))
         loss = None if drawn else self._loss(t, faults)
         burst = None if faults is None else faults.faults.burst
         if loss is None and burst is None:
             if self.count_traffic:
                 self.traffic.received(rows, offsets, lost=heard[3] if drawn else None)
-            return inbox
+            return inbox, None
         me = np.repeat(rows, np.diff(offsets))
         through = np.ones(len(senders), dtype=bool)
         if loss is not None:  # a draw for every message: one kept for sure passes too (a draw is below 1)
@@ -538,7 +542,7 @@ class Engine:
             faults.messages_lost += int((~through).sum())
         if self.count_traffic:
             self.traffic.received(rows, offsets, through)
-        return inbox.where(through)
+        return inbox.where(through), (me * self.n + senders)[~through]
 
     def _loss(self, t: int, faults: FaultState | None) -> Loss | None:
         """The radio's and the world's message losses at step ``t`` (``None``: every message in
@@ -556,6 +560,7 @@ class Engine:
         positions: np.ndarray,
         talking: np.ndarray,
         loss: Loss | None,
+        lost: np.ndarray | None,
         rows: np.ndarray,
         here: np.ndarray,
         fields: tuple[str, str],
@@ -564,10 +569,11 @@ class Engine:
         virtual: tuple[Any, Any],
         **shape: Any,
     ) -> VoronoiCells:
-        """:meth:`View.cells` of ``rows`` for a range radio without bursts: what each hears is what
-        the talking robots within range of it (``positions`` ``(n, 2)``) have on the board, less
-        the messages ``loss`` takes, and :func:`dream.kernels.heard_cells` looks only at the
-        messages near each cell (drawing the loss of those alone, as the perception draws it)."""
+        """:meth:`View.cells` of ``rows`` for a range radio: what each hears is what the talking
+        robots within range of it (``positions`` ``(n, 2)``) have on the board, less the messages
+        ``loss`` takes and those of the links ``lost`` (found as the inbox was listed: a
+        burst's), and :func:`dream.kernels.heard_cells` looks only at the messages near each cell
+        (drawing the loss of those alone, as the perception draws it)."""
         missing = [name for name in fields if name not in self.board]
         if missing:
             raise KeyError(f"no field {missing[0]!r} in the radio's messages (its fields: {', '.join(self.board)})")
@@ -578,7 +584,17 @@ class Engine:
         assert self.robot.radio is not None  # a range radio
         radio_range = self.robot.radio.range
         return kernels.heard_cells(
-            here, rows, positions, said, range=radio_range, seen=seen, same=same, virtual=virtual, loss=loss, **shape
+            here,
+            rows,
+            positions,
+            said,
+            range=radio_range,
+            seen=seen,
+            same=same,
+            virtual=virtual,
+            loss=loss,
+            lost=lost,
+            **shape,
         )
 
     def _burst(self, t: int, me: np.ndarray, others: np.ndarray, burst: tuple[float, float]) -> np.ndarray:
