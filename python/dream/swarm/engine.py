@@ -261,7 +261,7 @@ class Engine:
                 radio.graph, rows, x, talking, measured=faults is not None and faults.faults.distance_loss > 0
             )
         inbox: Neighbourhood
-        lost = None  # the links whose messages were lost as the inbox was listed (a burst's)
+        lost = None  # what gives the links whose messages were lost as the inbox was listed (a burst's)
         if deferred:
             assert radio is not None
             sums = Summed(np.diff(heard[0]), dict(zip(summed or [], heard[4:], strict=True))) if in_pass else None
@@ -514,13 +514,13 @@ class Engine:
     # -- radio -------------------------------------------------------------------------------
     def _hear(
         self, t: int, rows: np.ndarray, heard: Heard, faults: FaultState | None, drawn: bool = False
-    ) -> tuple[Neighbourhood, np.ndarray | None]:
+    ) -> tuple[Neighbourhood, Callable[[], np.ndarray] | None]:
         """The messages delivered to ``rows`` by the talking robots in range or linked (what
         :func:`dream.kernels.perceive` or :func:`~dream.kernels.linked` found), with the radio's
         and the world's losses: ``drawn`` where the perception drew them (``heard[3]``: each row's
-        messages lost, counted in the faults already), else drawn here. Returns the inbox and the
-        links of the messages lost here (``i * n + j``, increasing; ``None`` where none was
-        drawn here)."""
+        messages lost, counted in the faults already), else drawn here. Returns the inbox and what
+        gives the links of the messages lost here (``i * n + j``, increasing; worked out only if
+        the cells read them), ``None`` where none was drawn here."""
         offsets, senders, gaps = heard[:3]
         radio = self.robot.radio
         if radio is None:
@@ -542,7 +542,7 @@ class Engine:
             faults.messages_lost += int((~through).sum())
         if self.count_traffic:
             self.traffic.received(rows, offsets, through)
-        return inbox.where(through), (me * self.n + senders)[~through]
+        return inbox.where(through), lambda: (me * self.n + senders)[~through]
 
     def _loss(self, t: int, faults: FaultState | None) -> Loss | None:
         """The radio's and the world's message losses at step ``t`` (``None``: every message in
@@ -560,7 +560,7 @@ class Engine:
         positions: np.ndarray,
         talking: np.ndarray,
         loss: Loss | None,
-        lost: np.ndarray | None,
+        lost: Callable[[], np.ndarray] | None,
         rows: np.ndarray,
         here: np.ndarray,
         fields: tuple[str, str],
@@ -593,7 +593,7 @@ class Engine:
             same=same,
             virtual=virtual,
             loss=loss,
-            lost=lost,
+            lost=None if lost is None else lost(),
             **shape,
         )
 
