@@ -212,7 +212,7 @@ class View:
     safety: Any = field(default=None, repr=False)  #: each row's safety radius (:meth:`keep_apart`)
     turn: Any = field(default=None, repr=False)  #: each row's side and stop (:meth:`aside`)
     #: The engine's way to :meth:`cells` of robots ``ids`` from the board, for a range radio
-    #: without bursts (None: the rows').
+    #: (None: the rows').
     board_cells: Any = field(default=None, repr=False)
 
     def __len__(self) -> int:
@@ -271,9 +271,9 @@ class View:
         (m) from every one of those (a robot seen that no message accounts for, a crashed one
         say), then by its ``virtual`` agents (CSR rows; :func:`dream.kernels.obstacle_agents`).
 
-        For a range radio (but under bursts of loss), the engine looks only at the messages near
-        each cell (:func:`dream.kernels.heard_cells`, drawing their losses as the perception
-        does): a robot in a crowd hears hundreds, of which a dozen shape its cell. The cells are
+        For a range radio, the engine looks only at the messages near each cell
+        (:func:`dream.kernels.heard_cells`, drawing their losses as the perception does, or
+        leaving out those a loss burst took as the inbox was listed): a robot in a crowd hears hundreds, of which a dozen shape its cell. The cells are
         the same, to the bit.
         """
         empty: Rows = (np.zeros(len(self) + 1, dtype=np.int64), np.zeros((0, 2)))
