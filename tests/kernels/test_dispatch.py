@@ -86,7 +86,7 @@ def test_every_public_kernel_goes_through_the_dispatch(monkeypatch):
     kernels.sidestep_mark(points, points, [0, 1], counters, sides, 10)
     # The swarm engine's random draws and loss bursts, not public kernels.
     engine = SimpleNamespace(n=2, seed=1, lossy=np.zeros(0, dtype=np.int64))
-    Engine._burst(engine, 0, np.array([0, 1]), np.array([1, 0]), (0.5, 0.5))  # type: ignore[arg-type]
+    Engine._burst(engine, 0, np.array([0, 1]), np.array([1, 0]), np.array([1, 2]), (0.5, 0.5))  # type: ignore[arg-type]
     assert recorder.asked == set(CORE_KERNELS)
 
 

@@ -297,7 +297,12 @@ def test_heard_cells_without_the_links_lost_match_the_reference(rng, loss):
 
 @pytest.mark.parametrize(
     ("lost", "message"),
-    [(np.array([4, 4]), "`lost` must be strictly increasing"), (np.array([1.5]), "`lost` must be a 1-D array")],
+    [
+        (np.array([4, 4]), "`lost` must be strictly increasing, but the link at index 1"),
+        (np.array([1.5]), "`lost` must be a 1-D array"),
+        (np.array([-5, 1]), r"`lost` links must lie in \[0, n\^2\) = \[0, 100\)"),
+        (np.array([5, 2**63], dtype=np.uint64), r"`lost` links must lie in \[0, n\^2\)"),
+    ],
 )
 def test_heard_cells_bad_lost_links_are_named(rng, lost, message):
     s = scene(rng, 10, 3.0)

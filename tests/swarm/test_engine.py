@@ -374,8 +374,8 @@ def test_loss_bursts_follow_each_link_as_a_set_of_links_does(rng):
     bursts: set[int] = set()
     for t in range(60):
         me, others = rng.integers(0, n, 400), rng.integers(0, n, 400)
-        now = Engine._burst(engine, t, me, others, (enter, leave))  # type: ignore[arg-type]
         links = me * n + others
+        now = Engine._burst(engine, t, me, others, links, (enter, leave))  # type: ignore[arg-type]
         was = np.array([link in bursts for link in links.tolist()], dtype=bool)
         flip = draws.uniform(3, draws.BURST, t, me, others) < np.where(was, leave, enter)
         assert np.array_equal(now, was ^ flip)

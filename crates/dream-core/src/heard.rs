@@ -72,8 +72,8 @@ pub struct Hearers<'a> {
 /// # Errors
 /// Non-finite positions, a message that is neither a point nor all NaN, coordinates beyond
 /// [`crate::voronoi::MAX_COORDINATE`], hearer indices that are not strictly increasing robot
-/// indices, mismatched lengths or CSR offsets, a negative range or `same`, or the cell
-/// parameters of [`crate::voronoi::voronoi_cells`].
+/// indices, mismatched lengths or CSR offsets, a negative range or `same`, `lost` links that are
+/// not strictly increasing, or the cell parameters of [`crate::voronoi::voronoi_cells`].
 pub fn heard_cells(
     radio: &Radio<'_>,
     hearers: &Hearers<'_>,
@@ -272,8 +272,8 @@ type Hearer<'a> = (usize, u64, &'a [i64], i64);
 type Candidate = (u64, u8, usize, Vec2);
 
 impl Search<'_> {
-    /// Robot i as a hearer: its index, the hash of its loss draws and the senders of its lost
-    /// messages (both found once a cell).
+    /// Robot i as a hearer: its index, the hash of its loss draws, its row of the lost links and
+    /// the row's first link `i * n` (found once a cell).
     fn hearer(&self, i: usize) -> Hearer<'_> {
         let n = self.radio.positions.len() as i64;
         let lost = self.radio.lost;
@@ -298,7 +298,7 @@ impl Search<'_> {
             let distance = || length(dx * dx + dy * dy, dx, dy);
             self.radio.loss.is_none_or(|loss| loss.delivered(hash, j, distance))
         };
-        let kept = || lost.binary_search(&(first + j as i64)).is_err();
+        let kept = || lost.binary_search(&first.saturating_add(j as i64)).is_err();
         (!q[0].is_nan() && through() && kept()).then_some(q)
     }
 

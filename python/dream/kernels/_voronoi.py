@@ -177,8 +177,8 @@ def heard_cells(
     loss : Loss, optional
         The radio's losses: a message lost is not heard, drawn as :func:`perceive` draws it.
     lost : (m,) int, optional
-        Links ``i * n + j`` whose message robot i does not hear (lost otherwise: a loss burst's),
-        strictly increasing.
+        Links ``i * n + j`` (each in ``[0, n^2)``) whose message robot i does not hear (lost
+        otherwise: a loss burst's), strictly increasing.
     """
     p = _points(here, "here")
     k = p.shape[0]
@@ -219,20 +219,22 @@ def heard_cells(
         bounds=_checked_box(bounds),
         resolution=resolution,
         loss=checked_loss(loss),
-        lost=None if lost is None else _links(lost),
+        lost=None if lost is None else _links(lost, n),
     )
     return VoronoiCells(centroids, areas, vertices if polygons else None, offsets if polygons else None)
 
 
-def _links(lost: Any) -> np.ndarray:
-    """``lost`` as a strictly increasing int64 array of links."""
+def _links(lost: Any, n: int) -> np.ndarray:
+    """``lost`` as a strictly increasing int64 array of links of ``n`` robots (in ``[0, n^2)``)."""
     links = np.asarray(lost)
     if links.ndim != 1 or (links.size and links.dtype.kind not in "iu"):
         raise ValueError(f"`lost` must be a 1-D array of links (integers), got {links.dtype} of shape {links.shape}")
+    if links.size and (int(links.min()) < 0 or int(links.max()) >= n * n):
+        raise ValueError(f"`lost` links must lie in [0, n^2) = [0, {n * n}) for n = {n} robots")
     links = np.ascontiguousarray(links, dtype=np.int64)
     wrong = np.flatnonzero(links[1:] <= links[:-1])
     if wrong.size:
-        raise ValueError(f"`lost` must be strictly increasing, but link {wrong[0] + 1} is not above the one before")
+        raise ValueError(f"`lost` must be strictly increasing, but the link at index {wrong[0] + 1} is not")
     return links
 
 

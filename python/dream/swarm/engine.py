@@ -261,7 +261,7 @@ class Engine:
                 radio.graph, rows, x, talking, measured=faults is not None and faults.faults.distance_loss > 0
             )
         inbox: Neighbourhood
-        lost = None  # what gives the links whose messages were lost as the inbox was listed (a burst's)
+        lost = None  # the links whose messages were lost as the inbox was listed (under bursts)
         if deferred:
             assert radio is not None
             sums = Summed(np.diff(heard[0]), dict(zip(summed or [], heard[4:], strict=True))) if in_pass else None
@@ -514,13 +514,13 @@ class Engine:
     # -- radio -------------------------------------------------------------------------------
     def _hear(
         self, t: int, rows: np.ndarray, heard: Heard, faults: FaultState | None, drawn: bool = False
-    ) -> tuple[Neighbourhood, Callable[[], np.ndarray] | None]:
+    ) -> tuple[Neighbourhood, np.ndarray | None]:
         """The messages delivered to ``rows`` by the talking robots in range or linked (what
         :func:`dream.kernels.perceive` or :func:`~dream.kernels.linked` found), with the radio's
         and the world's losses: ``drawn`` where the perception drew them (``heard[3]``: each row's
-        messages lost, counted in the faults already), else drawn here. Returns the inbox and what
-        gives the links of the messages lost here (``i * n + j``, increasing; worked out only if
-        the cells read them), ``None`` where none was drawn here."""
+        messages lost, counted in the faults already), else drawn here. Returns the inbox and,
+        under loss bursts, the links of the messages lost (``i * n + j``: increasing for a range
+        radio, whose rows list their senders in order), else ``None``."""
         offsets, senders, gaps = heard[:3]
         radio = self.robot.radio
         if radio is None:
@@ -536,13 +536,15 @@ class Engine:
         through = np.ones(len(senders), dtype=bool)
         if loss is not None:  # a draw for every message: one kept for sure passes too (a draw is below 1)
             through = draws.delivered(loss, me, senders, gaps)
+        links = None
         if burst is not None:
-            through &= ~self._burst(t, me, senders, burst)
+            links = me * self.n + senders
+            through &= ~self._burst(t, me, senders, links, burst)
         if faults is not None:
             faults.messages_lost += int((~through).sum())
         if self.count_traffic:
             self.traffic.received(rows, offsets, through)
-        return inbox.where(through), lambda: (me * self.n + senders)[~through]
+        return inbox.where(through), None if links is None else links[~through]
 
     def _loss(self, t: int, faults: FaultState | None) -> Loss | None:
         """The radio's and the world's message losses at step ``t`` (``None``: every message in
@@ -560,7 +562,7 @@ class Engine:
         positions: np.ndarray,
         talking: np.ndarray,
         loss: Loss | None,
-        lost: Callable[[], np.ndarray] | None,
+        lost: np.ndarray | None,
         rows: np.ndarray,
         here: np.ndarray,
         fields: tuple[str, str],
@@ -582,25 +584,19 @@ class Engine:
             said[:, column] = self.board[name]
         said[~talking] = np.nan  # a robot that has said nothing yet
         assert self.robot.radio is not None  # a range radio
-        radio_range = self.robot.radio.range
-        return kernels.heard_cells(
-            here,
-            rows,
-            positions,
-            said,
-            range=radio_range,
-            seen=seen,
-            same=same,
-            virtual=virtual,
-            loss=loss,
-            lost=None if lost is None else lost(),
-            **shape,
-        )
+        if lost is not None and len(rows):  # the rows asked for only: robot by robot, a robot's own
+            first, last = np.searchsorted(lost, (rows[0] * self.n, (rows[-1] + 1) * self.n))
+            lost = lost[first:last]
+        radio: dict[str, Any] = {"range": self.robot.radio.range, "loss": loss, "lost": lost}
+        return kernels.heard_cells(here, rows, positions, said, seen=seen, same=same, virtual=virtual, **radio, **shape)
 
-    def _burst(self, t: int, me: np.ndarray, others: np.ndarray, burst: tuple[float, float]) -> np.ndarray:
-        """Each link's Gilbert-Elliott state after this message (True: in a loss burst)."""
+    def _burst(
+        self, t: int, me: np.ndarray, others: np.ndarray, links: np.ndarray, burst: tuple[float, float]
+    ) -> np.ndarray:
+        """Each link's Gilbert-Elliott state after this message (True: in a loss burst): the
+        messages from ``others`` to ``me``, on the ``links`` ``me * n + others``."""
         flips = draws.uniform(self.seed, draws.BURST, t, me, others)
-        now, self.lossy = implementation("bursts")(self.lossy, me * self.n + others, flips, *burst)
+        now, self.lossy = implementation("bursts")(self.lossy, links, flips, *burst)
         return now
 
     def _message(self, said: dict[str, np.ndarray], k: int) -> dict[str, np.ndarray]:

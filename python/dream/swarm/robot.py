@@ -273,8 +273,8 @@ class View:
 
         For a range radio, the engine looks only at the messages near each cell
         (:func:`dream.kernels.heard_cells`, drawing their losses as the perception does, or
-        leaving out those a loss burst took as the inbox was listed): a robot in a crowd hears hundreds, of which a dozen shape its cell. The cells are
-        the same, to the bit.
+        leaving out those a loss burst took as the inbox was listed): a robot in a crowd hears
+        hundreds, of which a dozen shape its cell. The cells are the same, to the bit.
         """
         empty: Rows = (np.zeros(len(self) + 1, dtype=np.int64), np.zeros((0, 2)))
         seen, virtual = seen or empty, virtual or empty
