@@ -261,7 +261,7 @@ class Engine:
                 radio.graph, rows, x, talking, measured=faults is not None and faults.faults.distance_loss > 0
             )
         inbox: Neighbourhood
-        lost = None  # the links whose messages were lost as the inbox was listed (under bursts)
+        lost = None  # what gives the links whose messages were lost as the inbox was listed (bursts)
         if deferred:
             assert radio is not None
             sums = Summed(np.diff(heard[0]), dict(zip(summed or [], heard[4:], strict=True))) if in_pass else None
@@ -514,13 +514,14 @@ class Engine:
     # -- radio -------------------------------------------------------------------------------
     def _hear(
         self, t: int, rows: np.ndarray, heard: Heard, faults: FaultState | None, drawn: bool = False
-    ) -> tuple[Neighbourhood, np.ndarray | None]:
+    ) -> tuple[Neighbourhood, Callable[[], np.ndarray] | None]:
         """The messages delivered to ``rows`` by the talking robots in range or linked (what
         :func:`dream.kernels.perceive` or :func:`~dream.kernels.linked` found), with the radio's
         and the world's losses: ``drawn`` where the perception drew them (``heard[3]``: each row's
         messages lost, counted in the faults already), else drawn here. Returns the inbox and,
-        under loss bursts, the links of the messages lost (``i * n + j``: increasing for a range
-        radio, whose rows list their senders in order), else ``None``."""
+        under loss bursts, what gives the links of the messages lost (``i * n + j``: increasing
+        for a range radio, whose rows list their senders in order; worked out once, and only if
+        the cells read them), else ``None``."""
         offsets, senders, gaps = heard[:3]
         radio = self.robot.radio
         if radio is None:
@@ -544,7 +545,7 @@ class Engine:
             faults.messages_lost += int((~through).sum())
         if self.count_traffic:
             self.traffic.received(rows, offsets, through)
-        return inbox.where(through), None if links is None else links[~through]
+        return inbox.where(through), None if links is None else cache(lambda: links[~through])
 
     def _loss(self, t: int, faults: FaultState | None) -> Loss | None:
         """The radio's and the world's message losses at step ``t`` (``None``: every message in
@@ -562,7 +563,7 @@ class Engine:
         positions: np.ndarray,
         talking: np.ndarray,
         loss: Loss | None,
-        lost: np.ndarray | None,
+        lost: Callable[[], np.ndarray] | None,
         rows: np.ndarray,
         here: np.ndarray,
         fields: tuple[str, str],
@@ -584,10 +585,11 @@ class Engine:
             said[:, column] = self.board[name]
         said[~talking] = np.nan  # a robot that has said nothing yet
         assert self.robot.radio is not None  # a range radio
-        if lost is not None and len(rows):  # the rows asked for only: robot by robot, a robot's own
-            first, last = np.searchsorted(lost, (rows[0] * self.n, (rows[-1] + 1) * self.n))
-            lost = lost[first:last]
-        radio: dict[str, Any] = {"range": self.robot.radio.range, "loss": loss, "lost": lost}
+        links = None if lost is None else lost()
+        if links is not None and len(rows):  # the rows asked for only: robot by robot, a robot's own
+            first, last = np.searchsorted(links, (rows[0] * self.n, (rows[-1] + 1) * self.n))
+            links = links[first:last]
+        radio: dict[str, Any] = {"range": self.robot.radio.range, "loss": loss, "lost": links}
         return kernels.heard_cells(here, rows, positions, said, seen=seen, same=same, virtual=virtual, **radio, **shape)
 
     def _burst(
